@@ -1,0 +1,43 @@
+//! The geometry crate's error type.
+
+/// Why a shape, mesh or transform could not be built.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeometryError {
+    /// A value that must be finite was NaN or infinite.
+    NonFinite(&'static str),
+    /// A radius, height or edge length was zero or negative.
+    NonPositive {
+        /// What the value was.
+        what: &'static str,
+        /// The value given.
+        value: f32,
+    },
+    /// The transform's linear part is not invertible.
+    SingularTransform {
+        /// Its determinant.
+        det: f32,
+    },
+    /// A 4×4 matrix whose last row is not `(0, 0, 0, 1)`.
+    NotAffine,
+    /// A zero-length axis or normal, or a zero-area triangle.
+    Degenerate(&'static str),
+    /// Inconsistent mesh data.
+    InvalidMesh(String),
+}
+
+impl std::fmt::Display for GeometryError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NonFinite(what) => write!(f, "{what} must be finite (got NaN or infinity)"),
+            Self::NonPositive { what, value } => write!(f, "{what} must be positive, got {value}"),
+            Self::SingularTransform { det } => {
+                write!(f, "transform is singular (determinant {det:e}); it would flatten the object")
+            }
+            Self::NotAffine => write!(f, "matrix is not affine: its last row must be [0, 0, 0, 1]"),
+            Self::Degenerate(what) => write!(f, "{what}"),
+            Self::InvalidMesh(msg) => write!(f, "invalid mesh: {msg}"),
+        }
+    }
+}
+
+impl std::error::Error for GeometryError {}

@@ -1,0 +1,191 @@
+//! Indexed triangle meshes.
+
+use crate::shapes::TriangleRay;
+use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
+use glam::{Vec2, Vec3};
+
+/// An indexed triangle mesh with optional per-vertex normals and uvs.
+///
+/// The outward geometric normal of a face follows its counter-clockwise
+/// winding. The shading normal interpolates vertex normals when present
+/// (turned to the geometric normal's side), else equals the geometric one.
+/// uv interpolates vertex uvs when present, else is the barycentric
+/// `(b1, b2)`.
+///
+/// Zero-area faces are kept (so that indices stay stable) but never hit.
+/// [`Intersect`] on a mesh tests every face; use `prism-bvh` to accelerate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TriangleMesh {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    indices: Vec<[u32; 3]>,
+}
+
+impl TriangleMesh {
+    /// Builds and validates a mesh.
+    ///
+    /// # Errors
+    /// [`GeometryError::InvalidMesh`] if an index is out of range, the
+    /// normal or uv arrays do not match the positions in length, or a value
+    /// is not finite.
+    pub fn new(
+        positions: Vec<Vec3>,
+        normals: Option<Vec<Vec3>>,
+        uvs: Option<Vec<Vec2>>,
+        indices: Vec<[u32; 3]>,
+    ) -> Result<Self, GeometryError> {
+        let n = positions.len();
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(GeometryError::InvalidMesh(format!("vertex {i} is not finite")));
+        }
+        if let Some(ns) = &normals {
+            if ns.len() != n {
+                return Err(GeometryError::InvalidMesh(format!("{} normals for {n} vertices", ns.len())));
+            }
+            if let Some(i) = ns.iter().position(|p| !p.is_finite()) {
+                return Err(GeometryError::InvalidMesh(format!("normal {i} is not finite")));
+            }
+        }
+        if let Some(uv) = &uvs {
+            if uv.len() != n {
+                return Err(GeometryError::InvalidMesh(format!("{} uvs for {n} vertices", uv.len())));
+            }
+            if let Some(i) = uv.iter().position(|p| !p.is_finite()) {
+                return Err(GeometryError::InvalidMesh(format!("uv {i} is not finite")));
+            }
+        }
+        for (f, tri) in indices.iter().enumerate() {
+            if let Some(&bad) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(GeometryError::InvalidMesh(format!(
+                    "face {f} uses vertex {bad}, but the mesh has {n} vertices"
+                )));
+            }
+        }
+        Ok(Self { positions, normals, uvs, indices })
+    }
+
+    /// Vertex positions.
+    #[must_use]
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// Vertex normals, if any.
+    #[must_use]
+    pub fn normals(&self) -> Option<&[Vec3]> {
+        self.normals.as_deref()
+    }
+
+    /// Vertex uvs, if any.
+    #[must_use]
+    pub fn uvs(&self) -> Option<&[Vec2]> {
+        self.uvs.as_deref()
+    }
+
+    /// Faces as vertex index triples.
+    #[must_use]
+    pub fn indices(&self) -> &[[u32; 3]] {
+        &self.indices
+    }
+
+    /// Number of faces.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// Whether the mesh has no faces.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// Corners of face `f`.
+    #[inline]
+    #[must_use]
+    pub fn triangle(&self, f: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[f];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Number of faces with zero area (never hit).
+    #[must_use]
+    pub fn degenerate_count(&self) -> usize {
+        (0..self.len())
+            .filter(|&f| {
+                let [a, b, c] = self.triangle(f);
+                (b - a).cross(c - a).length_squared() == 0.0
+            })
+            .count()
+    }
+
+    /// Replaces the vertex normals by area-weighted averages of the face
+    /// normals (smooth shading for meshes that come without normals).
+    pub fn compute_smooth_normals(&mut self) {
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for f in 0..self.len() {
+            let [a, b, c] = self.triangle(f);
+            // The cross product's length is twice the area: area weighting.
+            let n = (b - a).cross(c - a);
+            for &i in &self.indices[f] {
+                acc[i as usize] += n;
+            }
+        }
+        // Vertices used by no face (or only degenerate faces) keep a zero
+        // normal, which hit() replaces by the face normal.
+        self.normals = Some(acc.into_iter().map(Vec3::normalize_or_zero).collect());
+    }
+
+    /// The full hit record for face `f` hit at `t` with barycentrics
+    /// `(b1, b2)` by a ray with direction `dir`.
+    #[must_use]
+    pub fn hit(&self, f: usize, t: f32, b1: f32, b2: f32, dir: Vec3) -> Hit {
+        let [ia, ib, ic] = self.indices[f].map(|i| i as usize);
+        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
+        let b0 = 1.0 - b1 - b2;
+        let point = b0 * a + b1 * b + b2 * c;
+        let geo_normal = (b - a).cross(c - a).normalize_or(Vec3::Y);
+        let normal = match &self.normals {
+            Some(ns) => {
+                let n = (b0 * ns[ia] + b1 * ns[ib] + b2 * ns[ic]).normalize_or(geo_normal);
+                if n.dot(geo_normal) < 0.0 { -n } else { n }
+            }
+            None => geo_normal,
+        };
+        let uv = match &self.uvs {
+            Some(uv) => b0 * uv[ia] + b1 * uv[ib] + b2 * uv[ic],
+            None => Vec2::new(b1, b2),
+        };
+        Hit { t, point, geo_normal, normal, uv, front_face: dir.dot(geo_normal) < 0.0 }
+    }
+
+    /// Closest face hit by `ray` by testing every face: `(face, t, b1, b2)`.
+    #[must_use]
+    pub fn intersect_brute_force(&self, ray: &Ray) -> Option<(usize, f32, f32, f32)> {
+        let mut tr = TriangleRay::new(ray);
+        let mut best = None;
+        for f in 0..self.len() {
+            let [a, b, c] = self.triangle(f);
+            if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+                best = Some((f, t, b1, b2));
+                tr.set_t_max(t);
+            }
+        }
+        best
+    }
+}
+
+impl Intersect for TriangleMesh {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let (f, t, b1, b2) = self.intersect_brute_force(ray)?;
+        Some(self.hit(f, t, b1, b2, ray.dir))
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.indices
+            .iter()
+            .flatten()
+            .fold(Aabb::EMPTY, |b, &i| b.grow(self.positions[i as usize]))
+    }
+}

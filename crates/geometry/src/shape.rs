@@ -1,0 +1,129 @@
+//! The intersection interface, the closed set of analytic shapes, and
+//! instances placed by a transform.
+
+use crate::shapes::{Cone, Cuboid, Cylinder, Disk, Plane, Sphere, Triangle};
+use crate::{Aabb, Hit, Ray, Transform};
+
+/// The two questions every shape answers.
+pub trait Intersect {
+    /// The nearest hit with `t` in `[ray.t_min, ray.t_max]`, if any.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+
+    /// Bounds of the shape ([`Aabb::INFINITE`] for unbounded shapes).
+    fn bounds(&self) -> Aabb;
+
+    /// Whether anything is hit within the ray's interval.
+    fn occludes(&self, ray: &Ray) -> bool {
+        self.intersect(ray).is_some()
+    }
+}
+
+/// Any analytic shape, dispatched by `match` (no virtual calls).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// See [`Sphere`].
+    Sphere(Sphere),
+    /// See [`Plane`]; unbounded.
+    Plane(Plane),
+    /// See [`Cuboid`].
+    Cuboid(Cuboid),
+    /// See [`Cylinder`].
+    Cylinder(Cylinder),
+    /// See [`Cone`].
+    Cone(Cone),
+    /// See [`Disk`].
+    Disk(Disk),
+    /// See [`Triangle`].
+    Triangle(Triangle),
+}
+
+impl Shape {
+    /// Whether the shape has finite bounds (everything but planes).
+    #[must_use]
+    pub fn is_bounded(&self) -> bool {
+        !matches!(self, Shape::Plane(_))
+    }
+
+    /// A short lower-case name of the kind of shape.
+    #[must_use]
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Shape::Sphere(_) => "sphere",
+            Shape::Plane(_) => "plane",
+            Shape::Cuboid(_) => "cuboid",
+            Shape::Cylinder(_) => "cylinder",
+            Shape::Cone(_) => "cone",
+            Shape::Disk(_) => "disk",
+            Shape::Triangle(_) => "triangle",
+        }
+    }
+}
+
+impl Intersect for Shape {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        match self {
+            Shape::Sphere(s) => s.intersect(ray),
+            Shape::Plane(s) => s.intersect(ray),
+            Shape::Cuboid(s) => s.intersect(ray),
+            Shape::Cylinder(s) => s.intersect(ray),
+            Shape::Cone(s) => s.intersect(ray),
+            Shape::Disk(s) => s.intersect(ray),
+            Shape::Triangle(s) => s.intersect(ray),
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        match self {
+            Shape::Sphere(s) => s.bounds(),
+            Shape::Plane(s) => s.bounds(),
+            Shape::Cuboid(s) => s.bounds(),
+            Shape::Cylinder(s) => s.bounds(),
+            Shape::Cone(s) => s.bounds(),
+            Shape::Disk(s) => s.bounds(),
+            Shape::Triangle(s) => s.bounds(),
+        }
+    }
+}
+
+macro_rules! impl_from_shape {
+    ($($t:ident),*) => {$(
+        impl From<$t> for Shape {
+            fn from(s: $t) -> Self {
+                Shape::$t(s)
+            }
+        }
+    )*};
+}
+impl_from_shape!(Sphere, Plane, Cuboid, Cylinder, Cone, Disk, Triangle);
+
+/// A shape placed in the world by a [`Transform`]: rays are mapped into the
+/// shape's object space, hits mapped back (normals by the inverse
+/// transpose). `t` is the same in both spaces.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance<S> {
+    /// The shape in its object space.
+    pub shape: S,
+    /// Object to world.
+    pub transform: Transform,
+}
+
+impl<S> Instance<S> {
+    /// `shape` placed by `transform`.
+    pub fn new(shape: S, transform: Transform) -> Self {
+        Self { shape, transform }
+    }
+}
+
+impl<S: Intersect> Intersect for Instance<S> {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let local = self.transform.ray_to_object(ray);
+        let hit = self.shape.intersect(&local)?;
+        Some(self.transform.hit_to_world(&hit))
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.transform.aabb(&self.shape.bounds())
+    }
+}

@@ -1,0 +1,83 @@
+//! Flat disks (also the caps of cylinders and cones).
+
+use super::{check_finite, check_positive};
+use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
+use glam::{Vec2, Vec3};
+
+/// A flat disk of `radius` about `center`, facing `normal` (one-sided only
+/// in the sense of where its normal points; rays hit it from both sides).
+///
+/// uv: polar, `u = angle / 2π` about the normal measured from the plane's
+/// tangent (as [`crate::Plane`]), `v = distance from centre / radius`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disk {
+    center: Vec3,
+    normal: Vec3,
+    radius: f32,
+    tangent: Vec3,
+}
+
+impl Disk {
+    /// A disk of `radius` about `center` with normal `normal`.
+    ///
+    /// # Errors
+    /// If the radius is not positive, the normal is zero, or a value is not
+    /// finite.
+    pub fn new(center: Vec3, normal: Vec3, radius: f32) -> Result<Self, GeometryError> {
+        let plane = crate::Plane::new(center, normal)?;
+        Ok(Self {
+            center: check_finite("disk centre", center)?,
+            normal: plane.normal(),
+            radius: check_positive("disk radius", radius)?,
+            tangent: plane.tangent(),
+        })
+    }
+
+    /// Centre.
+    #[must_use]
+    pub fn center(&self) -> Vec3 {
+        self.center
+    }
+
+    /// Unit normal.
+    #[must_use]
+    pub fn normal(&self) -> Vec3 {
+        self.normal
+    }
+
+    /// Radius.
+    #[must_use]
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+}
+
+impl Intersect for Disk {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let denom = ray.dir.dot(self.normal);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = (self.center - ray.origin).dot(self.normal) / denom;
+        if !ray.contains(t) {
+            return None;
+        }
+        let rel = ray.at(t) - self.center;
+        let rel = rel - self.normal * rel.dot(self.normal);
+        let r2 = rel.length_squared();
+        if r2 > self.radius * self.radius {
+            return None;
+        }
+        let bitangent = self.normal.cross(self.tangent);
+        let angle = rel.dot(bitangent).atan2(rel.dot(self.tangent));
+        let u = angle.rem_euclid(std::f32::consts::TAU) / std::f32::consts::TAU;
+        let uv = Vec2::new(u, r2.sqrt() / self.radius);
+        Some(Hit::new(t, self.center + rel, self.normal, uv, ray.dir))
+    }
+
+    fn bounds(&self) -> Aabb {
+        let n = self.normal;
+        let e = self.radius * (Vec3::ONE - n * n).max(Vec3::ZERO).map(f32::sqrt);
+        Aabb::new(self.center - e, self.center + e)
+    }
+}
