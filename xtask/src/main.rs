@@ -1,1 +1,57 @@
-fn main() {}
+//! Project automation: `cargo xtask <command>`.
+//!
+//! Commands: `render [SCENE] [prism flags…]`, `assets [--check]`,
+//! `bench […]`, `bless`, `ci`. Each lives in its own module with a
+//! `run(args)` entry point; this file only dispatches.
+
+mod ci;
+
+use anyhow::{Result, bail};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn main() -> Result<()> {
+    let mut args = std::env::args().skip(1);
+    let cmd = args.next();
+    let rest: Vec<String> = args.collect();
+    std::env::set_current_dir(project_root())?;
+    match cmd.as_deref() {
+        Some("ci") => ci::run(&rest),
+        Some("help" | "-h" | "--help") | None => {
+            print_help();
+            Ok(())
+        }
+        Some(other) => {
+            print_help();
+            bail!("unknown xtask command `{other}`")
+        }
+    }
+}
+
+fn print_help() {
+    eprintln!(
+        "cargo xtask <command>\n\n\
+         commands:\n  \
+         ci                      fmt --check, clippy -D warnings, tests, docs (what CI should pass)\n"
+    );
+}
+
+/// The workspace root, found from this crate's manifest directory.
+pub fn project_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_default()
+}
+
+/// The cargo that invoked us (or `cargo`).
+pub fn cargo() -> Command {
+    Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
+}
+
+/// Runs `cmd`, failing with its rendering if it exits non-zero.
+pub fn run_checked(cmd: &mut Command) -> Result<()> {
+    eprintln!("$ {cmd:?}");
+    let status = cmd.status()?;
+    if !status.success() {
+        bail!("command failed ({status}): {cmd:?}");
+    }
+    Ok(())
+}

@@ -183,9 +183,6 @@ impl Intersect for TriangleMesh {
     }
 
     fn bounds(&self) -> Aabb {
-        self.indices
-            .iter()
-            .flatten()
-            .fold(Aabb::EMPTY, |b, &i| b.grow(self.positions[i as usize]))
+        self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(self.positions[i as usize]))
     }
 }

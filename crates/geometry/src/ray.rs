@@ -93,22 +93,15 @@ const FLOAT_SCALE: f32 = 1.0 / 65536.0;
 /// `t_min = 0`. This is the only self-intersection epsilon in prism.
 #[must_use]
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    let of = [
-        (INT_SCALE * n.x) as i32,
-        (INT_SCALE * n.y) as i32,
-        (INT_SCALE * n.z) as i32,
-    ];
+    let of = [(INT_SCALE * n.x) as i32, (INT_SCALE * n.y) as i32, (INT_SCALE * n.z) as i32];
     let pa = p.to_array();
     let na = n.to_array();
     let mut out = [0.0f32; 3];
     for k in 0..3 {
         let bits = pa[k].to_bits() as i32;
         let moved = f32::from_bits(bits.wrapping_add(if pa[k] < 0.0 { -of[k] } else { of[k] }) as u32);
-        out[k] = if pa[k].abs() < ORIGIN_BAND || !moved.is_finite() {
-            pa[k] + FLOAT_SCALE * na[k]
-        } else {
-            moved
-        };
+        out[k] =
+            if pa[k].abs() < ORIGIN_BAND || !moved.is_finite() { pa[k] + FLOAT_SCALE * na[k] } else { moved };
     }
     Vec3::from_array(out)
 }

@@ -27,11 +27,8 @@ impl Default for Transform {
 
 impl Transform {
     /// The identity.
-    pub const IDENTITY: Self = Self {
-        to_world: Affine3A::IDENTITY,
-        to_object: Affine3A::IDENTITY,
-        normal: Mat3A::IDENTITY,
-    };
+    pub const IDENTITY: Self =
+        Self { to_world: Affine3A::IDENTITY, to_object: Affine3A::IDENTITY, normal: Mat3A::IDENTITY };
 
     /// Checks and wraps an affine map.
     ///
@@ -142,11 +139,7 @@ impl Transform {
     #[must_use]
     pub fn then(&self, next: &Self) -> Self {
         let to_object = self.to_object * next.to_object;
-        Self {
-            to_world: next.to_world * self.to_world,
-            to_object,
-            normal: to_object.matrix3.transpose(),
-        }
+        Self { to_world: next.to_world * self.to_world, to_object, normal: to_object.matrix3.transpose() }
     }
 
     /// The inverse transform.
@@ -209,7 +202,14 @@ impl Transform {
     pub fn hit_to_world(&self, hit: &Hit) -> Hit {
         let geo_normal = self.normal(hit.geo_normal);
         let normal = if hit.normal == hit.geo_normal { geo_normal } else { self.normal(hit.normal) };
-        Hit { t: hit.t, point: self.point(hit.point), geo_normal, normal, uv: hit.uv, front_face: hit.front_face }
+        Hit {
+            t: hit.t,
+            point: self.point(hit.point),
+            geo_normal,
+            normal,
+            uv: hit.uv,
+            front_face: hit.front_face,
+        }
     }
 
     /// World-space bounds of an object-space box (exact for the box's

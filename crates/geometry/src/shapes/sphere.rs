@@ -31,7 +31,10 @@ impl Sphere {
     /// # Errors
     /// If `radius` is not positive or a value is not finite.
     pub fn new(center: Vec3, radius: f32) -> Result<Self, GeometryError> {
-        Ok(Self { center: check_finite("sphere centre", center)?, radius: check_positive("sphere radius", radius)? })
+        Ok(Self {
+            center: check_finite("sphere centre", center)?,
+            radius: check_positive("sphere radius", radius)?,
+        })
     }
 
     /// Centre.

@@ -1,0 +1,117 @@
+//! Surface materials.
+
+use crate::{ShadeError, Texture};
+use prism_geometry::glam::Vec3;
+
+/// A Whitted material. The outgoing radiance at a surface is
+///
+/// `w_local · local + reflectivity · L_mirror + transparency · L_straight + transmission · (F · L_mirror + (1 − F) · L_refracted)`
+///
+/// where `w_local = 1 − reflectivity − transparency − transmission`,
+/// `local` is ambient + Lambert diffuse + Phong specular over all lights
+/// with shadows, and `F` is the Fresnel reflectance (Schlick) of a
+/// dielectric with index `ior`. `L_straight` continues the ray unbent (the
+/// report's transparent object); `L_refracted` bends it by Snell's law,
+/// with total internal reflection past the critical angle and Beer–Lambert
+/// `absorption` inside.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Surface colour (albedo), linear RGB.
+    pub texture: Texture,
+    /// Ambient coefficient (times the scene's ambient light and the albedo).
+    pub ambient: f32,
+    /// Lambert diffuse coefficient.
+    pub diffuse: f32,
+    /// Phong specular coefficient.
+    pub specular: f32,
+    /// Phong exponent.
+    pub shininess: f32,
+    /// Colour of highlights (white for plastics, the albedo for metals).
+    pub specular_color: Vec3,
+    /// Mirror reflection weight in `[0, 1]`.
+    pub reflectivity: f32,
+    /// Unbent see-through weight in `[0, 1]` (the report's transparency).
+    pub transparency: f32,
+    /// Refractive (dielectric) weight in `[0, 1]`.
+    pub transmission: f32,
+    /// Index of refraction of the inside (outside is 1).
+    pub ior: f32,
+    /// Beer–Lambert absorption coefficient per scene unit inside the
+    /// object, per channel (zero: clear).
+    pub absorption: Vec3,
+}
+
+impl Material {
+    /// A plain diffuse material of `color` with a modest highlight.
+    #[must_use]
+    pub fn diffuse(color: Vec3) -> Self {
+        Self {
+            texture: Texture::Solid(color),
+            ambient: 0.1,
+            diffuse: 0.9,
+            specular: 0.0,
+            shininess: 32.0,
+            specular_color: Vec3::ONE,
+            reflectivity: 0.0,
+            transparency: 0.0,
+            transmission: 0.0,
+            ior: 1.5,
+            absorption: Vec3::ZERO,
+        }
+    }
+
+    /// Weight of the local (Phong) term.
+    #[must_use]
+    pub fn local_weight(&self) -> f32 {
+        (1.0 - self.reflectivity - self.transparency - self.transmission).max(0.0)
+    }
+
+    /// Whether light passes through (transparent or refractive).
+    #[must_use]
+    pub fn is_see_through(&self) -> bool {
+        self.transparency > 0.0 || self.transmission > 0.0
+    }
+
+    /// Checks ranges.
+    ///
+    /// # Errors
+    /// [`ShadeError::Material`] naming the offending parameter.
+    pub fn validate(&self) -> Result<(), ShadeError> {
+        let unit = [
+            ("reflectivity", self.reflectivity),
+            ("transparency", self.transparency),
+            ("transmission", self.transmission),
+        ];
+        for (name, v) in unit {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(ShadeError::Material(format!("{name} must be in [0, 1], got {v}")));
+            }
+        }
+        let sum = self.reflectivity + self.transparency + self.transmission;
+        if sum > 1.0 + 1e-6 {
+            return Err(ShadeError::Material(format!(
+                "reflectivity + transparency + transmission must not exceed 1, got {sum}"
+            )));
+        }
+        for (name, v) in [
+            ("ambient", self.ambient),
+            ("diffuse", self.diffuse),
+            ("specular", self.specular),
+            ("shininess", self.shininess),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ShadeError::Material(format!("{name} must be a finite number >= 0, got {v}")));
+            }
+        }
+        if !(self.ior.is_finite() && self.ior > 0.0) {
+            return Err(ShadeError::Material(format!("ior must be a finite number > 0, got {}", self.ior)));
+        }
+        if !(self.absorption.is_finite() && self.absorption.min_element() >= 0.0) {
+            return Err(ShadeError::Material("absorption must be finite and >= 0".into()));
+        }
+        if !(self.specular_color.is_finite() && self.specular_color.min_element() >= 0.0) {
+            return Err(ShadeError::Material("specular_color must be finite and >= 0".into()));
+        }
+        self.texture.validate()
+    }
+}
