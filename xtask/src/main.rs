@@ -4,7 +4,11 @@
 //! `bench […]`, `bless`, `ci`. Each lives in its own module with a
 //! `run(args)` entry point; this file only dispatches.
 
+mod assets;
+mod bench;
+mod bless;
 mod ci;
+mod render;
 
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
@@ -17,6 +21,10 @@ fn main() -> Result<()> {
     std::env::set_current_dir(project_root())?;
     match cmd.as_deref() {
         Some("ci") => ci::run(&rest),
+        Some("render") => render::run(&rest),
+        Some("assets") => assets::run(&rest),
+        Some("bench") => bench::run(&rest),
+        Some("bless") => bless::run(&rest),
         Some("help" | "-h" | "--help") | None => {
             print_help();
             Ok(())
@@ -32,6 +40,10 @@ fn print_help() {
     eprintln!(
         "cargo xtask <command>\n\n\
          commands:\n  \
+         render [SCENE] [ARGS…]  build prism (release) and render SCENE (default scenes/seed.toml)\n  \
+         assets [--check]        regenerate (or check) the generated files under assets/\n  \
+         bench [ARGS…]           BVH and render benchmarks (release); see docs/benchmarks.md\n  \
+         bless                   re-render the golden reference images after an intended change\n  \
          ci                      fmt --check, clippy -D warnings, tests, docs (what CI should pass)\n"
     );
 }

@@ -8,11 +8,13 @@
 
 mod camera;
 mod material;
+mod render;
 mod scene;
 mod texture;
 
 pub use camera::Camera;
 pub use material::Material;
+pub use render::{Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples};
 pub use scene::{Fog, FogMode, PointLight, Scene};
 pub use texture::{ImageTexture, Mapping, Texture, Wrap};
 
