@@ -125,3 +125,59 @@ impl Aabb {
         Some((t0, t1))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit() -> Aabb {
+        Aabb::new(Vec3::splat(-1.0), Vec3::ONE)
+    }
+
+    #[test]
+    fn construction_and_queries() {
+        let b = Aabb::from_points(&[Vec3::new(1.0, -2.0, 0.5), Vec3::new(-1.0, 3.0, 0.0)]);
+        assert_eq!(b, Aabb::new(Vec3::new(-1.0, -2.0, 0.0), Vec3::new(1.0, 3.0, 0.5)));
+        assert_eq!(b.center(), Vec3::new(0.0, 0.5, 0.25));
+        assert_eq!(b.extent(), Vec3::new(2.0, 5.0, 0.5));
+        assert!(Aabb::EMPTY.is_empty() && !b.is_empty());
+        assert!(Aabb::from_points(&[]).is_empty());
+        assert_eq!(Aabb::EMPTY.union(b), b);
+        assert!(!Aabb::INFINITE.is_finite() && b.is_finite());
+        assert!(b.contains(Vec3::new(1.0, 3.0, 0.5), 0.0));
+        assert!(!b.contains(Vec3::new(1.001, 3.0, 0.5), 0.0));
+        assert!(b.contains(Vec3::new(1.001, 3.0, 0.5), 0.01));
+        let c = b.corners();
+        assert!(c.iter().all(|&p| b.contains(p, 0.0)));
+        assert_eq!(Aabb::from_points(&c), b);
+    }
+
+    #[test]
+    fn slab_interval() {
+        let (t0, t1) = unit().intersect_ray(&Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z)).unwrap();
+        assert_eq!((t0, t1), (4.0, 6.0));
+        // From inside: clipped to t_min.
+        let (t0, t1) = unit().intersect_ray(&Ray::new(Vec3::ZERO, Vec3::X)).unwrap();
+        assert_eq!((t0, t1), (0.0, 1.0));
+        // Zero components: inside the slab is fine, outside misses.
+        assert!(unit().intersect_ray(&Ray::new(Vec3::new(1.0, 1.0, 5.0), Vec3::NEG_Z)).is_some());
+        assert!(unit().intersect_ray(&Ray::new(Vec3::new(1.000_001, 0.0, 5.0), Vec3::NEG_Z)).is_none());
+        assert!(
+            unit()
+                .intersect_ray(&Ray::with_interval(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z, 0.0, 3.0))
+                .is_none()
+        );
+        assert!(unit().intersect_ray(&Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z)).is_none());
+        assert!(Aabb::EMPTY.intersect_ray(&Ray::new(Vec3::ZERO, Vec3::X)).is_none());
+        let (t0, t1) = Aabb::INFINITE.intersect_ray(&Ray::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 0.0))).unwrap();
+        assert_eq!((t0, t1), (0.0, f32::INFINITY));
+    }
+
+    #[test]
+    fn slab_through_an_edge_and_a_corner() {
+        let r = Ray::new(Vec3::new(3.0, 3.0, 0.0), Vec3::new(-1.0, -1.0, 0.0));
+        assert_eq!(unit().intersect_ray(&r), Some((2.0, 4.0)));
+        let r = Ray::new(Vec3::new(2.0, 2.0, 2.0), Vec3::new(-1.0, -1.0, -1.0));
+        assert_eq!(unit().intersect_ray(&r), Some((1.0, 3.0)));
+    }
+}

@@ -44,6 +44,8 @@ mod mesh;
 mod ray;
 mod shape;
 pub mod shapes;
+#[cfg(test)]
+mod testutil;
 mod transform;
 
 pub use aabb::Aabb;

@@ -186,3 +186,86 @@ impl Intersect for TriangleMesh {
         self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(self.positions[i as usize]))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{close, close2, close3};
+
+    /// The unit square in z = 0 as two triangles facing +Z.
+    fn quad(normals: Option<Vec<Vec3>>, uvs: Option<Vec<Vec2>>) -> TriangleMesh {
+        let p = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        TriangleMesh::new(p, normals, uvs, vec![[0, 1, 2], [0, 2, 3]]).unwrap()
+    }
+
+    #[test]
+    fn diagonal_and_interior_hits() {
+        let m = quad(None, None);
+        for p in [
+            Vec3::new(0.5, 0.5, 1.0),
+            Vec3::new(0.9, 0.1, 1.0),
+            Vec3::new(0.1, 0.9, 1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+        ] {
+            let h = m.intersect(&Ray::new(p, Vec3::NEG_Z)).unwrap_or_else(|| panic!("{p}"));
+            close(h.t, 1.0, 1e-6);
+            close3(h.point, p - Vec3::Z, 1e-6);
+            assert_eq!(h.geo_normal, Vec3::Z);
+            assert!(h.front_face);
+        }
+        assert!(m.intersect(&Ray::new(Vec3::new(1.000_001, 0.5, 1.0), Vec3::NEG_Z)).is_none());
+        assert_eq!(m.bounds(), Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+        assert_eq!(m.len(), 2);
+        assert!(!m.is_empty());
+    }
+
+    #[test]
+    fn interpolates_normals_and_uvs() {
+        let ns = vec![Vec3::Z, Vec3::Z, Vec3::new(1.0, 0.0, 1.0).normalize(), Vec3::Z];
+        let uvs = vec![Vec2::ZERO, Vec2::new(2.0, 0.0), Vec2::new(2.0, 2.0), Vec2::new(0.0, 2.0)];
+        let m = quad(Some(ns), Some(uvs));
+        let h = m.intersect(&Ray::new(Vec3::new(0.75, 0.25, 1.0), Vec3::NEG_Z)).unwrap();
+        close2(h.uv, Vec2::new(1.5, 0.5), 1e-6);
+        assert_eq!(h.geo_normal, Vec3::Z);
+        assert!(h.normal.x > 0.0 && (h.normal.length() - 1.0).abs() < 1e-6);
+        // Vertex normals pointing against the winding are turned to its side.
+        let m = quad(Some(vec![Vec3::NEG_Z; 4]), None);
+        let h = m.intersect(&Ray::new(Vec3::new(0.75, 0.25, -1.0), Vec3::Z)).unwrap();
+        assert_eq!(h.normal, Vec3::Z);
+        assert!(!h.front_face);
+        close2(h.uv, Vec2::new(0.5, 0.25), 1e-6);
+    }
+
+    #[test]
+    fn smooth_normals_average_the_faces() {
+        // A roof: two faces meeting at the ridge x = 0 with normals (∓1, 1, 0)/√2.
+        let p = vec![
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, -1.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(9.0, 9.0, 9.0),
+        ];
+        let mut m = TriangleMesh::new(p, None, None, vec![[0, 1, 2], [1, 3, 2]]).unwrap();
+        m.compute_smooth_normals();
+        let ns = m.normals().unwrap();
+        close3(ns[1], Vec3::Y, 1e-6);
+        close3(ns[0], Vec3::new(-1.0, 1.0, 0.0).normalize(), 1e-6);
+        assert_eq!(ns[4], Vec3::ZERO, "unused vertex");
+        assert_eq!(m.bounds().max, Vec3::new(1.0, 1.0, 0.0), "unused vertices are not bounded");
+    }
+
+    #[test]
+    fn invalid_meshes_are_rejected() {
+        let p = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+        assert!(TriangleMesh::new(p.clone(), None, None, vec![[0, 1, 3]]).is_err());
+        assert!(TriangleMesh::new(p.clone(), Some(vec![Vec3::Z; 2]), None, vec![[0, 1, 2]]).is_err());
+        assert!(TriangleMesh::new(p.clone(), None, Some(vec![Vec2::ZERO; 4]), vec![[0, 1, 2]]).is_err());
+        assert!(TriangleMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::NAN], None, None, vec![]).is_err());
+        // Degenerate faces are kept but never hit.
+        let m = TriangleMesh::new(p, None, None, vec![[0, 1, 1], [0, 1, 2]]).unwrap();
+        assert_eq!(m.degenerate_count(), 1);
+        let h = m.intersect_brute_force(&Ray::new(Vec3::new(0.5, 0.0, 1.0), Vec3::NEG_Z)).unwrap();
+        assert_eq!(h.0, 1);
+    }
+}

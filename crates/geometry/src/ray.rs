@@ -41,11 +41,15 @@ impl Ray {
         self.origin + t * self.dir
     }
 
-    /// Whether `t` lies in this ray's valid interval.
+    /// Whether `t` is finite and lies in this ray's valid interval.
+    ///
+    /// An infinite `t` (a division that overflowed for a nearly parallel
+    /// ray) or NaN is never accepted, even when `t_max` is `+inf`: it names
+    /// no point on the ray.
     #[inline]
     #[must_use]
     pub fn contains(&self, t: f32) -> bool {
-        t >= self.t_min && t <= self.t_max
+        t >= self.t_min && t <= self.t_max && t.is_finite()
     }
 
     /// A ray leaving the surface point `point` (with geometric normal
@@ -104,4 +108,49 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
             if pa[k].abs() < ORIGIN_BAND || !moved.is_finite() { pa[k] + FLOAT_SCALE * na[k] } else { moved };
     }
     Vec3::from_array(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn at_and_contains() {
+        let r = Ray::with_interval(Vec3::ONE, Vec3::new(0.0, 2.0, 0.0), 1.0, 3.0);
+        assert_eq!(r.at(1.5), Vec3::new(1.0, 4.0, 1.0));
+        assert!(r.contains(1.0) && r.contains(3.0) && !r.contains(0.5) && !r.contains(3.5));
+        let open = Ray::new(Vec3::ZERO, Vec3::X);
+        assert!(open.contains(1e30) && !open.contains(f32::INFINITY) && !open.contains(f32::NAN));
+    }
+
+    #[test]
+    fn offset_moves_to_the_normal_side_at_every_scale() {
+        for &s in &[0.0f32, 1e-3, 0.03, 0.5, 1.0, 7.0, 1e3, 1e6, -1e-3, -0.5, -1e6] {
+            let p = Vec3::new(s, -s, 0.5 * s);
+            for n in [Vec3::X, Vec3::NEG_Y, Vec3::new(1.0, 1.0, 1.0).normalize(), Vec3::new(-0.6, 0.0, 0.8)] {
+                let q = offset_ray_origin(p, n);
+                assert!((q - p).dot(n) > 0.0, "p = {p}, n = {n}, q = {q}");
+                assert!(q.is_finite());
+                // Small: a few hundred ULPs, or 1/65536 near the origin.
+                assert!((q - p).length() <= 1e-4 * p.abs().max_element().max(1.0), "{p} -> {q}");
+            }
+        }
+        let far = offset_ray_origin(Vec3::splat(f32::MAX), Vec3::ONE.normalize());
+        assert!(far.is_finite());
+    }
+
+    #[test]
+    fn spawn_picks_the_side_of_the_direction() {
+        let p = Vec3::new(1.0, 0.0, 0.0);
+        let out = Ray::spawn(p, Vec3::X, Vec3::new(1.0, 1.0, 0.0));
+        assert!(out.origin.x > 1.0 && out.t_min == 0.0);
+        let inward = Ray::spawn(p, Vec3::X, Vec3::new(-1.0, 1.0, 0.0));
+        assert!(inward.origin.x < 1.0);
+        let shadow = Ray::spawn_to(p, Vec3::X, Vec3::new(5.0, 3.0, 0.0));
+        assert!((shadow.dir.length() - 1.0).abs() < 1e-6);
+        assert!((shadow.at(shadow.t_max) - Vec3::new(5.0, 3.0, 0.0)).length() < 1e-5);
+        assert!(shadow.origin.x > 1.0);
+        let behind = Ray::spawn_to(p, Vec3::X, Vec3::new(-5.0, 0.0, 0.0));
+        assert!(behind.origin.x < 1.0);
+    }
 }

@@ -3,8 +3,9 @@
 use crate::{Aabb, GeometryError, Hit, Ray};
 use glam::{Affine3A, Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
-/// Smallest |determinant| of the linear part accepted as invertible.
-const MIN_ABS_DET: f32 = 1e-12;
+/// Smallest |determinant| of the linear part, relative to the product of
+/// its column lengths, accepted as invertible.
+const MIN_REL_DET: f32 = 1e-6;
 
 /// An invertible affine transform from object space to world space, with
 /// its inverse and normal matrix (inverse transpose) cached.
@@ -35,13 +36,19 @@ impl Transform {
     /// # Errors
     /// [`GeometryError::NonFinite`] if any entry is NaN or infinite,
     /// [`GeometryError::SingularTransform`] if the linear part is not
-    /// invertible.
+    /// safely invertible: `|det| <= 1e-6 · |c0|·|c1|·|c2|` for its columns
+    /// `c0, c1, c2` (it flattens space by a factor of a million or more
+    /// relative to its own scale; a uniform scale of any size passes).
     pub fn try_from_affine(m: Affine3A) -> Result<Self, GeometryError> {
         if !m.is_finite() {
             return Err(GeometryError::NonFinite("transform"));
         }
         let det = m.matrix3.determinant();
-        if !(det.abs() > MIN_ABS_DET) {
+        // Relative test: |det| against the volume the columns could span at
+        // most (Hadamard's bound), so that a small uniform scale (a model in
+        // millimetres) is accepted while a flattening map is not.
+        let hadamard = m.matrix3.x_axis.length() * m.matrix3.y_axis.length() * m.matrix3.z_axis.length();
+        if !(det.abs() > MIN_REL_DET * hadamard) {
             return Err(GeometryError::SingularTransform { det });
         }
         let inv = m.inverse();
@@ -246,4 +253,151 @@ pub struct Shear {
 impl Shear {
     /// No shear.
     pub const NONE: Self = Self { xy: 0.0, xz: 0.0, yx: 0.0, yz: 0.0, zx: 0.0, zy: 0.0 };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{close, close3};
+    use crate::{Cuboid, Instance, Intersect, Sphere};
+    use std::f32::consts::FRAC_PI_2;
+
+    fn t(v: Vec3) -> Transform {
+        Transform::translate(v).unwrap()
+    }
+
+    #[test]
+    fn composition_order_is_self_then_next() {
+        // Rotate a quarter turn about Y, then translate: (1,0,0) -> (0,0,-1) -> (5,0,-1).
+        let m = Transform::rotate_y(FRAC_PI_2).then(&t(Vec3::new(5.0, 0.0, 0.0)));
+        close3(m.point(Vec3::X), Vec3::new(5.0, 0.0, -1.0), 1e-6);
+        // The other order: (1,0,0) -> (6,0,0) -> (0,0,-6).
+        let m = t(Vec3::new(5.0, 0.0, 0.0)).then(&Transform::rotate_y(FRAC_PI_2));
+        close3(m.point(Vec3::X), Vec3::new(0.0, 0.0, -6.0), 1e-5);
+        // Directions ignore translation.
+        close3(m.vector(Vec3::X), Vec3::new(0.0, 0.0, -1.0), 1e-6);
+    }
+
+    #[test]
+    fn rotations_are_right_handed() {
+        close3(Transform::rotate_x(FRAC_PI_2).point(Vec3::Y), Vec3::Z, 1e-6);
+        close3(Transform::rotate_y(FRAC_PI_2).point(Vec3::Z), Vec3::X, 1e-6);
+        close3(Transform::rotate_z(FRAC_PI_2).point(Vec3::X), Vec3::Y, 1e-6);
+        let about = Transform::rotate_axis(Vec3::new(0.0, 0.0, 3.0), FRAC_PI_2).unwrap();
+        close3(about.point(Vec3::X), Vec3::Y, 1e-6);
+        assert!(Transform::rotate_axis(Vec3::ZERO, 1.0).is_err());
+    }
+
+    #[test]
+    fn inverse_round_trips() {
+        let m = Transform::scale(Vec3::new(2.0, 0.5, 3.0))
+            .unwrap()
+            .then(&Transform::shear(Shear { xy: 0.7, zx: -0.3, ..Shear::NONE }).unwrap())
+            .then(&Transform::rotate_axis(Vec3::new(1.0, 2.0, 3.0), 0.8).unwrap())
+            .then(&t(Vec3::new(-4.0, 1.0, 9.0)));
+        let inv = m.inverse();
+        for p in [Vec3::ZERO, Vec3::new(1.0, -2.0, 3.5), Vec3::splat(10.0)] {
+            close3(inv.point(m.point(p)), p, 1e-4);
+            close3(m.point(inv.point(p)), p, 1e-4);
+        }
+        close3(m.inverse().inverse().point(Vec3::ONE), m.point(Vec3::ONE), 1e-5);
+        let id = m.then(&inv);
+        close3(id.point(Vec3::new(3.0, 2.0, 1.0)), Vec3::new(3.0, 2.0, 1.0), 1e-4);
+    }
+
+    #[test]
+    fn normals_under_non_uniform_scale_use_the_inverse_transpose() {
+        // The sphere x² + y² + z² = 1 scaled by (2, 1, 1): at the object point
+        // (1,1,0)/√2 the normal is ∝ (1/2, 1, 0), not the scaled (2, 1, 0).
+        let m = Transform::scale(Vec3::new(2.0, 1.0, 1.0)).unwrap();
+        let n = m.normal(Vec3::new(1.0, 1.0, 0.0).normalize());
+        close3(n, Vec3::new(0.5, 1.0, 0.0).normalize(), 1e-6);
+        // Perpendicular to the transformed tangent.
+        let tangent = m.vector(Vec3::new(-1.0, 1.0, 0.0));
+        close(n.dot(tangent), 0.0, 1e-6);
+    }
+
+    #[test]
+    fn normals_under_shear() {
+        // The report's shear x' = x + y·tan φ: the top face (normal +Y) keeps
+        // its normal, the side x = 1 (normal +X) tilts to (1, −tan φ, 0)/len.
+        let tan = 30f32.to_radians().tan();
+        let m = Transform::shear(Shear { xy: tan, ..Shear::NONE }).unwrap();
+        close3(m.point(Vec3::new(1.0, 2.0, 0.0)), Vec3::new(1.0 + 2.0 * tan, 2.0, 0.0), 1e-6);
+        close3(m.normal(Vec3::Y), Vec3::Y, 1e-6);
+        close3(m.normal(Vec3::X), Vec3::new(1.0, -tan, 0.0).normalize(), 1e-6);
+        // Still perpendicular to the sheared side's tangent (0, 1, 0) -> (tan, 1, 0).
+        close(m.normal(Vec3::X).dot(m.vector(Vec3::Y)), 0.0, 1e-6);
+    }
+
+    #[test]
+    fn reflection_keeps_outward_normals_outward() {
+        let mirror = Transform::scale(Vec3::new(-1.0, 1.0, 1.0)).unwrap().then(&t(Vec3::new(0.0, 0.0, -5.0)));
+        let s = Instance::new(Sphere::new(Vec3::new(1.0, 0.0, 0.0), 1.0).unwrap(), mirror);
+        // The mirrored sphere is centred at (−1, 0, −5).
+        let h = s.intersect(&Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::NEG_Z)).unwrap();
+        close(h.t, 4.0, 1e-5);
+        close3(h.geo_normal, Vec3::Z, 1e-6);
+        assert!(h.front_face);
+        let b = Instance::new(Cuboid::new(Vec3::splat(-1.0), Vec3::ONE).unwrap(), mirror);
+        let h = b.intersect(&Ray::new(Vec3::new(3.0, 0.0, -5.0), Vec3::NEG_X)).unwrap();
+        close3(h.geo_normal, Vec3::X, 1e-6);
+        assert!(h.front_face);
+    }
+
+    #[test]
+    fn singular_and_non_finite_matrices_are_rejected() {
+        assert!(matches!(
+            Transform::scale(Vec3::new(1.0, 0.0, 1.0)),
+            Err(GeometryError::SingularTransform { .. })
+        ));
+        let flat = Transform::shear(Shear { xy: 1.0, yx: 1.0, ..Shear::NONE });
+        assert!(matches!(flat, Err(GeometryError::SingularTransform { .. })));
+        assert!(matches!(
+            Transform::translate(Vec3::new(f32::NAN, 0.0, 0.0)),
+            Err(GeometryError::NonFinite(_))
+        ));
+        let squash = Mat4::from_cols_array(&[
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ]);
+        assert!(Transform::try_from_mat4(squash).is_err());
+        let projective = Mat4::from_cols_array(&[
+            1.0, 0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ]);
+        assert_eq!(Transform::try_from_mat4(projective), Err(GeometryError::NotAffine));
+        // Nearly flat relative to its own scale: two columns almost parallel.
+        let nearly = Transform::shear(Shear { xy: 1.0, yx: 0.999_999_9, ..Shear::NONE });
+        assert!(matches!(nearly, Err(GeometryError::SingularTransform { .. })));
+        // A diagonal scale is exactly invertible, however anisotropic.
+        assert!(Transform::scale(Vec3::new(1.0, 1.0, 1e-7)).is_ok());
+    }
+
+    #[test]
+    fn small_and_large_uniform_scales_are_accepted() {
+        for s in [1e-5, 1e-3, 1.0, 1e4] {
+            let m = Transform::scale(Vec3::splat(s)).unwrap();
+            close3(m.inverse().point(m.point(Vec3::ONE)), Vec3::ONE, 1e-5);
+        }
+    }
+
+    #[test]
+    fn full_matrix_matches_named_constructors() {
+        let named = Transform::rotate_z(0.3).then(&t(Vec3::new(1.0, 2.0, 3.0)));
+        let m = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)) * Mat4::from_rotation_z(0.3);
+        let full = Transform::try_from_mat4(m).unwrap();
+        close3(full.point(Vec3::new(0.5, -1.0, 2.0)), named.point(Vec3::new(0.5, -1.0, 2.0)), 1e-5);
+        close3(full.normal(Vec3::X), named.normal(Vec3::X), 1e-6);
+        assert_eq!(Transform::default(), Transform::IDENTITY);
+    }
+
+    #[test]
+    fn bounds_of_a_rotated_box() {
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::ONE);
+        let r = Transform::rotate_y(45f32.to_radians()).aabb(&b);
+        let s = 2f32.sqrt();
+        close3(r.max, Vec3::new(s, 1.0, s), 1e-5);
+        close3(r.min, -Vec3::new(s, 1.0, s), 1e-5);
+        assert_eq!(Transform::IDENTITY.aabb(&Aabb::INFINITE), Aabb::INFINITE);
+        assert!(Transform::IDENTITY.aabb(&Aabb::EMPTY).is_empty());
+    }
 }

@@ -1,7 +1,7 @@
 //! Finite cones with a base cap.
 
 use super::cylinder::{Part, azimuth_u, cap_t, cap_uv, keep};
-use super::{check_finite, check_positive, solve_quadratic_half};
+use super::{SEAL, check_finite, check_positive};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -14,7 +14,9 @@ use glam::{Vec2, Vec3};
 /// (at the apex itself, `+Y`).
 ///
 /// uv: on the side, `u = 0.5 + atan2(z, x) / 2π`, `v = (y − base.y) / height`;
-/// on the cap as [`crate::Cylinder`]'s caps.
+/// on the cap as [`crate::Cylinder`]'s caps, `((x / r + 1) / 2, (z / r + 1) / 2)`.
+/// The side is accepted up to `1e-6 · height` below the base so that a ray
+/// through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cone {
     base: Vec3,
@@ -54,6 +56,27 @@ impl Cone {
     }
 }
 
+/// Roots of `a t² + 2 hb t + c = 0` given its discriminant `hb² − a c`, in
+/// ascending order; `a` may be zero (one root).
+#[inline]
+fn roots_from_disc(a: f32, hb: f32, c: f32, disc: f32) -> Option<(f32, f32)> {
+    if a == 0.0 {
+        return (hb != 0.0).then(|| {
+            let t = -c / (2.0 * hb);
+            (t, t)
+        });
+    }
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let q = -(hb + hb.signum() * disc.sqrt());
+    if q == 0.0 {
+        return Some((0.0, 0.0));
+    }
+    let (t0, t1) = (q / a, c / q);
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+}
+
 impl Intersect for Cone {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let o = ray.origin - self.base;
@@ -61,14 +84,29 @@ impl Intersect for Cone {
         let (r, h) = (self.radius, self.height);
         let k = r / h;
         let k2 = k * k;
-        let s0 = h - o.y;
         let mut best: Option<(f32, Part)> = None;
-        // x² + z² = k² s², s = h − y in [0, h]: the lower nappe only.
+        // x² + z² = k² s², s = h − y in [0, h]: the lower nappe only. In
+        // coordinates relative to the apex, p = (x, y − h, z), the side is
+        // the quadric pᵀ M p = 0 with M = diag(1, −k², 1).
+        let oa = Vec3::new(o.x, o.y - h, o.z);
         let a = d.x * d.x + d.z * d.z - k2 * d.y * d.y;
-        let hb = o.x * d.x + o.z * d.z + k2 * s0 * d.y;
-        let c = o.x * o.x + o.z * o.z - k2 * s0 * s0;
-        if let Some(roots) = solve_quadratic_half(a, hb, c) {
-            let eps = 1e-6 * h;
+        let hb = oa.x * d.x + oa.z * d.z - k2 * oa.y * d.y;
+        let c = oa.x * oa.x + oa.z * oa.z - k2 * oa.y * oa.y;
+        // The discriminant hb² − a c by the Gram identity
+        // (oᵀMo)(dᵀMd) − (oᵀMd)² = det M · wᵀ M⁻¹ w with w = o × d: it is
+        // computed from w directly, so it does not cancel. Every line
+        // through the apex is a double root (w = 0) and stays one, instead
+        // of losing √ε of its accuracy or the hit altogether.
+        let w = oa.cross(d);
+        let mut disc = k2 * (w.x * w.x + w.z * w.z) - w.y * w.y;
+        // When w is no larger than its own rounding error the line passes
+        // through the apex as far as f32 can tell: a double root there.
+        let noise = 4.0 * f32::EPSILON * oa.length() * d.length();
+        if disc < 0.0 && w.length_squared() <= noise * noise {
+            disc = 0.0;
+        }
+        if let Some(roots) = roots_from_disc(a, hb, c, disc) {
+            let eps = SEAL * h;
             for t in [roots.0, roots.1] {
                 let y = o.y + t * d.y;
                 if ray.contains(t) && y >= -eps && y <= h + eps {
@@ -100,5 +138,125 @@ impl Intersect for Cone {
     fn bounds(&self) -> Aabb {
         let r = self.radius;
         Aabb::new(self.base - Vec3::new(r, 0.0, r), self.base + Vec3::new(r, self.height, r))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{check_hit, close, close3};
+
+    /// Base radius 1 at y = 0, apex at (0, 2, 0): k = 1/2.
+    fn cone() -> Cone {
+        Cone::new(Vec3::ZERO, 1.0, 2.0).unwrap()
+    }
+
+    fn side_normal(x: f32, z: f32) -> Vec3 {
+        (Vec3::new(x, 0.0, z).normalize() + 0.5 * Vec3::Y) / 1.25f32.sqrt()
+    }
+
+    #[test]
+    fn side_from_outside() {
+        // At y = 1 the radius is 1/2.
+        let h = cone().intersect(&Ray::new(Vec3::new(5.0, 1.0, 0.0), Vec3::NEG_X)).unwrap();
+        check_hit(&h, 4.5, Vec3::new(0.5, 1.0, 0.0), side_normal(1.0, 0.0), Vec2::new(0.5, 0.5), true);
+        let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, -4.0), Vec3::Z)).unwrap();
+        check_hit(&h, 3.25, Vec3::new(0.0, 0.5, -0.75), side_normal(0.0, -1.0), Vec2::new(0.25, 0.25), true);
+    }
+
+    #[test]
+    fn base_cap_from_below() {
+        let h = cone().intersect(&Ray::new(Vec3::new(0.3, -5.0, 0.0), Vec3::Y)).unwrap();
+        check_hit(&h, 5.0, Vec3::new(0.3, 0.0, 0.0), Vec3::NEG_Y, Vec2::new(0.65, 0.5), true);
+    }
+
+    #[test]
+    fn from_inside() {
+        let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::X)).unwrap();
+        check_hit(&h, 0.75, Vec3::new(0.75, 0.5, 0.0), side_normal(1.0, 0.0), Vec2::new(0.5, 0.25), false);
+        let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 0.5, Vec3::ZERO, Vec3::NEG_Y, Vec2::new(0.5, 0.5), false);
+        let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::Y)).unwrap();
+        check_hit(&h, 1.5, Vec3::new(0.0, 2.0, 0.0), Vec3::Y, Vec2::new(0.5, 1.0), false);
+    }
+
+    #[test]
+    fn along_the_axis_hits_the_apex() {
+        let h = cone().intersect(&Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 3.0, Vec3::new(0.0, 2.0, 0.0), Vec3::Y, Vec2::new(0.5, 1.0), true);
+        // Another base position and height, where rounding differs.
+        let c = Cone::new(Vec3::new(0.3, -0.7, 1.1), 0.7, 1.3).unwrap();
+        let h = c.intersect(&Ray::new(Vec3::new(0.3, 3.0, 1.1), Vec3::NEG_Y)).unwrap();
+        close(h.t, 3.0 - 0.6, 1e-5);
+        assert!(h.front_face);
+    }
+
+    #[test]
+    fn rays_through_the_apex_from_any_direction() {
+        // Every line through the apex is a double root of the quadric; none
+        // may be lost to rounding.
+        let c = cone();
+        let apex = Vec3::new(0.0, 2.0, 0.0);
+        for i in 0..64 {
+            let a = i as f32 * 0.1;
+            // Directions inside the cone's half-angle from above.
+            let d = Vec3::new(0.3 * a.cos(), -1.0, 0.3 * a.sin());
+            let o = apex - 3.0 * d;
+            let h = c.intersect(&Ray::new(o, d)).expect("aimed at the apex");
+            close(h.t, 3.0, 1e-4);
+            close3(h.point, apex, 1e-4);
+            assert!(h.front_face, "{h:?}");
+        }
+    }
+
+    #[test]
+    fn no_second_nappe() {
+        let c = cone();
+        // Horizontal above the apex: the double cone would be hit at radius 1/2.
+        assert!(c.intersect(&Ray::new(Vec3::new(5.0, 3.0, 0.0), Vec3::NEG_X)).is_none());
+        // Down, off-axis: skips the upper nappe at y = 2.2, hits the lower at 1.8.
+        let h = c.intersect(&Ray::new(Vec3::new(0.1, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 3.2, Vec3::new(0.1, 1.8, 0.0), side_normal(1.0, 0.0), Vec2::new(0.5, 0.9), true);
+    }
+
+    #[test]
+    fn parallel_to_a_generator() {
+        // Direction (1/2, −1, 0) makes the quadratic linear (a = 0).
+        let h = cone().intersect(&Ray::new(Vec3::new(-1.0, 2.0, 0.0), Vec3::new(0.5, -1.0, 0.0))).unwrap();
+        check_hit(&h, 1.0, Vec3::new(-0.5, 1.0, 0.0), side_normal(-1.0, 0.0), Vec2::new(1.0, 0.5), true);
+    }
+
+    #[test]
+    fn grazing_the_side() {
+        let h = cone().intersect(&Ray::new(Vec3::new(0.5, 1.0, -5.0), Vec3::Z)).unwrap();
+        close(h.t, 5.0, 1e-5);
+        close3(h.point, Vec3::new(0.5, 1.0, 0.0), 1e-5);
+        assert!(cone().intersect(&Ray::new(Vec3::new(0.500_01, 1.0, -5.0), Vec3::Z)).is_none());
+    }
+
+    #[test]
+    fn cap_edge() {
+        let c = cone();
+        // Horizontal in the base plane: meets the rim.
+        let h = c.intersect(&Ray::new(Vec3::new(5.0, 0.0, 0.0), Vec3::NEG_X)).unwrap();
+        close(h.t, 4.0, 1e-6);
+        close3(h.point, Vec3::X, 1e-6);
+        // Diagonally onto the rim from below and outside.
+        let h = c.intersect(&Ray::new(Vec3::new(2.0, -1.0, 0.0), Vec3::new(-1.0, 1.0, 0.0))).unwrap();
+        close(h.t, 1.0, 1e-6);
+        close3(h.point, Vec3::X, 1e-6);
+        assert!(h.geo_normal == Vec3::NEG_Y || (h.geo_normal - side_normal(1.0, 0.0)).length() < 1e-6);
+        // Just below the base, or just outside the rim: miss.
+        // (The side is sealed to the cap over 1e-6 of the height: 2e-6 here.)
+        assert!(c.intersect(&Ray::new(Vec3::new(5.0, -4.0e-6, 0.0), Vec3::NEG_X)).is_none());
+        assert!(c.intersect(&Ray::new(Vec3::new(1.000_01, -5.0, 0.0), Vec3::Y)).is_none());
+    }
+
+    #[test]
+    fn construction_and_bounds() {
+        assert!(Cone::new(Vec3::ZERO, 0.0, 1.0).is_err());
+        assert!(Cone::new(Vec3::ZERO, 1.0, 0.0).is_err());
+        assert!(Cone::new(Vec3::INFINITY, 1.0, 1.0).is_err());
+        assert_eq!(cone().bounds(), Aabb::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0)));
     }
 }

@@ -112,3 +112,82 @@ impl Intersect for Cuboid {
         Aabb::new(self.min, self.max)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{check_hit, close, close3};
+
+    fn cube() -> Cuboid {
+        Cuboid::new(Vec3::splat(-1.0), Vec3::splat(1.0)).unwrap()
+    }
+
+    #[test]
+    fn hit_from_outside_on_each_axis() {
+        let c = cube();
+        let h = c.intersect(&Ray::new(Vec3::new(0.5, -0.5, 5.0), Vec3::NEG_Z)).unwrap();
+        check_hit(&h, 4.0, Vec3::new(0.5, -0.5, 1.0), Vec3::Z, Vec2::new(0.75, 0.25), true);
+        let h = c.intersect(&Ray::new(Vec3::new(-3.0, 0.5, 0.0), Vec3::new(2.0, 0.0, 0.0))).unwrap();
+        check_hit(&h, 1.0, Vec3::new(-1.0, 0.5, 0.0), Vec3::NEG_X, Vec2::new(0.75, 0.5), true);
+        let h = c.intersect(&Ray::new(Vec3::new(0.0, 4.0, -0.5), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 3.0, Vec3::new(0.0, 1.0, -0.5), Vec3::Y, Vec2::new(0.5, 0.25), true);
+    }
+
+    #[test]
+    fn hit_from_inside_is_the_exit_face() {
+        let h = cube().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::X)).unwrap();
+        check_hit(&h, 1.0, Vec3::new(1.0, 0.5, 0.0), Vec3::X, Vec2::new(0.75, 0.5), false);
+        let h = cube().intersect(&Ray::new(Vec3::ZERO, Vec3::new(0.0, -1.0, -1.0))).unwrap();
+        close(h.t, 1.0, 1e-6);
+        close3(h.point, Vec3::new(0.0, -1.0, -1.0), 1e-6);
+        assert!(!h.front_face);
+    }
+
+    #[test]
+    fn oblique_hit() {
+        // From (3, 2, 0) along (−1, −0.5, 0): reaches x = 1 at t = 2, y = 1 (an edge).
+        let h = cube().intersect(&Ray::new(Vec3::new(3.0, 1.5, 0.25), Vec3::new(-1.0, -0.25, 0.0))).unwrap();
+        check_hit(&h, 2.0, Vec3::new(1.0, 1.0, 0.25), Vec3::X, Vec2::new(1.0, 0.625), true);
+    }
+
+    #[test]
+    fn grazing_along_a_face_and_corner() {
+        // In the plane of the top face (zero y component): enters at the x = −1 face.
+        let h = cube().intersect(&Ray::new(Vec3::new(-5.0, 1.0, 0.0), Vec3::X)).unwrap();
+        check_hit(&h, 4.0, Vec3::new(-1.0, 1.0, 0.0), Vec3::NEG_X, Vec2::new(1.0, 0.5), true);
+        // Straight at a corner.
+        let h = cube().intersect(&Ray::new(Vec3::splat(5.0), Vec3::splat(-1.0))).unwrap();
+        close(h.t, 4.0, 1e-6);
+        close3(h.point, Vec3::ONE, 1e-6);
+        assert_eq!(h.geo_normal.abs().max_element(), 1.0);
+        assert!(h.geo_normal.min_element() >= 0.0, "one of the corner's outward faces");
+    }
+
+    #[test]
+    fn misses_just_outside_the_silhouette() {
+        let c = cube();
+        assert!(c.intersect(&Ray::new(Vec3::new(-5.0, 1.000_001, 0.0), Vec3::X)).is_none());
+        assert!(c.intersect(&Ray::new(Vec3::new(1.000_001, 0.0, 5.0), Vec3::NEG_Z)).is_none());
+        assert!(c.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z)).is_none(), "behind");
+        assert!(c.intersect(&Ray::with_interval(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z, 0.0, 3.99)).is_none());
+    }
+
+    #[test]
+    fn zero_direction_never_hits() {
+        assert!(cube().intersect(&Ray::new(Vec3::ZERO, Vec3::ZERO)).is_none());
+        // A direction so small that 1/d overflows.
+        let tiny = Ray::new(Vec3::ZERO, Vec3::new(1.0e-40, 0.0, 0.0));
+        if let Some(h) = cube().intersect(&tiny) {
+            assert!(h.t.is_finite() && h.point.is_finite(), "{h:?}");
+        }
+    }
+
+    #[test]
+    fn construction_and_bounds() {
+        assert!(Cuboid::new(Vec3::ONE, Vec3::ONE).is_err());
+        assert!(Cuboid::new(Vec3::ONE, Vec3::ZERO).is_err());
+        assert!(Cuboid::new(Vec3::ZERO, Vec3::new(1.0, f32::NAN, 1.0)).is_err());
+        let c = Cuboid::from_center_size(Vec3::new(1.0, 2.0, 3.0), Vec3::new(2.0, 4.0, 6.0)).unwrap();
+        assert_eq!(c.bounds(), Aabb::new(Vec3::ZERO, Vec3::new(2.0, 4.0, 6.0)));
+    }
+}

@@ -1,6 +1,6 @@
 //! Finite cylinders with both caps.
 
-use super::{check_finite, check_positive};
+use super::{SEAL, check_finite, check_positive};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -10,7 +10,12 @@ use std::f32::consts::PI;
 ///
 /// uv: on the side, `u = 0.5 + atan2(z, x) / 2π` about the axis and
 /// `v = (y − base.y) / height`; on a cap, `((x / r + 1) / 2, (z / r + 1) / 2)`
-/// with `x, z` relative to the axis.
+/// with `x, z` relative to the axis. All of `u`, `v` lie in `[0, 1]`; `u`
+/// grows from the seam at −X through −Z (`u = 0.25`), +X (`0.5`) and +Z
+/// (`0.75`), as on [`crate::Sphere`].
+///
+/// The side is accepted up to `1e-6 · height` beyond either cap so that a
+/// ray through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cylinder {
     base: Vec3,
@@ -110,7 +115,7 @@ impl Intersect for Cylinder {
                 let c = o.x * o.x + o.z * o.z - r * r;
                 let q = -(hb + hb.signum() * disc.sqrt());
                 let roots = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
-                let eps = 1e-6 * h;
+                let eps = SEAL * h;
                 for t in [roots.0.min(roots.1), roots.0.max(roots.1)] {
                     let y = o.y + t * d.y;
                     if ray.contains(t) && y >= -eps && y <= h + eps {
@@ -143,5 +148,110 @@ impl Intersect for Cylinder {
     fn bounds(&self) -> Aabb {
         let r = self.radius;
         Aabb::new(self.base - Vec3::new(r, 0.0, r), self.base + Vec3::new(r, self.height, r))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{check_hit, close, close3};
+
+    /// Radius 1, height 2, standing on (0, 0, 0) — shifted to test `base`.
+    fn cyl() -> Cylinder {
+        Cylinder::new(Vec3::new(0.0, -1.0, 0.0), 1.0, 2.0).unwrap()
+    }
+
+    #[test]
+    fn side_from_outside() {
+        let h = cyl().intersect(&Ray::new(Vec3::new(5.0, 0.0, 0.0), Vec3::NEG_X)).unwrap();
+        check_hit(&h, 4.0, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.5, 0.5), true);
+        let h = cyl().intersect(&Ray::new(Vec3::new(0.0, 0.5, 3.0), Vec3::NEG_Z)).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.0, 0.5, 1.0), Vec3::Z, Vec2::new(0.75, 0.75), true);
+    }
+
+    #[test]
+    fn caps_from_outside() {
+        let h = cyl().intersect(&Ray::new(Vec3::new(0.5, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 4.0, Vec3::new(0.5, 1.0, 0.0), Vec3::Y, Vec2::new(0.75, 0.5), true);
+        let h = cyl().intersect(&Ray::new(Vec3::new(0.0, -3.0, -0.5), Vec3::Y)).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.0, -1.0, -0.5), Vec3::NEG_Y, Vec2::new(0.5, 0.25), true);
+    }
+
+    #[test]
+    fn from_inside() {
+        let h = cyl().intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
+        check_hit(&h, 1.0, Vec3::new(0.0, 0.0, 1.0), Vec3::Z, Vec2::new(0.75, 0.5), false);
+        let h = cyl().intersect(&Ray::new(Vec3::ZERO, Vec3::Y)).unwrap();
+        check_hit(&h, 1.0, Vec3::new(0.0, 1.0, 0.0), Vec3::Y, Vec2::new(0.5, 0.5), false);
+        // Diagonal from inside out through the side, below the top.
+        let h = cyl().intersect(&Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.5, 0.0))).unwrap();
+        check_hit(&h, 1.0, Vec3::new(1.0, 0.5, 0.0), Vec3::X, Vec2::new(0.5, 0.75), false);
+    }
+
+    #[test]
+    fn enters_through_the_top_leaves_through_the_side() {
+        // From (0, 2, 0) along (1, −1, 0): the infinite cylinder's first root
+        // lies above the top, so the cap at t = 1 is the answer.
+        let h = cyl().intersect(&Ray::new(Vec3::new(-1.5, 2.5, 0.0), Vec3::new(1.0, -1.0, 0.0))).unwrap();
+        check_hit(&h, 1.5, Vec3::new(0.0, 1.0, 0.0), Vec3::Y, Vec2::new(0.5, 0.5), true);
+        let inside = Ray::with_interval(Vec3::new(-1.5, 2.5, 0.0), Vec3::new(1.0, -1.0, 0.0), 1.6, f32::MAX);
+        let h = cyl().intersect(&inside).unwrap();
+        check_hit(&h, 2.5, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.5, 0.5), false);
+    }
+
+    #[test]
+    fn parallel_to_the_axis() {
+        let c = cyl();
+        assert!(c.intersect(&Ray::new(Vec3::new(2.0, 5.0, 0.0), Vec3::NEG_Y)).is_none());
+        assert!(c.intersect(&Ray::new(Vec3::new(1.000_001, 5.0, 0.0), Vec3::NEG_Y)).is_none());
+        // Exactly on the rim: touches the top cap's edge.
+        let h = c.intersect(&Ray::new(Vec3::new(0.0, 5.0, 1.0), Vec3::NEG_Y)).unwrap();
+        close(h.t, 4.0, 1e-6);
+        close3(h.point, Vec3::new(0.0, 1.0, 1.0), 1e-6);
+    }
+
+    #[test]
+    fn grazing_the_side() {
+        let h = cyl().intersect(&Ray::new(Vec3::new(1.0, 0.0, -5.0), Vec3::Z)).unwrap();
+        check_hit(&h, 5.0, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.5, 0.5), false);
+        assert!(cyl().intersect(&Ray::new(Vec3::new(1.000_001, 0.0, -5.0), Vec3::Z)).is_none());
+    }
+
+    #[test]
+    fn cap_edges() {
+        let c = cyl();
+        // Horizontal ray in the plane of the top cap: hits the rim.
+        let h = c.intersect(&Ray::new(Vec3::new(5.0, 1.0, 0.0), Vec3::NEG_X)).unwrap();
+        close(h.t, 4.0, 1e-6);
+        close3(h.point, Vec3::new(1.0, 1.0, 0.0), 1e-6);
+        close3(h.geo_normal, Vec3::X, 1e-6);
+        // Just above the top, or just below the bottom: miss.
+        // (The side is sealed to the caps over 1e-6 of the height: 2e-6 here.)
+        assert!(c.intersect(&Ray::new(Vec3::new(5.0, 1.000_004, 0.0), Vec3::NEG_X)).is_none());
+        assert!(c.intersect(&Ray::new(Vec3::new(5.0, -1.000_004, 0.0), Vec3::NEG_X)).is_none());
+        // Diagonally onto the top rim: cap and side meet at the same t.
+        let h = c.intersect(&Ray::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(-1.0, -1.0, 0.0))).unwrap();
+        close(h.t, 1.0, 1e-6);
+        close3(h.point, Vec3::new(1.0, 1.0, 0.0), 1e-6);
+        assert!(h.geo_normal == Vec3::X || h.geo_normal == Vec3::Y, "{h:?}");
+        // Diagonally onto the bottom rim from below.
+        let h = c.intersect(&Ray::new(Vec3::new(0.0, -2.0, -2.0), Vec3::new(0.0, 1.0, 1.0))).unwrap();
+        close(h.t, 1.0, 1e-6);
+        close3(h.point, Vec3::new(0.0, -1.0, -1.0), 1e-6);
+        // Skimming past the rim by a hair, on the outside of the corner, misses.
+        let miss = Ray::new(Vec3::new(2.0, 0.000_01, 0.0), Vec3::new(-1.0, 1.0, 0.0));
+        assert!(c.intersect(&miss).is_none());
+        let hit = Ray::new(Vec3::new(2.0, -0.000_01, 0.0), Vec3::new(-1.0, 1.0, 0.0));
+        close3(c.intersect(&hit).unwrap().geo_normal, Vec3::X, 1e-6);
+        let miss = Ray::new(Vec3::new(2.0, -0.000_01, 0.0), Vec3::new(-1.0, -1.0, 0.0));
+        assert!(c.intersect(&miss).is_none());
+    }
+
+    #[test]
+    fn construction_and_bounds() {
+        assert!(Cylinder::new(Vec3::ZERO, 0.0, 1.0).is_err());
+        assert!(Cylinder::new(Vec3::ZERO, 1.0, -1.0).is_err());
+        assert!(Cylinder::new(Vec3::NAN, 1.0, 1.0).is_err());
+        assert_eq!(cyl().bounds(), Aabb::new(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 1.0, 1.0)));
     }
 }

@@ -81,3 +81,50 @@ impl Intersect for Disk {
         Aabb::new(self.center - e, self.center + e)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::check_hit;
+
+    fn disk() -> Disk {
+        Disk::new(Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 2.0).unwrap()
+    }
+
+    #[test]
+    fn hits_from_both_sides_with_polar_uv() {
+        let d = disk();
+        // Tangent +X (u = 0), bitangent Y × X = −Z (u = 1/4).
+        let h = d.intersect(&Ray::new(Vec3::new(1.0, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 4.0, Vec3::new(1.0, 1.0, 0.0), Vec3::Y, Vec2::new(0.0, 0.5), true);
+        let h = d.intersect(&Ray::new(Vec3::new(0.0, -1.0, -1.0), Vec3::Y)).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.0, 1.0, -1.0), Vec3::Y, Vec2::new(0.25, 0.5), false);
+        let h = d.intersect(&Ray::new(Vec3::new(-2.0, 2.0, 0.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&h, 1.0, Vec3::new(-2.0, 1.0, 0.0), Vec3::Y, Vec2::new(0.5, 1.0), true);
+    }
+
+    #[test]
+    fn rim_and_just_outside() {
+        let d = disk();
+        assert!(d.intersect(&Ray::new(Vec3::new(0.0, 5.0, 2.0), Vec3::NEG_Y)).is_some());
+        assert!(d.intersect(&Ray::new(Vec3::new(0.0, 5.0, 2.000_001), Vec3::NEG_Y)).is_none());
+        assert!(d.intersect(&Ray::new(Vec3::new(-5.0, 1.0, 0.0), Vec3::X)).is_none(), "in its plane");
+        assert!(d.intersect(&Ray::new(Vec3::new(0.0, 2.0, 0.0), Vec3::X)).is_none(), "parallel");
+    }
+
+    #[test]
+    fn nearly_parallel_ray_never_returns_nan() {
+        let r = Ray::new(Vec3::new(0.0, 1.0e10, 0.0), Vec3::new(0.0, -1.0e-30, 0.0));
+        assert!(disk().intersect(&r).is_none());
+    }
+
+    #[test]
+    fn bounds_of_a_tilted_disk() {
+        let d = Disk::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), 1.0).unwrap();
+        let b = d.bounds();
+        let s = 0.5f32.sqrt();
+        assert!((b.max - Vec3::new(s, s, 1.0)).abs().max_element() < 1e-6, "{b:?}");
+        assert!(Disk::new(Vec3::ZERO, Vec3::Y, 0.0).is_err());
+        assert!(Disk::new(Vec3::ZERO, Vec3::ZERO, 1.0).is_err());
+    }
+}

@@ -18,6 +18,12 @@ pub use triangle::{Triangle, TriangleRay};
 
 use crate::{GeometryError, Ray};
 
+/// How far (relative to the height) the side of a cylinder or cone is
+/// accepted past its caps, so that a ray through the rim, where side and cap
+/// meet, cannot slip between the two tests by rounding. Rays passing more
+/// than `SEAL · height` beyond a cap miss.
+pub(crate) const SEAL: f32 = 1e-6;
+
 /// Smallest accepted radius, height or edge length.
 pub(crate) fn check_positive(what: &'static str, v: f32) -> Result<f32, GeometryError> {
     if !v.is_finite() {
@@ -31,31 +37,6 @@ pub(crate) fn check_positive(what: &'static str, v: f32) -> Result<f32, Geometry
 
 pub(crate) fn check_finite(what: &'static str, v: glam::Vec3) -> Result<glam::Vec3, GeometryError> {
     if v.is_finite() { Ok(v) } else { Err(GeometryError::NonFinite(what)) }
-}
-
-/// Roots of `a t² + 2 h t + c = 0` in ascending order, computed without
-/// catastrophic cancellation; `None` when there is no real root. `a` may be
-/// zero (linear case).
-#[inline]
-pub(crate) fn solve_quadratic_half(a: f32, h: f32, c: f32) -> Option<(f32, f32)> {
-    if a == 0.0 {
-        if h == 0.0 {
-            return None;
-        }
-        let t = -c / (2.0 * h);
-        return Some((t, t));
-    }
-    let disc = h * h - a * c;
-    if disc < 0.0 {
-        return None;
-    }
-    let q = -(h + h.signum() * disc.sqrt());
-    if q == 0.0 {
-        // h == 0 and disc == 0: the double root is 0 (c == 0).
-        return Some((0.0, 0.0));
-    }
-    let (t0, t1) = (q / a, c / q);
-    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
 /// The first of the candidate `t` values that lies in the ray's interval.

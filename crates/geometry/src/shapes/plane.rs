@@ -75,3 +75,64 @@ impl Intersect for Plane {
         Aabb::INFINITE
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{check_hit, close3};
+
+    fn floor() -> Plane {
+        Plane::new(Vec3::ZERO, Vec3::new(0.0, 3.0, 0.0)).unwrap()
+    }
+
+    #[test]
+    fn hit_from_above_with_world_unit_uv() {
+        let h = floor().intersect(&Ray::new(Vec3::new(1.0, 2.0, 3.0), Vec3::NEG_Y)).unwrap();
+        // u along +X, v along −Z.
+        check_hit(&h, 2.0, Vec3::new(1.0, 0.0, 3.0), Vec3::Y, Vec2::new(1.0, -3.0), true);
+    }
+
+    #[test]
+    fn hit_from_below_keeps_the_declared_normal() {
+        let h = floor().intersect(&Ray::new(Vec3::new(0.0, -2.0, 0.0), Vec3::new(0.0, 1.0, -1.0))).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.0, 0.0, -2.0), Vec3::Y, Vec2::new(0.0, 2.0), false);
+    }
+
+    #[test]
+    fn parallel_and_in_plane_rays_miss() {
+        let p = floor();
+        assert!(p.intersect(&Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::X)).is_none());
+        assert!(p.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).is_none());
+        assert!(p.intersect(&Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::Y)).is_none(), "pointing away");
+    }
+
+    #[test]
+    fn tilted_plane_and_tangent_frame() {
+        let p = Plane::new(Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+        let h = p.intersect(&Ray::new(Vec3::new(0.5, 0.25, 0.0), Vec3::NEG_Z)).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.5, 0.25, -2.0), Vec3::Z, Vec2::new(0.5, 0.25), true);
+        // Normal near ±X: the tangent falls back to +Z; the frame is orthonormal.
+        let side = Plane::new(Vec3::ZERO, Vec3::NEG_X).unwrap();
+        close3(side.tangent(), Vec3::Z, 1e-6);
+        let h = side.intersect(&Ray::new(Vec3::new(-1.0, 2.0, 3.0), Vec3::X)).unwrap();
+        // The ray comes from −X, the side the normal points to.
+        check_hit(&h, 1.0, Vec3::new(0.0, 2.0, 3.0), Vec3::NEG_X, Vec2::new(3.0, 2.0), true);
+    }
+
+    #[test]
+    fn nearly_parallel_ray_never_returns_nan() {
+        // The division overflows to t = ∞: that is no hit, not a NaN point.
+        let r = Ray::new(Vec3::new(0.0, 1.0e10, 0.0), Vec3::new(1.0, -1.0e-30, 0.0));
+        match floor().intersect(&r) {
+            None => {}
+            Some(h) => assert!(h.t.is_finite() && h.point.is_finite(), "{h:?}"),
+        }
+    }
+
+    #[test]
+    fn rejects_zero_normal() {
+        assert!(Plane::new(Vec3::ZERO, Vec3::ZERO).is_err());
+        assert!(Plane::new(Vec3::NAN, Vec3::Y).is_err());
+        assert_eq!(floor().bounds(), Aabb::INFINITE);
+    }
+}

@@ -78,3 +78,99 @@ impl Intersect for Sphere {
         Aabb::new(self.center - Vec3::splat(self.radius), self.center + Vec3::splat(self.radius))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{check_hit, close};
+
+    fn sphere() -> Sphere {
+        Sphere::new(Vec3::new(0.0, 0.0, -5.0), 1.0).unwrap()
+    }
+
+    #[test]
+    fn hit_from_outside_head_on() {
+        let h = sphere().intersect(&Ray::new(Vec3::ZERO, Vec3::NEG_Z)).unwrap();
+        // d = +Z: u = 0.5 + atan2(1, 0)/2π = 0.75, v = 0.5.
+        check_hit(&h, 4.0, Vec3::new(0.0, 0.0, -4.0), Vec3::Z, Vec2::new(0.75, 0.5), true);
+    }
+
+    #[test]
+    fn t_is_in_units_of_an_unnormalised_direction() {
+        let h = sphere().intersect(&Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, -2.0))).unwrap();
+        close(h.t, 2.0, 1e-6);
+    }
+
+    #[test]
+    fn hit_from_inside_is_the_far_side_with_outward_normal() {
+        let h = sphere().intersect(&Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::X)).unwrap();
+        check_hit(&h, 1.0, Vec3::new(1.0, 0.0, -5.0), Vec3::X, Vec2::new(0.5, 0.5), false);
+    }
+
+    #[test]
+    fn poles_and_seam_follow_the_report_mapping() {
+        let s = sphere();
+        let top = s.intersect(&Ray::new(Vec3::new(0.0, 5.0, -5.0), Vec3::NEG_Y)).unwrap();
+        check_hit(&top, 4.0, Vec3::new(0.0, 1.0, -5.0), Vec3::Y, Vec2::new(0.5, 0.0), true);
+        let bottom = s.intersect(&Ray::new(Vec3::new(0.0, -5.0, -5.0), Vec3::Y)).unwrap();
+        check_hit(&bottom, 4.0, Vec3::new(0.0, -1.0, -5.0), Vec3::NEG_Y, Vec2::new(0.5, 1.0), true);
+        // +X is u = 0.5, −Z is u = 0.25 (atan2(−1, 0) = −π/2).
+        let back = s.intersect(&Ray::new(Vec3::new(0.0, 0.0, -10.0), Vec3::Z)).unwrap();
+        check_hit(&back, 4.0, Vec3::new(0.0, 0.0, -6.0), Vec3::NEG_Z, Vec2::new(0.25, 0.5), true);
+        let u = sphere_uv(Vec3::new(-1.0, 0.0, 0.0)).x;
+        assert!(u == 1.0 || u == 0.0, "seam at −X, got {u}");
+    }
+
+    #[test]
+    fn grazing_ray_touches_at_one_point() {
+        // Tangent to the sphere at its top, along +X (zero y and z components).
+        let h = sphere().intersect(&Ray::new(Vec3::new(-5.0, 1.0, -5.0), Vec3::X)).unwrap();
+        check_hit(&h, 5.0, Vec3::new(0.0, 1.0, -5.0), Vec3::Y, Vec2::new(0.5, 0.0), false);
+    }
+
+    #[test]
+    fn misses_just_outside_the_silhouette() {
+        let s = sphere();
+        assert!(s.intersect(&Ray::new(Vec3::new(-5.0, 1.000_001, -5.0), Vec3::X)).is_none());
+        assert!(s.intersect(&Ray::new(Vec3::new(1.000_001, 0.0, 0.0), Vec3::NEG_Z)).is_none());
+        assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).is_none(), "behind the ray");
+    }
+
+    #[test]
+    fn interval_selects_the_root() {
+        let s = sphere();
+        assert!(s.intersect(&Ray::with_interval(Vec3::ZERO, Vec3::NEG_Z, 0.0, 3.9)).is_none());
+        let far = s.intersect(&Ray::with_interval(Vec3::ZERO, Vec3::NEG_Z, 4.5, 100.0)).unwrap();
+        check_hit(&far, 6.0, Vec3::new(0.0, 0.0, -6.0), Vec3::NEG_Z, Vec2::new(0.25, 0.5), false);
+    }
+
+    #[test]
+    fn distant_sphere_is_exact() {
+        let s = Sphere::new(Vec3::new(0.0, 0.0, -1.0e4), 1.0).unwrap();
+        let h = s.intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::NEG_Z)).unwrap();
+        let expected_z = -1.0e4 + 0.75f32.sqrt();
+        close(h.point.z, expected_z, 2e-3);
+        // Within a few ULPs of the largest coordinate (ulp(1e4) ≈ 1e-3).
+        close(h.point.y, 0.5, 1e-3);
+        close((h.point - s.center()).length(), 1.0, 2e-3);
+    }
+
+    #[test]
+    fn zero_direction_never_hits() {
+        assert!(sphere().intersect(&Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO)).is_none());
+    }
+
+    #[test]
+    fn rejects_bad_parameters() {
+        assert!(Sphere::new(Vec3::ZERO, 0.0).is_err());
+        assert!(Sphere::new(Vec3::ZERO, -1.0).is_err());
+        assert!(Sphere::new(Vec3::ZERO, f32::NAN).is_err());
+        assert!(Sphere::new(Vec3::splat(f32::INFINITY), 1.0).is_err());
+    }
+
+    #[test]
+    fn bounds_are_tight() {
+        let b = sphere().bounds();
+        assert_eq!(b, Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -4.0)));
+    }
+}

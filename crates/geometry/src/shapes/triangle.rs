@@ -146,9 +146,74 @@ impl TriangleRay {
         let t_scaled = u * az + v * bz + w * cz;
         let rcp = 1.0 / det;
         let t = t_scaled * rcp;
-        if !(t >= self.t_min && t <= self.t_max) {
+        if !(t >= self.t_min && t <= self.t_max && t.is_finite()) {
             return None;
         }
         Some((t, v * rcp, w * rcp))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{check_hit, close};
+
+    fn tri() -> Triangle {
+        Triangle::new([Vec3::ZERO, Vec3::X, Vec3::Y]).unwrap()
+    }
+
+    #[test]
+    fn hits_from_both_sides_with_barycentric_uv() {
+        let h = tri().intersect(&Ray::new(Vec3::new(0.25, 0.5, 2.0), Vec3::NEG_Z)).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.25, 0.5, 0.0), Vec3::Z, Vec2::new(0.25, 0.5), true);
+        let h = tri().intersect(&Ray::new(Vec3::new(0.5, 0.25, -1.0), Vec3::new(0.0, 0.0, 0.5))).unwrap();
+        check_hit(&h, 2.0, Vec3::new(0.5, 0.25, 0.0), Vec3::Z, Vec2::new(0.5, 0.25), false);
+        // Oblique.
+        let h = tri().intersect(&Ray::new(Vec3::new(1.25, 0.25, 1.0), Vec3::new(-1.0, 0.0, -1.0))).unwrap();
+        check_hit(&h, 1.0, Vec3::new(0.25, 0.25, 0.0), Vec3::Z, Vec2::new(0.25, 0.25), true);
+    }
+
+    #[test]
+    fn edges_and_vertices_are_hit_and_just_outside_is_not() {
+        let t = tri();
+        for p in [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.5, 0.5, 0.0)] {
+            let h = t.intersect(&Ray::new(p + Vec3::Z, Vec3::NEG_Z)).unwrap_or_else(|| panic!("{p}"));
+            close(h.t, 1.0, 1e-6);
+        }
+        for p in [Vec3::new(0.5, -1e-6, 1.0), Vec3::new(-1e-6, 0.5, 1.0), Vec3::new(0.5, 0.500_001, 1.0)] {
+            assert!(t.intersect(&Ray::new(p, Vec3::NEG_Z)).is_none(), "{p}");
+        }
+    }
+
+    #[test]
+    fn parallel_rays_and_intervals() {
+        let t = tri();
+        assert!(t.intersect(&Ray::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X)).is_none(), "in its plane");
+        assert!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::X)).is_none());
+        assert!(t.intersect(&Ray::with_interval(Vec3::new(0.2, 0.2, 1.0), Vec3::NEG_Z, 0.0, 0.5)).is_none());
+        assert!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::Z)).is_none(), "behind");
+        assert!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::ZERO)).is_none());
+    }
+
+    #[test]
+    fn nearly_parallel_ray_never_returns_infinity() {
+        // The plane is reached at t = 1e48, beyond f32: no hit, not t = ∞.
+        let far = Triangle::new([
+            Vec3::new(-1e15, -1e15, 0.0),
+            Vec3::new(1e15, -1e15, 0.0),
+            Vec3::new(0.0, 1e15, 0.0),
+        ]);
+        let r = Ray::new(Vec3::new(0.0, 0.0, 1e10), Vec3::new(1e-38, 0.0, -1e-38));
+        if let Some(h) = far.unwrap().intersect(&r) {
+            assert!(h.t.is_finite() && h.point.is_finite(), "{h:?}");
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_are_rejected() {
+        assert!(Triangle::new([Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0)]).is_err());
+        assert!(Triangle::new([Vec3::ZERO, Vec3::X, Vec3::NAN]).is_err());
+        assert_eq!(tri().bounds(), Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+        assert_eq!(tri().normal(), Vec3::Z);
     }
 }
