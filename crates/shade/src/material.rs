@@ -14,6 +14,31 @@ use prism_geometry::glam::Vec3;
 /// report's transparent object); `L_refracted` bends it by Snell's law,
 /// with total internal reflection past the critical angle and Beer–Lambert
 /// `absorption` inside.
+///
+/// In detail, with `a` the albedo (the texture's colour at the point), `n`
+/// the shading normal turned toward the viewer, `v` the unit direction to
+/// the viewer, and for each light `l` its unit direction, `E` its
+/// `color · intensity` and `S` its shadow transmittance:
+///
+/// `local = ambient · a · scene.ambient + Σ S · E · (diffuse · a · max(0, n·l) + specular · specular_color · max(0, r·v)^shininess)`
+///
+/// with `r = 2 (n·l) n − l`; lights with `n·l <= 0` add nothing (and cost
+/// no shadow ray). `S` is the product over the objects on the segment to
+/// the light of `clamp((transparency + transmission) · a_occluder, 0, 1)`
+/// per channel: opaque objects block, transparent ones cast lighter shadows
+/// of their own colour. A closed solid (sphere, cuboid, cylinder, cone)
+/// counts once, where the segment enters it; open surfaces (planes, disks,
+/// triangles, mesh faces) count at every crossing. Absorption does not
+/// darken shadows.
+///
+/// `L_mirror` reflects the ray about `n`; `L_straight` continues it from
+/// the far side of a closed solid (its exit is not shaded); the dielectric
+/// enters when the ray meets the outer side (`Hit::front_face`, ratio
+/// `1 / ior`) and leaves otherwise (ratio `ior`). Every segment travelled
+/// inside an absorbing dielectric (ending on the inner side of its
+/// surface) is multiplied by `exp(−absorption · length)`. `L_straight` and
+/// `L_refracted` are not tinted by the albedo; use `absorption` for
+/// coloured glass.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Surface colour (albedo), linear RGB.

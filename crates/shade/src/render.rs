@@ -1,9 +1,17 @@
-//! The renderer: tiles in parallel, deterministic per-pixel samples.
+//! The renderer: rows in parallel, deterministic per-pixel samples.
 //!
-//! (Placeholder integrator: normal shading only; the Whitted integrator
-//! replaces `radiance` without changing this API.)
+//! Sampling: with `spp = n`, pixel `(i, j)` is divided into an `m × m`
+//! grid of strata, `m = ⌈√n⌉`. Sample `s` falls in stratum
+//! `(s · stride) mod m²` (a fixed stride coprime with `m²`, about 0.618·m²,
+//! so that the first samples spread over the pixel), at a point jittered
+//! inside it by a hash of `(pixel index, s)`. A pixel's samples therefore
+//! depend on nothing but the pixel and the sample index: the image is the
+//! same, bit for bit, for any number of threads. With `spp = 1` the single
+//! sample is the pixel centre, so a 1-spp render measures the scene
+//! exactly.
 
 use crate::Scene;
+use crate::integrator::Tracer;
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -14,9 +22,13 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 pub struct RenderSettings {
     /// Samples per pixel (stratified), at least 1.
     pub spp: u32,
-    /// Maximum recursion depth of reflection/refraction rays.
+    /// Maximum recursion depth of reflection/refraction/transparency rays:
+    /// 0 traces camera and shadow rays only. Values above
+    /// [`crate::MAX_DEPTH_LIMIT`] act as that limit.
     pub max_depth: u32,
-    /// Rays whose weight on the pixel falls below this are not traced.
+    /// Secondary rays whose weight on the pixel (the product of the
+    /// coefficients and fog along their path, largest channel) falls below
+    /// this are not traced; rays of weight 0 never are.
     pub min_contribution: f32,
     /// Worker threads; `None` uses every core.
     pub threads: Option<usize>,
@@ -67,9 +79,13 @@ pub struct RenderStats {
     pub rays: u64,
     /// Whether the render was cancelled before the end.
     pub cancelled: bool,
+    /// Samples whose radiance was not finite (NaN or infinite) and so
+    /// counted as black; 0 unless something is wrong.
+    pub nonfinite_samples: u64,
 }
 
-/// Renders the whole image with `settings.spp` samples per pixel.
+/// Renders the whole image with `settings.spp` samples per pixel: the
+/// per-pixel sums of [`render_samples`] over `0..spp`, times `1 / spp`.
 pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) -> (Image, RenderStats) {
     let (mut image, stats) = render_samples(scene, settings, 0..settings.spp.max(1), hooks);
     let inv = 1.0 / settings.spp.max(1) as f32;
@@ -81,7 +97,14 @@ pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) 
 
 /// Renders samples `samples` (of `settings.spp` per pixel) and returns the
 /// per-pixel *sums*, so that passes over disjoint ranges add up to the full
-/// render exactly (progressive refinement in the viewer).
+/// render (progressive refinement in the viewer).
+///
+/// Each pixel sums its samples in increasing sample order starting from
+/// zero, so one-sample passes `0..1`, `1..2`, … added in that order to a
+/// zeroed buffer give exactly the sums [`render`] uses (then multiply by
+/// `1 / spp` as it does); passes of several samples agree with it up to
+/// float rounding of the additions. Sample `s` is the same whatever the
+/// passes, and the same on any number of threads.
 pub fn render_samples(
     scene: &Scene,
     settings: &RenderSettings,
@@ -91,7 +114,10 @@ pub fn render_samples(
     let start = std::time::Instant::now();
     let cam = &scene.camera;
     let (w, h) = (cam.width(), cam.height());
+    let pattern = SamplePattern::new(settings.spp);
+    let see_through = Tracer::scene_is_see_through(scene);
     let rays = AtomicU64::new(0);
+    let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let mut pixels = vec![Vec3::ZERO; w as usize * h as usize];
     let work = |pixels: &mut [Vec3]| {
@@ -99,15 +125,27 @@ pub fn render_samples(
             if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                 return;
             }
+            let mut tracer = Tracer::new(scene, settings, see_through);
+            let mut bad = 0u64;
+            let row_start = j as u64 * u64::from(w);
             for (i, px) in row.iter_mut().enumerate() {
-                for _s in samples.clone() {
-                    let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
-                    rays.fetch_add(1, Ordering::Relaxed);
-                    *px += match scene.accel.closest_hit(&ray) {
-                        Some(h) => 0.5 * (h.hit.normal + Vec3::ONE),
-                        None => scene.background,
-                    };
+                let index = row_start + i as u64;
+                let mut sum = Vec3::ZERO;
+                for s in samples.clone() {
+                    let (dx, dy) = pattern.offset(index, s);
+                    let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+                    let l = tracer.trace_camera(&ray);
+                    if l.is_finite() {
+                        sum += l;
+                    } else {
+                        bad += 1;
+                    }
                 }
+                *px = sum;
+            }
+            rays.fetch_add(tracer.rays, Ordering::Relaxed);
+            if bad > 0 {
+                nonfinite.fetch_add(bad, Ordering::Relaxed);
             }
             let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
             if let Some(p) = hooks.progress {
@@ -123,6 +161,107 @@ pub fn render_samples(
         None => work(&mut pixels),
     }
     let cancelled = hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
-    let stats = RenderStats { seconds: start.elapsed().as_secs_f64(), rays: rays.into_inner(), cancelled };
+    let nonfinite_samples = nonfinite.into_inner();
+    debug_assert!(nonfinite_samples == 0, "{nonfinite_samples} non-finite samples");
+    let stats = RenderStats {
+        seconds: start.elapsed().as_secs_f64(),
+        rays: rays.into_inner(),
+        cancelled,
+        nonfinite_samples,
+    };
     (Image { width: w, height: h, pixels }, stats)
+}
+
+/// The stratified, hashed sample positions within a pixel.
+#[derive(Clone, Copy, Debug)]
+struct SamplePattern {
+    /// Strata per side (`⌈√spp⌉`); 0 means "pixel centre only" (spp = 1).
+    m: u32,
+    /// Number of strata, `m²`.
+    strata: u32,
+    /// Step through the strata, coprime with `strata`.
+    stride: u32,
+}
+
+impl SamplePattern {
+    fn new(spp: u32) -> Self {
+        let spp = spp.max(1);
+        if spp == 1 {
+            return Self { m: 0, strata: 1, stride: 1 };
+        }
+        let mut m = (spp as f64).sqrt().ceil() as u32;
+        while m.saturating_mul(m) < spp {
+            m += 1;
+        }
+        let strata = m.saturating_mul(m);
+        let mut stride = ((f64::from(strata) * 0.618_033_988_75).round() as u32).max(1);
+        while gcd(stride, strata) != 1 {
+            stride += 1;
+        }
+        Self { m, strata, stride }
+    }
+
+    /// Offset of sample `s` of pixel number `pixel` inside its pixel, in `[0, 1)²`.
+    #[inline]
+    fn offset(&self, pixel: u64, s: u32) -> (f32, f32) {
+        if self.m == 0 {
+            return (0.5, 0.5);
+        }
+        let k = ((u64::from(s) * u64::from(self.stride)) % u64::from(self.strata)) as u32;
+        let (sx, sy) = (k % self.m, k / self.m);
+        let z = splitmix64((pixel << 32) ^ u64::from(s) ^ 0x5851_F42D_4C95_7F2D);
+        let jx = (z >> 40) as f32 * (1.0 / 16_777_216.0);
+        let jy = ((z >> 16) & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0);
+        let m = self.m as f32;
+        let below_one = 1.0 - f32::EPSILON / 2.0;
+        (((sx as f32 + jx) / m).min(below_one), ((sy as f32 + jy) / m).min(below_one))
+    }
+}
+
+fn gcd(mut a: u32, mut b: u32) -> u32 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+/// Steele, Lea and Flood's SplitMix64 finaliser: a well-mixed 64-bit hash.
+#[inline]
+fn splitmix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_sample_is_the_centre() {
+        let p = SamplePattern::new(1);
+        assert_eq!(p.offset(123, 0), (0.5, 0.5));
+    }
+
+    #[test]
+    fn samples_are_stratified_and_deterministic() {
+        for spp in [2u32, 3, 4, 5, 9, 10, 16, 17] {
+            let p = SamplePattern::new(spp);
+            let m = p.m;
+            assert_eq!(m, (spp as f64).sqrt().ceil() as u32);
+            let mut seen = vec![false; (m * m) as usize];
+            for s in 0..spp {
+                let (x, y) = p.offset(77, s);
+                assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+                let cell = ((y * m as f32) as u32 * m + (x * m as f32) as u32) as usize;
+                assert!(!seen[cell], "spp {spp}: two samples in stratum {cell}");
+                seen[cell] = true;
+                assert_eq!(p.offset(77, s), (x, y));
+            }
+        }
+        // Different pixels get different jitter.
+        let p = SamplePattern::new(4);
+        assert_ne!(p.offset(1, 0), p.offset(2, 0));
+    }
 }

@@ -1,8 +1,8 @@
 //! A renderable scene: geometry, materials, lights, camera, fog.
 
-use crate::{Camera, Material};
-use prism_bvh::Accel;
-use prism_geometry::glam::Vec3;
+use crate::{Camera, Material, ShadeError};
+use prism_bvh::{Accel, Object, SceneHit};
+use prism_geometry::glam::{Affine3A, Vec3};
 
 /// A point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,7 +37,73 @@ pub enum FogMode {
     },
 }
 
-/// Fog blended toward `color` over every ray segment.
+impl FogMode {
+    /// The fog weight at distance `d` from the eye, in `[0, 1]` (0: clear,
+    /// 1: only fog). `d = +∞` (a ray that hits nothing) gives 1 except for
+    /// a zero density. A linear law with `end <= start` is a step at `start`.
+    #[must_use]
+    pub fn weight(&self, d: f32) -> f32 {
+        let w = match *self {
+            FogMode::Linear { start, end } => {
+                if end > start {
+                    (d - start) / (end - start)
+                } else if d >= start {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            FogMode::Exponential { density } => {
+                if density > 0.0 {
+                    1.0 - (-density * d).exp()
+                } else {
+                    0.0
+                }
+            }
+            FogMode::ExponentialSquared { density } => {
+                if density > 0.0 {
+                    let x = density * d;
+                    1.0 - (-(x * x)).exp()
+                } else {
+                    0.0
+                }
+            }
+        };
+        if w >= 0.0 { w.min(1.0) } else { 0.0 }
+    }
+
+    /// The fraction of a path's radiance that survives the fog over the
+    /// segment from path length `a` to path length `b` (`a <= b`), so that
+    /// the product over the segments of a path is `1 − weight(total
+    /// length)`: `(1 − weight(b)) / (1 − weight(a))`, and `1 − weight(b)`
+    /// for the first segment (`a <= 0`). For [`FogMode::Exponential`] this
+    /// is `exp(−density · (b − a))`, the segment's own law; for the other
+    /// laws it makes a reflected or refracted object as foggy as the length
+    /// of the path by which it is seen.
+    #[must_use]
+    pub fn transmittance(&self, a: f32, b: f32) -> f32 {
+        let t = match *self {
+            FogMode::Exponential { density } if density > 0.0 => (-density * (b - a.max(0.0))).exp(),
+            FogMode::ExponentialSquared { density } if density > 0.0 => {
+                let (a, b) = (density * a.max(0.0), density * b);
+                (-(b * b - a * a)).exp()
+            }
+            FogMode::Exponential { .. } | FogMode::ExponentialSquared { .. } => 1.0,
+            FogMode::Linear { .. } => {
+                let left = if a > 0.0 { 1.0 - self.weight(a) } else { 1.0 };
+                if left > 0.0 { (1.0 - self.weight(b)) / left } else { 0.0 }
+            }
+        };
+        if t >= 0.0 { t.min(1.0) } else { 0.0 }
+    }
+}
+
+/// Fog blended toward `color` over every ray segment: a segment from path
+/// length `a` to `b` whose far end sends radiance `L` delivers
+/// `T · L + (1 − T) · color` with `T = mode.transmittance(a, b)`. For a
+/// primary ray this is the report's blend by `weight(d)`; along a path of
+/// reflections and refractions the blends compose to `weight` of the whole
+/// path length. Rays that hit nothing are at infinite distance (all fog).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fog {
     /// Linear RGB fog colour.
@@ -46,6 +112,37 @@ pub struct Fog {
     pub mode: FogMode,
     /// Whether the fog is applied (toggled by `--fog`/`--no-fog` and keys).
     pub enabled: bool,
+}
+
+impl Fog {
+    /// Checks parameters.
+    ///
+    /// # Errors
+    /// [`ShadeError::Scene`] for a non-finite or negative colour, a
+    /// negative or non-finite density, or a linear law whose `end` is not
+    /// after `start`.
+    pub fn validate(&self) -> Result<(), ShadeError> {
+        if !(self.color.is_finite() && self.color.min_element() >= 0.0) {
+            return Err(ShadeError::Scene(format!("fog colour must be finite and >= 0, got {}", self.color)));
+        }
+        match self.mode {
+            FogMode::Linear { start, end } => {
+                if !(start.is_finite() && end.is_finite() && end > start) {
+                    return Err(ShadeError::Scene(format!(
+                        "linear fog needs finite start < end, got start {start}, end {end}"
+                    )));
+                }
+            }
+            FogMode::Exponential { density } | FogMode::ExponentialSquared { density } => {
+                if !(density.is_finite() && density >= 0.0) {
+                    return Err(ShadeError::Scene(format!(
+                        "fog density must be a finite number >= 0, got {density}"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Everything the renderer needs.
@@ -67,4 +164,110 @@ pub struct Scene {
     pub fog: Option<Fog>,
     /// The camera.
     pub camera: Camera,
+}
+
+/// Drawn where an object names a material that does not exist (magenta),
+/// so that a bad index shows instead of panicking; [`Scene::validate`]
+/// reports it.
+pub(crate) static MISSING_MATERIAL: Material = Material {
+    texture: crate::Texture::Solid(Vec3::new(1.0, 0.0, 1.0)),
+    ambient: 0.2,
+    diffuse: 0.8,
+    specular: 0.0,
+    shininess: 1.0,
+    specular_color: Vec3::ONE,
+    reflectivity: 0.0,
+    transparency: 0.0,
+    transmission: 0.0,
+    ior: 1.0,
+    absorption: Vec3::ZERO,
+};
+
+impl Scene {
+    /// Checks that every object has a material, every material, light and
+    /// the fog are valid, and the ambient and background colours are
+    /// finite and non-negative. [`crate::render`] does not need this to
+    /// be safe (a missing material is drawn magenta), but a loader should
+    /// call it.
+    ///
+    /// # Errors
+    /// [`ShadeError::Material`] for an invalid material, else
+    /// [`ShadeError::Scene`] naming the problem.
+    pub fn validate(&self) -> Result<(), ShadeError> {
+        let n = self.accel.objects().len();
+        if self.object_materials.len() != n {
+            return Err(ShadeError::Scene(format!(
+                "{} objects but {} object material indices",
+                n,
+                self.object_materials.len()
+            )));
+        }
+        if let Some((i, m)) =
+            self.object_materials.iter().enumerate().find(|(_, m)| **m as usize >= self.materials.len())
+        {
+            return Err(ShadeError::Scene(format!(
+                "object {i} uses material {m}, but there are {} materials",
+                self.materials.len()
+            )));
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            m.validate().map_err(|e| match e {
+                ShadeError::Material(msg) => ShadeError::Material(format!("material {i}: {msg}")),
+                other => other,
+            })?;
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if !(l.position.is_finite()
+                && l.color.is_finite()
+                && l.color.min_element() >= 0.0
+                && l.intensity.is_finite()
+                && l.intensity >= 0.0)
+            {
+                return Err(ShadeError::Scene(format!(
+                    "light {i} needs a finite position and finite, non-negative colour and intensity"
+                )));
+            }
+        }
+        for (name, c) in [("ambient", self.ambient), ("background", self.background)] {
+            if !(c.is_finite() && c.min_element() >= 0.0) {
+                return Err(ShadeError::Scene(format!("{name} colour must be finite and >= 0, got {c}")));
+            }
+        }
+        if let Some(f) = &self.fog {
+            f.validate()?;
+        }
+        Ok(())
+    }
+
+    /// The material of object `object` (magenta if it names none).
+    #[inline]
+    #[must_use]
+    pub fn material_of(&self, object: u32) -> &Material {
+        self.object_materials
+            .get(object as usize)
+            .and_then(|&m| self.materials.get(m as usize))
+            .unwrap_or(&MISSING_MATERIAL)
+    }
+
+    /// The world-to-object map of object `object` (identity if none).
+    #[inline]
+    #[must_use]
+    pub fn to_object(&self, object: u32) -> Affine3A {
+        match self.accel.objects().get(object as usize) {
+            Some(Object::Shape(inst)) => inst.transform.inverse_matrix(),
+            Some(Object::Mesh { transform, .. }) => transform.inverse_matrix(),
+            None => Affine3A::IDENTITY,
+        }
+    }
+
+    /// The surface colour (albedo, linear) at a hit: the material's texture
+    /// evaluated there. Also what an albedo AOV shows.
+    #[must_use]
+    pub fn albedo_at(&self, hit: &SceneHit) -> Vec3 {
+        let m = self.material_of(hit.object);
+        match &m.texture {
+            crate::Texture::Solid(c) => *c,
+            t => t.color_at(hit.hit.point, hit.hit.uv, &self.to_object(hit.object)),
+        }
+    }
 }

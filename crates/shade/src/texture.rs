@@ -1,8 +1,16 @@
 //! Textures: solid colours, the procedural checker, and images.
 
 use crate::ShadeError;
-use prism_geometry::glam::{Vec2, Vec3};
+use prism_geometry::glam::{Affine3A, Vec2, Vec3};
+use prism_geometry::sphere_uv;
+use std::f32::consts::PI;
+use std::path::Path;
 use std::sync::Arc;
+
+/// Largest accepted image edge in texels (refused before decoding).
+pub const MAX_TEXTURE_EDGE: u32 = 16_384;
+/// Largest accepted number of texels (`64 Mi`, 768 MiB of linear RGB).
+pub const MAX_TEXTURE_TEXELS: u64 = 64 * 1024 * 1024;
 
 /// How a surface point is turned into texture coordinates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -11,11 +19,15 @@ pub enum Mapping {
     /// cylindrical on cylinder and cone sides; planar on planes; the
     /// mesh's uvs on meshes).
     Uv,
-    /// Spherical about the object's origin, from the object-space point.
+    /// Spherical about the object's origin, from the object-space point
+    /// `p`: the report's `u = 0.5 + atan2(d.z, d.x) / 2π`,
+    /// `v = 0.5 − asin(d.y) / π` with `d = p / |p|`.
     Spherical,
-    /// Cylindrical about the object's Y axis: `u` the angle, `v` the height.
+    /// Cylindrical about the object's Y axis: `u = 0.5 + atan2(p.z, p.x) / 2π`
+    /// (the angle), `v = 1 − p.y` (the height, so that the image stands
+    /// upright over `y` in `[0, 1]`).
     Cylindrical,
-    /// Planar: object-space `(x, z)`.
+    /// Planar: `(u, v) = (p.x, p.z)` of the object-space point.
     Planar,
 }
 
@@ -58,7 +70,49 @@ pub enum Texture {
     },
 }
 
+impl Mapping {
+    /// Texture coordinates of a hit under this mapping: `uv` is the shape's
+    /// own uv (used by [`Mapping::Uv`]), `object_point` the hit point in the
+    /// object's own space (used by the others).
+    #[inline]
+    #[must_use]
+    pub fn uv(self, uv: Vec2, object_point: Vec3) -> Vec2 {
+        let p = object_point;
+        match self {
+            Mapping::Uv => uv,
+            Mapping::Spherical => sphere_uv(p.normalize_or(Vec3::Y)),
+            Mapping::Cylindrical => Vec2::new(0.5 + p.z.atan2(p.x) / (2.0 * PI), 1.0 - p.y),
+            Mapping::Planar => Vec2::new(p.x, p.z),
+        }
+    }
+}
+
 impl Texture {
+    /// The linear colour at a surface point: `point` in world space, `uv`
+    /// the shape's own uv, `to_object` the world-to-object map of the
+    /// object hit (for the object-space mappings). Never NaN for finite
+    /// inputs.
+    #[inline]
+    #[must_use]
+    pub fn color_at(&self, point: Vec3, uv: Vec2, to_object: &Affine3A) -> Vec3 {
+        match self {
+            Texture::Solid(c) => *c,
+            Texture::Checker { a, b, size, world } => {
+                let (x, y) = if *world { (point.x, point.z) } else { (uv.x, uv.y) };
+                let ix = (x / size).floor() as i64;
+                let iy = (y / size).floor() as i64;
+                if (ix.wrapping_add(iy)) & 1 == 0 { *a } else { *b }
+            }
+            Texture::Image { image, mapping, scale, tint } => {
+                let object_point = match mapping {
+                    Mapping::Uv => point,
+                    _ => to_object.transform_point3(point),
+                };
+                image.sample(mapping.uv(uv, object_point) * *scale) * *tint
+            }
+        }
+    }
+
     /// Checks parameters.
     ///
     /// # Errors
@@ -119,6 +173,88 @@ impl ImageTexture {
         Ok(Self { width, height, texels, wrap })
     }
 
+    /// Loads a PNG, JPEG, BMP or EXR file (the format is guessed from the
+    /// content, not the extension) and converts it to linear RGB: 8- and
+    /// 16-bit images are taken to be sRGB-encoded and decoded with the sRGB
+    /// EOTF ([`srgb_to_linear`]); floating-point images (EXR) are taken as
+    /// already linear. Alpha is ignored; grey images become grey RGB.
+    ///
+    /// Images wider or taller than [`MAX_TEXTURE_EDGE`] or with more than
+    /// [`MAX_TEXTURE_TEXELS`] texels are refused before their pixels are
+    /// decoded.
+    ///
+    /// # Errors
+    /// [`ShadeError::Texture`] naming `path` if the file cannot be opened,
+    /// is not a supported image, is corrupt, or is too large.
+    pub fn load(path: &Path, wrap: Wrap) -> Result<Self, ShadeError> {
+        let err = |reason: String| ShadeError::Texture { path: path.to_path_buf(), reason };
+        let mut reader = image::ImageReader::open(path)
+            .map_err(|e| err(e.to_string()))?
+            .with_guessed_format()
+            .map_err(|e| err(e.to_string()))?;
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_TEXTURE_EDGE);
+        limits.max_image_height = Some(MAX_TEXTURE_EDGE);
+        limits.max_alloc = Some(1024 * 1024 * 1024);
+        reader.limits(limits);
+        if reader.format().is_none() {
+            return Err(err("not a recognised image format (PNG, JPEG, BMP or EXR expected)".into()));
+        }
+        let decoded = reader.decode().map_err(|e| err(e.to_string()))?;
+        let (width, height) = (decoded.width(), decoded.height());
+        if u64::from(width) * u64::from(height) > MAX_TEXTURE_TEXELS {
+            return Err(err(format!(
+                "{width}×{height} texels is more than the {MAX_TEXTURE_TEXELS} allowed"
+            )));
+        }
+        let linear_input = matches!(decoded.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
+        let texels: Vec<Vec3> = if linear_input {
+            decoded
+                .to_rgb32f()
+                .pixels()
+                .map(|p| {
+                    let c = Vec3::from_array(p.0);
+                    // Non-finite or negative texels would poison every pixel that sees them.
+                    if c.is_finite() { c.max(Vec3::ZERO) } else { Vec3::ZERO }
+                })
+                .collect()
+        } else if matches!(
+            decoded.color(),
+            image::ColorType::L8 | image::ColorType::La8 | image::ColorType::Rgb8 | image::ColorType::Rgba8
+        ) {
+            let lut = srgb8_lut();
+            decoded
+                .to_rgb8()
+                .pixels()
+                .map(|p| Vec3::new(lut[p.0[0] as usize], lut[p.0[1] as usize], lut[p.0[2] as usize]))
+                .collect()
+        } else {
+            decoded.to_rgb32f().pixels().map(|p| Vec3::from_array(p.0.map(srgb_to_linear))).collect()
+        };
+        Self::from_linear(width, height, texels, wrap).map_err(|e| err(e.to_string()))
+    }
+
+    /// The bilinearly filtered colour at texture coordinates `uv`: `u` runs
+    /// left to right over the width, `v` top to bottom over the height (so
+    /// `v = 0` is the top row), texel `(i, j)` centred on
+    /// `((i + ½) / width, (j + ½) / height)`; outside `[0, 1]` the image is
+    /// tiled or clamped by its [`Wrap`]. Non-finite coordinates read as 0.
+    #[inline]
+    #[must_use]
+    pub fn sample(&self, uv: Vec2) -> Vec3 {
+        let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let top = self.texel(ix, iy).lerp(self.texel(ix.saturating_add(1), iy), fx);
+        let bottom = self
+            .texel(ix, iy.saturating_add(1))
+            .lerp(self.texel(ix.saturating_add(1), iy.saturating_add(1)), fx);
+        top.lerp(bottom, fy)
+    }
+
     /// Width in texels.
     #[must_use]
     pub fn width(&self) -> u32 {
@@ -147,4 +283,22 @@ impl ImageTexture {
         };
         self.texels[(y * w + x) as usize]
     }
+}
+
+/// The sRGB electro-optical transfer function: an sRGB-encoded value in
+/// `[0, 1]` to linear (inputs are clamped to `[0, 1]`; NaN reads as 0).
+#[must_use]
+pub fn srgb_to_linear(s: f32) -> f32 {
+    let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
+    if s <= 0.040_45 { s / 12.92 } else { ((s + 0.055) / 1.055).powf(2.4) }
+}
+
+/// An 8-bit sRGB value to linear: [`srgb_to_linear`] of `b / 255`.
+#[must_use]
+pub fn srgb8_to_linear(b: u8) -> f32 {
+    srgb_to_linear(f32::from(b) / 255.0)
+}
+
+fn srgb8_lut() -> [f32; 256] {
+    std::array::from_fn(|i| srgb8_to_linear(i as u8))
 }

@@ -1,0 +1,257 @@
+//! The Whitted integrator: local Phong shading with coloured shadows,
+//! mirror reflection, unbent transparency, dielectric refraction, and fog
+//! over every segment.
+//!
+//! A [`Tracer`] is made per row of the image; it holds no heap data and
+//! counts the rays it traces, so that nothing is shared between threads
+//! while a row is traced.
+
+use crate::optics::{reflect, refract, schlick};
+use crate::{FogMode, Material, RenderSettings, Scene, Texture};
+use prism_bvh::{Object, SceneHit};
+use prism_geometry::glam::Vec3;
+use prism_geometry::{Hit, Ray, Shape};
+use std::ops::ControlFlow;
+
+/// Recursion never goes deeper than this, whatever the settings say (a
+/// pair of perfect mirrors with no contribution cut-off would otherwise
+/// exhaust the stack).
+pub const MAX_DEPTH_LIMIT: u32 = 64;
+
+/// No object: the "skip the exit of" argument of an ordinary ray.
+const NO_OBJECT: u32 = u32::MAX;
+
+/// Per-row tracing state.
+pub(crate) struct Tracer<'a> {
+    scene: &'a Scene,
+    max_depth: u32,
+    min_contribution: f32,
+    fog: Option<(FogMode, Vec3)>,
+    /// Whether any material lets light through (else shadows are yes/no).
+    see_through: bool,
+    /// Rays traced so far (camera, secondary, shadow).
+    pub rays: u64,
+}
+
+/// Whether object `object` is a closed solid (its inside is bounded by it).
+#[inline]
+fn is_closed(scene: &Scene, object: u32) -> bool {
+    matches!(
+        scene.accel.objects().get(object as usize),
+        Some(Object::Shape(inst))
+            if matches!(inst.shape, Shape::Sphere(_) | Shape::Cuboid(_) | Shape::Cylinder(_) | Shape::Cone(_))
+    )
+}
+
+#[inline]
+fn albedo(scene: &Scene, mat: &Material, h: &SceneHit) -> Vec3 {
+    match &mat.texture {
+        Texture::Solid(c) => *c,
+        t => t.color_at(h.hit.point, h.hit.uv, &scene.to_object(h.object)),
+    }
+}
+
+impl<'a> Tracer<'a> {
+    /// Whether the scene needs transmittance shadows (computed once per render).
+    pub(crate) fn scene_is_see_through(scene: &Scene) -> bool {
+        scene.materials.iter().any(Material::is_see_through)
+    }
+
+    pub(crate) fn new(scene: &'a Scene, settings: &RenderSettings, see_through: bool) -> Self {
+        let min_contribution =
+            if settings.min_contribution.is_finite() { settings.min_contribution.max(0.0) } else { 0.0 };
+        Self {
+            scene,
+            max_depth: settings.max_depth.min(MAX_DEPTH_LIMIT),
+            min_contribution,
+            fog: scene.fog.filter(|f| f.enabled).map(|f| (f.mode, f.color)),
+            see_through,
+            rays: 0,
+        }
+    }
+
+    /// Radiance arriving at the origin of the camera ray `ray` (unit
+    /// direction).
+    #[inline]
+    pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
+        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT)
+    }
+
+    /// Should a ray of path weight `w` be traced?
+    #[inline]
+    fn worth(&self, w: Vec3) -> bool {
+        let m = w.max_element();
+        m > 0.0 && m >= self.min_contribution
+    }
+
+    /// Fog transmittance of the path segment `[a, b]`.
+    #[inline]
+    fn fog_t(&self, a: f32, b: f32) -> f32 {
+        match &self.fog {
+            Some((mode, _)) => mode.transmittance(a, b),
+            None => 1.0,
+        }
+    }
+
+    #[inline]
+    fn fog_blend(&self, radiance: Vec3, t: f32) -> Vec3 {
+        match &self.fog {
+            Some((_, color)) if t < 1.0 => t * radiance + (1.0 - t) * *color,
+            _ => radiance,
+        }
+    }
+
+    /// Radiance arriving at `ray.origin` along `ray`, `depth` bounces from
+    /// the camera, with path weight `weight` and path length `path` so far.
+    /// When the ray leaves object `skip_exit` through its back face (the
+    /// unbent continuation through a transparent solid), it goes on from
+    /// the far side without shading the exit.
+    fn trace(&mut self, ray: &Ray, depth: u32, weight: Vec3, path: f32, skip_exit: u32) -> Vec3 {
+        self.rays += 1;
+        let scene = self.scene;
+        let Some(h) = scene.accel.closest_hit(ray) else {
+            return self.fog_blend(scene.background, self.fog_t(path, f32::INFINITY));
+        };
+        let seg = h.hit.t * ray.dir.length();
+        let end = path + seg;
+        let fog_t = self.fog_t(path, end);
+        let weight = weight * fog_t;
+        if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
+            let next = Ray::spawn(h.hit.point, h.hit.geo_normal, ray.dir);
+            let l = self.trace(&next, depth, weight, end, NO_OBJECT);
+            return self.fog_blend(l, fog_t);
+        }
+        let mat = scene.material_of(h.object);
+        // Beer–Lambert over a segment travelled inside an absorbing dielectric
+        // (it ends on the inside of its surface).
+        let absorb = if !h.hit.front_face && mat.transmission > 0.0 && mat.absorption != Vec3::ZERO {
+            (-mat.absorption * seg).exp()
+        } else {
+            Vec3::ONE
+        };
+        let l = self.shade(ray, &h, mat, depth, weight * absorb, end) * absorb;
+        self.fog_blend(l, fog_t)
+    }
+
+    /// Radiance leaving the hit `h` toward the origin of `ray`, by the
+    /// material formula (see [`Material`]).
+    fn shade(
+        &mut self,
+        ray: &Ray,
+        h: &SceneHit,
+        mat: &Material,
+        depth: u32,
+        weight: Vec3,
+        path: f32,
+    ) -> Vec3 {
+        let hit = &h.hit;
+        let d = ray.dir.normalize_or(Vec3::NEG_Z);
+        let n = hit.facing_normal();
+        let mut out = Vec3::ZERO;
+        let w_local = mat.local_weight();
+        if w_local > 0.0 {
+            let albedo = albedo(self.scene, mat, h);
+            out += w_local * self.local(mat, albedo, hit, n, -d);
+        }
+        if depth >= self.max_depth {
+            return out;
+        }
+        // Dielectric split: Fresnel reflectance F and the refracted direction.
+        let (fresnel, refracted) = if mat.transmission > 0.0 {
+            let (n1, n2) = if hit.front_face { (1.0, mat.ior) } else { (mat.ior, 1.0) };
+            match refract(d, n, n1 / n2) {
+                Some(t) => (schlick(-d.dot(n), n1, n2), Some(t)),
+                None => (1.0, None),
+            }
+        } else {
+            (0.0, None)
+        };
+        // Mirror reflection and the dielectric's reflected part share one ray.
+        let k_mirror = mat.reflectivity + mat.transmission * fresnel;
+        if k_mirror > 0.0 && self.worth(weight * k_mirror) {
+            let r = Ray::spawn(hit.point, hit.geo_normal, reflect(d, n));
+            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT);
+        }
+        if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
+            let r = Ray::spawn(hit.point, hit.geo_normal, d);
+            let skip = if hit.front_face { h.object } else { NO_OBJECT };
+            out += mat.transparency * self.trace(&r, depth + 1, weight * mat.transparency, path, skip);
+        }
+        if let Some(t) = refracted {
+            let k = mat.transmission * (1.0 - fresnel);
+            if k > 0.0 && self.worth(weight * k) {
+                let r = Ray::spawn(hit.point, hit.geo_normal, t);
+                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT);
+            }
+        }
+        out
+    }
+
+    /// Ambient + Lambert + Phong over every light, each through its shadow
+    /// transmittance. `n` is the shading normal facing the viewer, `v` the
+    /// unit direction toward the viewer.
+    fn local(&mut self, mat: &Material, albedo: Vec3, hit: &Hit, n: Vec3, v: Vec3) -> Vec3 {
+        let scene = self.scene;
+        let mut c = mat.ambient * albedo * scene.ambient;
+        for light in &scene.lights {
+            let radiance = light.color * light.intensity;
+            if !(radiance.max_element() > 0.0) {
+                continue;
+            }
+            let to = light.position - hit.point;
+            let dist = to.length();
+            if !(dist > 0.0) {
+                continue;
+            }
+            let l = to / dist;
+            let n_dot_l = n.dot(l);
+            if !(n_dot_l > 0.0) {
+                continue;
+            }
+            let shadow = self.shadow(hit, light.position);
+            if !(shadow.max_element() > 0.0) {
+                continue;
+            }
+            let mut s = mat.diffuse * n_dot_l * albedo;
+            if mat.specular > 0.0 {
+                let r_dot_v = (2.0 * n_dot_l * n - l).dot(v);
+                if r_dot_v > 0.0 {
+                    s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+                }
+            }
+            c += shadow * radiance * s;
+        }
+        c
+    }
+
+    /// The fraction of a light at `target` that reaches the surface point
+    /// of `hit`: the product over the occluders on the segment of each
+    /// one's see-through fraction (`transparency + transmission`) times its
+    /// colour at the crossing, clamped to `[0, 1]` per channel. A closed
+    /// solid (sphere, cuboid, cylinder, cone) counts once, at the crossing
+    /// where the segment enters it; open surfaces (planes, disks,
+    /// triangles, meshes) count at every crossing. Opaque occluders give 0.
+    fn shadow(&mut self, hit: &Hit, target: Vec3) -> Vec3 {
+        let ray = Ray::spawn_to(hit.point, hit.geo_normal, target);
+        self.rays += 1;
+        let scene = self.scene;
+        if !self.see_through {
+            return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };
+        }
+        let mut t = Vec3::ONE;
+        scene.accel.for_each_hit(&ray, |sh| {
+            if !sh.hit.front_face && is_closed(scene, sh.object) {
+                return ControlFlow::Continue(());
+            }
+            let m = scene.material_of(sh.object);
+            let through = m.transparency + m.transmission;
+            if !(through > 0.0) {
+                t = Vec3::ZERO;
+                return ControlFlow::Break(());
+            }
+            t *= (through * albedo(scene, m, sh)).clamp(Vec3::ZERO, Vec3::ONE);
+            if t.max_element() > 0.0 { ControlFlow::Continue(()) } else { ControlFlow::Break(()) }
+        });
+        t
+    }
+}

@@ -1,0 +1,97 @@
+//! Helpers to build small scenes directly in code.
+#![allow(dead_code)]
+
+use prism_bvh::{Accel, Object};
+use prism_geometry::glam::Vec3;
+use prism_geometry::{Instance, Shape, Transform};
+use prism_shade::{Camera, Fog, Image, Material, PointLight, RenderHooks, RenderSettings, Scene, Texture};
+
+/// A scene of `objects` (each with its own material), lit by `lights`.
+pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>, camera: Camera) -> Scene {
+    let mut objs = Vec::new();
+    let mut materials = Vec::new();
+    let mut object_materials = Vec::new();
+    for (i, (shape, t, m)) in objects.into_iter().enumerate() {
+        objs.push(Object::Shape(Instance::new(shape, t)));
+        materials.push(m);
+        object_materials.push(i as u32);
+    }
+    Scene {
+        accel: Accel::build(Vec::new(), objs).expect("no meshes to miss"),
+        object_materials,
+        materials,
+        lights,
+        ambient: Vec3::ONE,
+        background: Vec3::ZERO,
+        fog: None,
+        camera,
+    }
+}
+
+pub fn light(position: Vec3) -> PointLight {
+    PointLight { position, color: Vec3::ONE, intensity: 1.0 }
+}
+
+/// A material that shows exactly its colour under ambient light 1.
+pub fn flat(color: Vec3) -> Material {
+    Material { ambient: 1.0, diffuse: 0.0, ..Material::diffuse(color) }
+}
+
+/// Only a texture, shown flat.
+pub fn flat_texture(texture: Texture) -> Material {
+    Material { texture, ..flat(Vec3::ONE) }
+}
+
+/// Clear glass.
+pub fn glass(ior: f32) -> Material {
+    Material {
+        texture: Texture::Solid(Vec3::ONE),
+        ambient: 0.0,
+        diffuse: 0.0,
+        specular: 0.0,
+        transmission: 1.0,
+        ior,
+        ..Material::diffuse(Vec3::ONE)
+    }
+}
+
+pub fn camera(position: Vec3, look_at: Vec3, up: Vec3, vfov: f32, w: u32, h: u32) -> Camera {
+    Camera::new(position, look_at, up, vfov, w, h).expect("valid camera")
+}
+
+pub fn settings(spp: u32, max_depth: u32) -> RenderSettings {
+    RenderSettings { spp, max_depth, min_contribution: 0.0, threads: Some(1) }
+}
+
+pub fn render(scene: &Scene, spp: u32, max_depth: u32) -> Image {
+    prism_shade::render(scene, &settings(spp, max_depth), RenderHooks::default()).0
+}
+
+pub fn px(img: &Image, i: u32, j: u32) -> Vec3 {
+    img.pixels[(j * img.width + i) as usize]
+}
+
+pub fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+    (a - b).abs().max_element() <= tol
+}
+
+#[track_caller]
+pub fn assert_close(got: Vec3, want: Vec3, tol: f32) {
+    assert!(close(got, want, tol), "got {got}, want {want} (tolerance {tol})");
+}
+
+/// Nearest `t` of the ray `o + t d` on the sphere `(c, r)`, if hit with
+/// margin (not grazing).
+pub fn sphere_t(o: Vec3, d: Vec3, c: Vec3, r: f32) -> Option<f32> {
+    let f = o - c;
+    let (a, b, cc) = (d.dot(d) as f64, f.dot(d) as f64, (f.dot(f) - r * r) as f64);
+    let disc = b * b - a * cc;
+    if disc < 1e-3 {
+        return None;
+    }
+    Some(((-b - disc.sqrt()) / a) as f32)
+}
+
+pub fn fog(color: Vec3, mode: prism_shade::FogMode) -> Option<Fog> {
+    Some(Fog { color, mode, enabled: true })
+}
