@@ -1,12 +1,72 @@
-//! Scene acceleration for prism: closest-hit and occlusion queries over a
-//! mix of analytic shapes and instanced triangle meshes.
+//! Scene acceleration for prism: closest-hit, occlusion and every-crossing
+//! queries over a mix of analytic shapes and instanced triangle meshes,
+//! built on [obvhs](https://docs.rs/obvhs)'s compressed wide BVHs (CWBVH,
+//! eight children per node, 80 bytes a node).
 //!
-//! (This first version tests every object; the obvhs-backed hierarchy
-//! replaces the internals without changing this API.)
+//! # Structure
+//!
+//! Two levels. Each mesh gets its own hierarchy over its triangles (a
+//! *BLAS*), built once however many objects instance it; its triangles are
+//! copied in leaf order so that a leaf's triangles are adjacent in memory.
+//! Zero-area faces are left out (they can never be hit). A top-level
+//! hierarchy (*TLAS*) holds every bounded object by its world-space box:
+//! analytic shapes under their transforms, and mesh instances. A ray that
+//! reaches a mesh instance is mapped into the mesh's object space (`t` is
+//! unchanged by the mapping) and walks that mesh's BLAS; the hit is mapped
+//! back, so a 6×6×6 grid of one mesh costs one BLAS plus 216 boxes.
+//! Hierarchies are built in parallel (rayon) with the [`BuildQuality`]
+//! chosen in [`BuildOptions`].
+//!
+//! # Infinite planes
+//!
+//! Infinite planes (and any object without finite bounds) are kept out of
+//! the hierarchy: one infinite box would make every node's box infinite
+//! (traversal then visits everything, and obvhs's quantised boxes cannot
+//! even be built). They are held in a short list that every query tests
+//! first, before walking the TLAS; a closest-hit query starts its walk
+//! with the plane's `t` as the upper bound. [`Accel::bounds`] excludes
+//! them; [`BuildStats::unbounded_objects`] counts them.
+//!
+//! # Queries and their order
+//!
+//! * [`Accel::closest_hit`] walks front to back (children ordered by the
+//!   ray's octant), shrinking `t_max` at each hit; the geometric hit record
+//!   is computed only for the winner.
+//! * [`Accel::occluded`] stops at the first hit found, which is *any* hit
+//!   in the interval, not the nearest.
+//! * [`Accel::for_each_hit`] reports every crossing in the interval in no
+//!   particular order (neither by `t` nor by object): callers that need an
+//!   order must sort, and callers that combine crossings (the product of
+//!   transmittances for coloured shadows) need none. A closed analytic
+//!   shape is reported at each of its crossings, each mesh triangle at most
+//!   once per instance (also with pre-split builds, where a triangle may sit
+//!   in several leaves); the callback may break early (an opaque occluder).
+//!
+//! Every query honours `[t_min, t_max]` inclusively, so rays spawned with
+//! [`Ray::spawn`] (origin offset off the surface, `t_min = 0`) find
+//! surfaces arbitrarily close; unlike obvhs's own box test, ours does not
+//! clamp the near distance to `1e-4`. Rays with a zero or non-finite
+//! direction, a non-finite origin, or an empty interval hit nothing. Zero
+//! direction components (either sign) are exact.
+//!
+//! [`Accel::closest_hit_brute_force`] and [`Accel::for_each_hit_brute_force`]
+//! answer the same questions by testing everything; the tests compare the
+//! two.
 
 #![warn(missing_docs)]
 
+mod cwbvh;
+
+use cwbvh::BoxRay;
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb as ObAabb;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::ploc::PlocBuilder;
+use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
+use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
@@ -49,12 +109,18 @@ impl SceneHit {
 pub struct BuildStats {
     /// Wall time of the build in seconds.
     pub build_seconds: f64,
-    /// Bytes held by the acceleration structures (not the meshes).
+    /// Bytes held by the acceleration structures (not the meshes): nodes,
+    /// primitive indices and the per-mesh triangle copies in BVH order.
     pub bvh_bytes: usize,
     /// Triangles stored (each mesh counted once).
     pub stored_triangles: usize,
     /// Triangles as seen by rays (each instance counted).
     pub instanced_triangles: usize,
+    /// CWBVH nodes over all levels (top level plus one tree per mesh).
+    pub bvh_nodes: usize,
+    /// Objects kept out of the hierarchy and tested by every ray
+    /// (infinite planes, and anything without finite bounds).
+    pub unbounded_objects: usize,
 }
 
 /// Why a scene could not be accelerated.
@@ -81,6 +147,235 @@ impl std::fmt::Display for BuildError {
 
 impl std::error::Error for BuildError {}
 
+/// Build quality of a hierarchy: obvhs's presets, from fastest to build
+/// to fastest to trace. The slow presets pre-split large triangles (a
+/// triangle may then sit in several leaves; queries account for that).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BuildQuality {
+    /// `BvhBuildParams::fastest_build`.
+    Fastest,
+    /// `BvhBuildParams::very_fast_build`.
+    VeryFast,
+    /// `BvhBuildParams::fast_build`.
+    Fast,
+    /// `BvhBuildParams::medium_build`.
+    #[default]
+    Medium,
+    /// `BvhBuildParams::slow_build` (pre-splits triangles).
+    Slow,
+    /// `BvhBuildParams::very_slow_build` (pre-splits triangles).
+    VerySlow,
+}
+
+impl BuildQuality {
+    /// Every preset, fastest build first.
+    pub const ALL: [Self; 6] =
+        [Self::Fastest, Self::VeryFast, Self::Fast, Self::Medium, Self::Slow, Self::VerySlow];
+
+    fn params(self) -> BvhBuildParams {
+        match self {
+            Self::Fastest => BvhBuildParams::fastest_build(),
+            Self::VeryFast => BvhBuildParams::very_fast_build(),
+            Self::Fast => BvhBuildParams::fast_build(),
+            Self::Medium => BvhBuildParams::medium_build(),
+            Self::Slow => BvhBuildParams::slow_build(),
+            Self::VerySlow => BvhBuildParams::very_slow_build(),
+        }
+    }
+
+    /// A short lower-case name (`"medium"`, `"very-slow"`, …).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fastest => "fastest",
+            Self::VeryFast => "very-fast",
+            Self::Fast => "fast",
+            Self::Medium => "medium",
+            Self::Slow => "slow",
+            Self::VerySlow => "very-slow",
+        }
+    }
+}
+
+/// Options for [`Accel::build_with`]; [`Accel::build`] uses the default.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Quality of each mesh's own hierarchy.
+    pub mesh_quality: BuildQuality,
+    /// Quality of the top-level hierarchy over objects.
+    pub top_quality: BuildQuality,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        Self { mesh_quality: DEFAULT_MESH_QUALITY, top_quality: BuildQuality::Medium }
+    }
+}
+
+/// Chosen by measurement (docs/benchmarks.md).
+const DEFAULT_MESH_QUALITY: BuildQuality = BuildQuality::Medium;
+
+/// Objects whose bounds reach beyond this are tested outside the hierarchy
+/// (the compressed node boxes cannot represent them well).
+const MAX_BOUNDED_COORD: f32 = 1e18;
+
+/// One mesh's own hierarchy, with its triangles copied in leaf order.
+#[derive(Debug, Default)]
+struct Blas {
+    bvh: CwBvh,
+    depth: usize,
+    /// Corners of the triangle in each primitive slot.
+    tris: Vec<[Vec3; 3]>,
+    /// Mesh face of each primitive slot.
+    faces: Vec<u32>,
+    /// A face may occupy several slots (pre-split build).
+    split: bool,
+}
+
+impl Blas {
+    fn build(mesh: &TriangleMesh, quality: BuildQuality) -> Self {
+        let kept: Vec<u32> = (0..mesh.len())
+            .filter(|&f| {
+                let [a, b, c] = mesh.triangle(f);
+                (b - a).cross(c - a).length_squared() != 0.0
+            })
+            .map(|f| f as u32)
+            .collect();
+        let tris: Vec<obvhs::triangle::Triangle> = kept
+            .iter()
+            .map(|&f| {
+                let [a, b, c] = mesh.triangle(f as usize);
+                obvhs::triangle::Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
+            })
+            .collect();
+        let bvh = build_cwbvh(&tris, quality, true);
+        let faces: Vec<u32> = bvh.primitive_indices.iter().map(|&i| kept[i as usize]).collect();
+        let tris = faces.iter().map(|&f| mesh.triangle(f as usize)).collect();
+        Self { depth: cwbvh::depth(&bvh), split: bvh.uses_spatial_splits, bvh, tris, faces }
+    }
+
+    fn bytes(&self) -> usize {
+        bvh_bytes(&self.bvh)
+            + self.tris.len() * std::mem::size_of::<[Vec3; 3]>()
+            + self.faces.len() * std::mem::size_of::<u32>()
+    }
+
+    /// Closest triangle hit by the object-space `ray`: `(face, t, b1, b2)`.
+    #[inline]
+    fn closest(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
+        let mut tr = TriangleRay::new(ray);
+        let mut br = BoxRay::new(ray);
+        let mut found = None;
+        cwbvh::walk_any(&self.bvh, self.depth, &mut br, |slot, br| {
+            let [a, b, c] = self.tris[slot as usize];
+            if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+                tr.set_t_max(t);
+                br.t_max = t;
+                found = Some((slot, t, b1, b2));
+            }
+            true
+        });
+        found.map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2))
+    }
+
+    /// Whether any triangle lies in the ray's interval.
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        let tr = TriangleRay::new(ray);
+        let mut br = BoxRay::new(ray);
+        let mut hit = false;
+        cwbvh::walk_any(&self.bvh, self.depth, &mut br, |slot, _| {
+            let [a, b, c] = self.tris[slot as usize];
+            hit = tr.intersect(a, b, c).is_some();
+            !hit
+        });
+        hit
+    }
+
+    /// Calls `f(face, t, b1, b2)` for every triangle crossing in the
+    /// interval, each face once, until `f` breaks.
+    fn crossings(
+        &self,
+        ray: &Ray,
+        mut f: impl FnMut(u32, f32, f32, f32) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let tr = TriangleRay::new(ray);
+        let mut br = BoxRay::new(ray);
+        let mut flow = ControlFlow::Continue(());
+        let mut seen: Vec<u32> = Vec::new();
+        cwbvh::walk_any(&self.bvh, self.depth, &mut br, |slot, _| {
+            let [a, b, c] = self.tris[slot as usize];
+            if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+                let face = self.faces[slot as usize];
+                if self.split {
+                    if seen.contains(&face) {
+                        return true;
+                    }
+                    seen.push(face);
+                }
+                flow = f(face, t, b1, b2);
+            }
+            flow.is_continue()
+        });
+        flow
+    }
+}
+
+fn bvh_bytes(bvh: &CwBvh) -> usize {
+    bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
+        + bvh.primitive_indices.len() * std::mem::size_of::<u32>()
+}
+
+/// Builds a CWBVH over triangles (`tris`, which may pre-split) or boxes.
+/// Unlike obvhs's helpers this never runs the (slow) debug validation.
+fn build_cwbvh(tris: &[obvhs::triangle::Triangle], quality: BuildQuality, allow_split: bool) -> CwBvh {
+    let aabbs: Vec<ObAabb> = tris.iter().map(|t| t.aabb()).collect();
+    build_cwbvh_aabbs(aabbs, Some(tris).filter(|_| allow_split), quality)
+}
+
+fn build_cwbvh_aabbs(
+    mut aabbs: Vec<ObAabb>,
+    tris: Option<&[obvhs::triangle::Triangle]>,
+    quality: BuildQuality,
+) -> CwBvh {
+    if aabbs.is_empty() {
+        return CwBvh::default();
+    }
+    let p = quality.params();
+    let mut indices: Vec<u32> = (0..aabbs.len() as u32).collect();
+    let mut split = false;
+    if let (true, Some(tris)) = (p.pre_split, tris) {
+        let (mut largest, mut total) = (0.0f32, 0.0f32);
+        for a in &aabbs {
+            let h = a.half_area();
+            largest = largest.max(h);
+            total += h;
+        }
+        let avg = total / aabbs.len() as f32;
+        obvhs::splits::split_aabbs_preset(&mut aabbs, &mut indices, tris, avg, largest);
+        split = true;
+    }
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        p.ploc_search_distance,
+        &aabbs,
+        indices,
+        p.sort_precision,
+        p.search_depth_threshold,
+    );
+    bvh2.uses_spatial_splits = split;
+    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
+}
+
+/// The best hit so far during a closest-hit query (world hits are made
+/// only once, for the winner).
+#[derive(Clone, Copy)]
+enum Best {
+    None,
+    Shape { object: u32, hit: Hit },
+    Mesh { object: u32, face: u32, t: f32, b1: f32, b2: f32, dir: Vec3 },
+}
+
 /// The acceleration structure over a whole scene.
 #[derive(Debug)]
 pub struct Accel {
@@ -88,41 +383,117 @@ pub struct Accel {
     objects: Vec<Object>,
     bounds: Aabb,
     stats: BuildStats,
+    blas: Vec<Blas>,
+    tlas: CwBvh,
+    tlas_depth: usize,
+    /// Object index of each top-level primitive slot.
+    tlas_objects: Vec<u32>,
+    /// Objects tested outside the hierarchy.
+    unbounded: Vec<u32>,
+}
+
+/// Whether a query ray can hit anything at all (finite, non-zero direction).
+#[inline]
+fn usable(ray: &Ray) -> bool {
+    ray.origin.is_finite() && ray.dir.is_finite() && ray.dir != Vec3::ZERO && ray.t_min <= ray.t_max
 }
 
 impl Accel {
     /// Builds the structure over `objects`, whose mesh instances index
-    /// `meshes`.
+    /// `meshes`, with the default [`BuildOptions`].
     ///
     /// # Errors
     /// [`BuildError::NoSuchMesh`] if an object names a missing mesh.
     pub fn build(meshes: Vec<Arc<TriangleMesh>>, objects: Vec<Object>) -> Result<Self, BuildError> {
+        Self::build_with(meshes, objects, BuildOptions::default())
+    }
+
+    /// Builds the structure with explicit options.
+    ///
+    /// # Errors
+    /// [`BuildError::NoSuchMesh`] if an object names a missing mesh.
+    pub fn build_with(
+        meshes: Vec<Arc<TriangleMesh>>,
+        objects: Vec<Object>,
+        options: BuildOptions,
+    ) -> Result<Self, BuildError> {
         let start = std::time::Instant::now();
         let mut bounds = Aabb::EMPTY;
         let mut instanced = 0;
+        let mut used = vec![false; meshes.len()];
+        let mut object_bounds = Vec::with_capacity(objects.len());
         for (i, o) in objects.iter().enumerate() {
-            match o {
+            let b = match o {
                 Object::Shape(s) => {
                     if s.shape.is_bounded() {
-                        bounds = bounds.union(s.bounds());
+                        s.bounds()
+                    } else {
+                        Aabb::INFINITE
                     }
                 }
                 Object::Mesh { mesh, transform } => {
                     let m = meshes
                         .get(*mesh as usize)
                         .ok_or(BuildError::NoSuchMesh { object: i, mesh: *mesh })?;
+                    used[*mesh as usize] = true;
                     instanced += m.len();
-                    bounds = bounds.union(transform.aabb(&m.bounds()));
+                    transform.aabb(&m.bounds())
                 }
+            };
+            if b.is_finite() && !b.is_empty() {
+                bounds = bounds.union(b);
+            }
+            object_bounds.push(b);
+        }
+        // One hierarchy per mesh that some object uses, in parallel.
+        let blas: Vec<Blas> = meshes
+            .par_iter()
+            .zip(used.par_iter())
+            .map(|(m, &u)| if u { Blas::build(m, options.mesh_quality) } else { Blas::default() })
+            .collect();
+        let mut unbounded = Vec::new();
+        let mut top = Vec::new();
+        let mut tlas_boxes = Vec::new();
+        for (i, (o, b)) in objects.iter().zip(&object_bounds).enumerate() {
+            if let Object::Mesh { mesh, .. } = o
+                && blas[*mesh as usize].bvh.nodes.is_empty()
+            {
+                continue; // Nothing to hit.
+            }
+            if b.is_empty() {
+                continue;
+            }
+            let finite = b.is_finite() && b.min.abs().max(b.max.abs()).max_element() <= MAX_BOUNDED_COORD;
+            if finite {
+                top.push(i as u32);
+                tlas_boxes.push(cwbvh::to_obvhs(b.min, b.max));
+            } else {
+                unbounded.push(i as u32);
             }
         }
+        let tlas = build_cwbvh_aabbs(tlas_boxes, None, options.top_quality);
+        let tlas_objects = tlas.primitive_indices.iter().map(|&k| top[k as usize]).collect();
         let stats = BuildStats {
             build_seconds: start.elapsed().as_secs_f64(),
-            bvh_bytes: 0,
+            bvh_bytes: bvh_bytes(&tlas)
+                + std::mem::size_of::<u32>() * (top.len() + unbounded.len())
+                + blas.iter().map(Blas::bytes).sum::<usize>(),
             stored_triangles: meshes.iter().map(|m| m.len()).sum(),
             instanced_triangles: instanced,
+            bvh_nodes: tlas.nodes.len() + blas.iter().map(|b| b.bvh.nodes.len()).sum::<usize>(),
+            unbounded_objects: unbounded.len(),
         };
-        Ok(Self { meshes, objects, bounds, stats })
+        Ok(Self {
+            meshes,
+            objects,
+            bounds,
+            stats,
+            blas,
+            tlas_depth: cwbvh::depth(&tlas),
+            tlas,
+            tlas_objects,
+            unbounded,
+        })
     }
 
     /// The objects, in the order given.
@@ -149,7 +520,148 @@ impl Accel {
         self.stats
     }
 
-    fn hit_object(&self, i: usize, ray: &Ray) -> Option<SceneHit> {
+    /// Tests object `i` against `ray`; on a hit closer than `ray.t_max`,
+    /// records it in `best` and shrinks `ray.t_max`.
+    #[inline]
+    fn closest_object(&self, i: u32, ray: &mut Ray, best: &mut Best) {
+        match &self.objects[i as usize] {
+            Object::Shape(s) => {
+                if let Some(hit) = s.intersect(ray) {
+                    ray.t_max = hit.t;
+                    *best = Best::Shape { object: i, hit };
+                }
+            }
+            Object::Mesh { mesh, transform } => {
+                let local = transform.ray_to_object(ray);
+                if let Some((face, t, b1, b2)) = self.blas[*mesh as usize].closest(&local) {
+                    ray.t_max = t;
+                    *best = Best::Mesh { object: i, face, t, b1, b2, dir: local.dir };
+                }
+            }
+        }
+    }
+
+    fn finish(&self, best: Best) -> Option<SceneHit> {
+        match best {
+            Best::None => None,
+            Best::Shape { object, hit } => Some(SceneHit { object, triangle: SceneHit::NO_TRIANGLE, hit }),
+            Best::Mesh { object, face, t, b1, b2, dir } => {
+                let Object::Mesh { mesh, transform } = &self.objects[object as usize] else {
+                    return None;
+                };
+                let local = self.meshes[*mesh as usize].hit(face as usize, t, b1, b2, dir);
+                Some(SceneHit { object, triangle: face, hit: transform.hit_to_world(&local) })
+            }
+        }
+    }
+
+    /// The nearest hit in `[ray.t_min, ray.t_max]`.
+    ///
+    /// Rays with a zero or non-finite direction or origin hit nothing.
+    #[must_use]
+    pub fn closest_hit(&self, ray: &Ray) -> Option<SceneHit> {
+        if !usable(ray) {
+            return None;
+        }
+        let mut r = *ray;
+        let mut best = Best::None;
+        for &i in &self.unbounded {
+            self.closest_object(i, &mut r, &mut best);
+        }
+        let mut br = BoxRay::new(&r);
+        cwbvh::walk_any(&self.tlas, self.tlas_depth, &mut br, |slot, br| {
+            self.closest_object(self.tlas_objects[slot as usize], &mut r, &mut best);
+            br.t_max = r.t_max;
+            true
+        });
+        self.finish(best)
+    }
+
+    #[inline]
+    fn object_occludes(&self, i: u32, ray: &Ray) -> bool {
+        match &self.objects[i as usize] {
+            Object::Shape(s) => s.occludes(ray),
+            Object::Mesh { mesh, transform } => {
+                self.blas[*mesh as usize].occluded(&transform.ray_to_object(ray))
+            }
+        }
+    }
+
+    /// Whether anything lies in `[ray.t_min, ray.t_max]` (early exit).
+    #[must_use]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if !usable(ray) {
+            return false;
+        }
+        if self.unbounded.iter().any(|&i| self.object_occludes(i, ray)) {
+            return true;
+        }
+        let mut hit = false;
+        let mut br = BoxRay::new(ray);
+        cwbvh::walk_any(&self.tlas, self.tlas_depth, &mut br, |slot, _| {
+            hit = self.object_occludes(self.tlas_objects[slot as usize], ray);
+            !hit
+        });
+        hit
+    }
+
+    /// Every crossing of object `i` in the ray's interval.
+    fn object_crossings(
+        &self,
+        i: u32,
+        ray: &Ray,
+        f: &mut impl FnMut(&SceneHit) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        match &self.objects[i as usize] {
+            Object::Shape(s) => {
+                let mut r = *ray;
+                // Analytic shapes are convex: at most two crossings (a few
+                // more steps only guard against a shape reporting a tangent
+                // twice).
+                for _ in 0..MAX_SHAPE_CROSSINGS {
+                    let Some(hit) = s.intersect(&r) else { break };
+                    f(&SceneHit { object: i, triangle: SceneHit::NO_TRIANGLE, hit })?;
+                    let next = hit.t.next_up();
+                    if !(next <= r.t_max) {
+                        break;
+                    }
+                    r.t_min = next;
+                }
+                ControlFlow::Continue(())
+            }
+            Object::Mesh { mesh, transform } => {
+                let m = &self.meshes[*mesh as usize];
+                let local = transform.ray_to_object(ray);
+                self.blas[*mesh as usize].crossings(&local, |face, t, b1, b2| {
+                    let hit = transform.hit_to_world(&m.hit(face as usize, t, b1, b2, local.dir));
+                    f(&SceneHit { object: i, triangle: face, hit })
+                })
+            }
+        }
+    }
+
+    /// Calls `f` for every surface crossing along the ray's interval, in no
+    /// particular order, until `f` breaks. A closed shape crossed twice
+    /// (entering and leaving) is reported at each crossing; `SceneHit::hit`
+    /// says which by `front_face`. Each mesh triangle is reported at most
+    /// once per instance. Used for coloured shadows behind transparent
+    /// objects.
+    pub fn for_each_hit(&self, ray: &Ray, mut f: impl FnMut(&SceneHit) -> ControlFlow<()>) {
+        if !usable(ray) {
+            return;
+        }
+        for &i in &self.unbounded {
+            if self.object_crossings(i, ray, &mut f).is_break() {
+                return;
+            }
+        }
+        let mut br = BoxRay::new(ray);
+        cwbvh::walk_any(&self.tlas, self.tlas_depth, &mut br, |slot, _| {
+            self.object_crossings(self.tlas_objects[slot as usize], ray, &mut f).is_continue()
+        });
+    }
+
+    fn hit_object_brute_force(&self, i: usize, ray: &Ray) -> Option<SceneHit> {
         match &self.objects[i] {
             Object::Shape(s) => s.intersect(ray).map(|hit| SceneHit {
                 object: i as u32,
@@ -166,13 +678,17 @@ impl Accel {
         }
     }
 
-    /// The nearest hit in `[ray.t_min, ray.t_max]`.
+    /// [`Accel::closest_hit`] by testing every object and every triangle:
+    /// the reference the hierarchy is tested against. Slow.
     #[must_use]
-    pub fn closest_hit(&self, ray: &Ray) -> Option<SceneHit> {
+    pub fn closest_hit_brute_force(&self, ray: &Ray) -> Option<SceneHit> {
+        if !usable(ray) {
+            return None;
+        }
         let mut ray = *ray;
         let mut best = None;
         for i in 0..self.objects.len() {
-            if let Some(h) = self.hit_object(i, &ray) {
+            if let Some(h) = self.hit_object_brute_force(i, &ray) {
                 ray.t_max = h.hit.t;
                 best = Some(h);
             }
@@ -180,45 +696,86 @@ impl Accel {
         best
     }
 
-    /// Whether anything lies in `[ray.t_min, ray.t_max]` (early exit).
-    #[must_use]
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        (0..self.objects.len()).any(|i| self.hit_object(i, ray).is_some())
-    }
-
-    /// Calls `f` for every surface crossing along the ray's interval, in no
-    /// particular order, until `f` breaks. A closed shape crossed twice
-    /// (entering and leaving) is reported at each crossing; `SceneHit::hit`
-    /// says which by `front_face`. Used for coloured shadows behind
-    /// transparent objects.
-    pub fn for_each_hit(&self, ray: &Ray, mut f: impl FnMut(&SceneHit) -> ControlFlow<()>) {
+    /// [`Accel::for_each_hit`] by testing every object and every triangle:
+    /// the reference the hierarchy is tested against. Slow.
+    pub fn for_each_hit_brute_force(&self, ray: &Ray, mut f: impl FnMut(&SceneHit) -> ControlFlow<()>) {
+        if !usable(ray) {
+            return;
+        }
         for i in 0..self.objects.len() {
-            let mut r = *ray;
-            while let Some(h) = self.hit_object(i, &r) {
-                if f(&h).is_break() {
-                    return;
+            let flow = match &self.objects[i] {
+                Object::Shape(_) => self.object_crossings(i as u32, ray, &mut f),
+                Object::Mesh { mesh, transform } => {
+                    let m = &self.meshes[*mesh as usize];
+                    let local = transform.ray_to_object(ray);
+                    let tr = TriangleRay::new(&local);
+                    let mut flow = ControlFlow::Continue(());
+                    for face in 0..m.len() {
+                        let [a, b, c] = m.triangle(face);
+                        if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+                            let hit = transform.hit_to_world(&m.hit(face, t, b1, b2, local.dir));
+                            flow = f(&SceneHit { object: i as u32, triangle: face as u32, hit });
+                            if flow.is_break() {
+                                break;
+                            }
+                        }
+                    }
+                    flow
                 }
-                // Continue past this crossing.
-                let next = h.hit.t.next_up_f32();
-                if !(next <= r.t_max) {
-                    break;
-                }
-                r.t_min = next;
+            };
+            if flow.is_break() {
+                return;
             }
         }
     }
 }
 
-trait NextUp {
-    fn next_up_f32(self) -> f32;
-}
+/// Most crossings reported for one analytic shape along one ray.
+const MAX_SHAPE_CROSSINGS: usize = 8;
 
-impl NextUp for f32 {
-    fn next_up_f32(self) -> f32 {
-        // Smallest step past a crossing that still orders distinct hits.
-        self + self.abs().max(1e-6) * 1e-5
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prism_geometry::glam::Vec2;
+
+    /// obvhs's own validation (skipped by our builds, as it is slow) on
+    /// meshes built at every quality.
+    #[test]
+    fn built_hierarchies_validate() {
+        let n = 30;
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                positions.push(Vec3::new(u, (u * 7.0).sin() * (v * 5.0).cos() * 0.2, v));
+            }
+        }
+        let w = n + 1;
+        let mut indices = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let a = j * w + i;
+                indices.push([a, a + 1, a + w + 1]);
+                indices.push([a, a + w + 1, a + w]);
+            }
+        }
+        let uvs = positions.iter().map(|p| Vec2::new(p.x, p.z)).collect();
+        let mesh = TriangleMesh::new(positions, None, Some(uvs), indices).unwrap();
+        for q in BuildQuality::ALL {
+            let blas = Blas::build(&mesh, q);
+            let tris: Vec<obvhs::triangle::Triangle> = (0..mesh.len())
+                .map(|f| {
+                    let [a, b, c] = mesh.triangle(f);
+                    obvhs::triangle::Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
+                })
+                .collect();
+            blas.bvh.validate(&tris, false);
+            assert_eq!(blas.tris.len(), blas.faces.len());
+            assert!(blas.depth >= 1 && blas.depth <= cwbvh::INLINE_STACK);
+            let mut faces = blas.faces.clone();
+            faces.sort_unstable();
+            faces.dedup();
+            assert_eq!(faces.len(), mesh.len(), "{}: every face is in a leaf", q.name());
+        }
     }
 }
-
-#[allow(unused_imports)]
-use TriangleRay as _;

@@ -1,0 +1,261 @@
+//! Our own walk over obvhs's compressed wide BVH (CWBVH) nodes.
+//!
+//! obvhs builds the nodes; this module traverses them. It follows obvhs's
+//! `traverse!` macro (same node groups, same child order by ray octant) but
+//! with a box test of its own:
+//!
+//! * the near distance is clamped to the ray's `t_min`, not to obvhs's fixed
+//!   `1e-4`, so a ray spawned a few ULPs off a surface with `t_min = 0` still
+//!   finds geometry closer than `1e-4` (and a ray with a long, non-unit
+//!   direction is not blind over its first `1e-4` units of `t`);
+//! * zero direction components (`+0.0` or `-0.0`) get an infinite
+//!   reciprocal, and the slab distances are computed as `(plane - origin) *
+//!   inv` so that a ray lying exactly in a box's face plane gives `NaN`,
+//!   which the min/max order below discards (the slab then does not limit
+//!   the interval). obvhs's `safe_inverse` instead clamps the reciprocal to
+//!   `±1/EPSILON` (a ray in a face plane then misses the box) and gives
+//!   `-0.0` a negative reciprocal while ordering slabs by `dir < 0`, which
+//!   culls every box for such rays;
+//! * the traversal stack is sized from the tree's measured depth.
+
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::node::CwBvhNode;
+use prism_geometry::Ray;
+use prism_geometry::glam::{Vec3, Vec3A, Vec4};
+
+/// Stack entries kept inline; deeper trees (never seen in practice) use a
+/// heap stack.
+pub(crate) const INLINE_STACK: usize = 32;
+
+/// A ray prepared for box tests.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxRay {
+    pub origin: Vec3A,
+    pub inv: Vec3A,
+    pub neg: [bool; 3],
+    pub oct_inv4: u32,
+    pub t_min: f32,
+    pub t_max: f32,
+}
+
+/// `1/d`, with `+inf` for both zeros (slab order uses `d < 0`).
+#[inline(always)]
+fn inv(d: f32) -> f32 {
+    if d == 0.0 { f32::INFINITY } else { 1.0 / d }
+}
+
+impl BoxRay {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.dir;
+        let neg = [d.x < 0.0, d.y < 0.0, d.z < 0.0];
+        // Child order by octant, as obvhs's ray_get_octant_inv4.
+        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
+            | (if neg[1] { 0 } else { 0x0202_0202 })
+            | (if neg[2] { 0 } else { 0x0101_0101 });
+        Self {
+            origin: Vec3A::from(ray.origin),
+            inv: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+            neg,
+            oct_inv4,
+            t_min: ray.t_min,
+            t_max: ray.t_max,
+        }
+    }
+}
+
+#[inline(always)]
+fn q4(v: &[u8; 8], i: usize) -> Vec4 {
+    let b = i * 4;
+    Vec4::new(v[b] as f32, v[b + 1] as f32, v[b + 2] as f32, v[b + 3] as f32)
+}
+
+/// Which children of `node` the ray's interval meets: obvhs's hit mask
+/// (leaf primitive bits in the low 24 bits, inner-node bits above).
+///
+/// Every `max`/`min` keeps a possible `NaN` in its first operand: both
+/// SSE (`maxps`) and scalar `f32::max` then return the second, so a `NaN`
+/// slab (ray in the face plane) is ignored.
+#[inline(always)]
+pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay) -> u32 {
+    let ext = node.compute_extent();
+    let po = Vec3A::from(node.p) - ray.origin;
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(ray.oct_inv4);
+    let (ex, ey, ez) = (Vec4::splat(ext.x), Vec4::splat(ext.y), Vec4::splat(ext.z));
+    let (ox, oy, oz) = (Vec4::splat(po.x), Vec4::splat(po.y), Vec4::splat(po.z));
+    let (ix, iy, iz) = (Vec4::splat(ray.inv.x), Vec4::splat(ray.inv.y), Vec4::splat(ray.inv.z));
+    let t_lo = Vec4::splat(ray.t_min);
+    let t_hi = Vec4::splat(ray.t_max);
+    let mut hit_mask = 0u32;
+    for i in 0..2 {
+        let (lo, hi) = (q4(&node.child_min_x, i), q4(&node.child_max_x, i));
+        let (near, far) = if ray.neg[0] { (hi, lo) } else { (lo, hi) };
+        let (nx, fx) = ((near * ex + ox) * ix, (far * ex + ox) * ix);
+        let (lo, hi) = (q4(&node.child_min_y, i), q4(&node.child_max_y, i));
+        let (near, far) = if ray.neg[1] { (hi, lo) } else { (lo, hi) };
+        let (ny, fy) = ((near * ey + oy) * iy, (far * ey + oy) * iy);
+        let (lo, hi) = (q4(&node.child_min_z, i), q4(&node.child_max_z, i));
+        let (near, far) = if ray.neg[2] { (hi, lo) } else { (lo, hi) };
+        let (nz, fz) = ((near * ez + oz) * iz, (far * ez + oz) * iz);
+        let tmin = nx.max(ny.max(nz.max(t_lo)));
+        let tmax = fx.min(fy.min(fz.min(t_hi)));
+        let mut mask = tmin.cmple(tmax).bitmask();
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let offset = i * 4 + j;
+            let child_bits = ((child_bits8 >> (offset * 8)) as u32) & 0xff;
+            let bit_index = ((bit_index8 >> (offset * 8)) as u32) & 0xff;
+            hit_mask |= child_bits << bit_index;
+        }
+    }
+    hit_mask
+}
+
+#[inline(always)]
+fn firstbithigh(v: u32) -> u32 {
+    31 - v.leading_zeros()
+}
+
+/// Fixed-capacity stack of node groups.
+pub(crate) struct GroupStack<const N: usize> {
+    data: [(u32, u32); N],
+    len: usize,
+}
+
+impl<const N: usize> GroupStack<N> {
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self { data: [(0, 0); N], len: 0 }
+    }
+}
+
+/// The stack interface the walk needs.
+pub(crate) trait Stack {
+    fn push(&mut self, v: (u32, u32));
+    fn pop(&mut self) -> Option<(u32, u32)>;
+}
+
+impl<const N: usize> Stack for GroupStack<N> {
+    #[inline(always)]
+    fn push(&mut self, v: (u32, u32)) {
+        // The caller sized N from the tree depth, so this never overflows;
+        // if it did, `get_mut` keeps it memory-safe (the group is dropped).
+        if let Some(slot) = self.data.get_mut(self.len) {
+            *slot = v;
+            self.len += 1;
+        }
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, u32)> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.data[self.len])
+    }
+}
+
+impl Stack for Vec<(u32, u32)> {
+    #[inline(always)]
+    fn push(&mut self, v: (u32, u32)) {
+        Vec::push(self, v);
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, u32)> {
+        Vec::pop(self)
+    }
+}
+
+/// Walks `bvh` front to back (approximately) for `ray`, calling
+/// `prim(slot, ray)` for each primitive slot (an index into
+/// `bvh.primitive_indices`) whose leaf box the ray's interval meets. The
+/// callback may shrink `ray.t_max`; it returns `false` to stop the walk.
+#[inline(always)]
+pub(crate) fn walk<S: Stack>(
+    bvh: &CwBvh,
+    stack: &mut S,
+    ray: &mut BoxRay,
+    mut prim: impl FnMut(u32, &mut BoxRay) -> bool,
+) {
+    if bvh.nodes.is_empty() {
+        return;
+    }
+    // (base index, mask) pairs as in obvhs: bit 31 stands for the root.
+    let mut current: (u32, u32) = (0, 0x8000_0000);
+    let mut prims: (u32, u32) = (0, 0);
+    loop {
+        while prims.1 != 0 {
+            let local = firstbithigh(prims.1);
+            prims.1 &= !(1u32 << local);
+            if !prim(prims.0 + local, ray) {
+                return;
+            }
+        }
+        if current.1 & 0xff00_0000 != 0 {
+            let hits_imask = current.1;
+            let child_index_offset = firstbithigh(hits_imask);
+            let child_index_base = current.0;
+            current.1 &= !(1u32 << child_index_offset);
+            if current.1 & 0xff00_0000 != 0 {
+                stack.push(current);
+            }
+            let slot_index = (child_index_offset - 24) ^ (ray.oct_inv4 & 0xff);
+            let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+            let Some(node) = bvh.nodes.get((child_index_base + relative_index) as usize) else {
+                return;
+            };
+            let hitmask = intersect_node(node, ray);
+            current = (node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
+            prims = (node.primitive_base_idx, hitmask & 0x00ff_ffff);
+        } else {
+            current = (0, 0);
+        }
+        if prims.1 == 0 && current.1 & 0xff00_0000 == 0 {
+            match stack.pop() {
+                Some(g) => current = g,
+                None => return,
+            }
+        }
+    }
+}
+
+/// Depth of the tree (root = 1), for sizing the stack.
+pub(crate) fn depth(bvh: &CwBvh) -> usize {
+    if bvh.nodes.is_empty() {
+        return 0;
+    }
+    let mut best = 0;
+    let mut todo = vec![(0usize, 1usize)];
+    while let Some((i, d)) = todo.pop() {
+        best = best.max(d);
+        let Some(node) = bvh.nodes.get(i) else { continue };
+        for ch in 0..8 {
+            if !node.is_child_empty(ch) && !node.is_leaf(ch) {
+                todo.push((node.child_node_index(ch) as usize, d + 1));
+            }
+        }
+    }
+    best
+}
+
+/// [`walk`] with a stack that fits a tree of depth `depth`.
+#[inline(always)]
+pub(crate) fn walk_any(
+    bvh: &CwBvh,
+    depth: usize,
+    ray: &mut BoxRay,
+    prim: impl FnMut(u32, &mut BoxRay) -> bool,
+) {
+    if depth <= INLINE_STACK {
+        walk(bvh, &mut GroupStack::<INLINE_STACK>::new(), ray, prim);
+    } else {
+        walk(bvh, &mut Vec::with_capacity(depth), ray, prim);
+    }
+}
+
+/// Converts a prism box to an obvhs one.
+#[inline]
+pub(crate) fn to_obvhs(min: Vec3, max: Vec3) -> obvhs::aabb::Aabb {
+    obvhs::aabb::Aabb::new(Vec3A::from(min), Vec3A::from(max))
+}
