@@ -271,3 +271,60 @@ impl Scene {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fog_weights_follow_their_laws() {
+        let lin = FogMode::Linear { start: 2.0, end: 6.0 };
+        assert_eq!(lin.weight(1.0), 0.0);
+        assert_eq!(lin.weight(2.0), 0.0);
+        assert_eq!(lin.weight(3.0), 0.25);
+        assert_eq!(lin.weight(6.0), 1.0);
+        assert_eq!(lin.weight(f32::INFINITY), 1.0);
+        let e = FogMode::Exponential { density: 0.3 };
+        assert!((e.weight(2.0) - (1.0 - (-0.6f32).exp())).abs() < 1e-7);
+        assert_eq!(e.weight(f32::INFINITY), 1.0);
+        let e2 = FogMode::ExponentialSquared { density: 0.3 };
+        assert!((e2.weight(2.0) - (1.0 - (-0.36f32).exp())).abs() < 1e-7);
+        assert_eq!(FogMode::Exponential { density: 0.0 }.weight(f32::INFINITY), 0.0);
+        assert_eq!(FogMode::Linear { start: 1.0, end: 1.0 }.weight(1.0), 1.0);
+        assert!(lin.weight(f32::NAN).is_finite());
+    }
+
+    #[test]
+    fn segment_transmittances_compose_to_the_whole_path() {
+        for mode in [
+            FogMode::Linear { start: 2.0, end: 20.0 },
+            FogMode::Linear { start: -3.0, end: 20.0 },
+            FogMode::Exponential { density: 0.1 },
+            FogMode::ExponentialSquared { density: 0.07 },
+        ] {
+            let cuts = [0.0f32, 1.5, 4.0, 9.0, 13.0];
+            let product: f32 = cuts.windows(2).map(|w| mode.transmittance(w[0], w[1])).product();
+            assert!((product - (1.0 - mode.weight(13.0))).abs() < 1e-5, "{mode:?}");
+            assert_eq!(mode.transmittance(0.0, f32::INFINITY), 0.0);
+            assert_eq!(mode.transmittance(5.0, 5.0), 1.0);
+        }
+        // Past the end of linear fog nothing gets through, without 0/0.
+        let lin = FogMode::Linear { start: 0.0, end: 1.0 };
+        assert_eq!(lin.transmittance(2.0, 3.0), 0.0);
+    }
+
+    #[test]
+    fn fog_validation() {
+        let ok = Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 1.0, end: 2.0 }, enabled: true };
+        assert!(ok.validate().is_ok());
+        for mode in [
+            FogMode::Linear { start: 2.0, end: 2.0 },
+            FogMode::Linear { start: f32::NAN, end: 2.0 },
+            FogMode::Exponential { density: -1.0 },
+            FogMode::ExponentialSquared { density: f32::INFINITY },
+        ] {
+            assert!(matches!(Fog { mode, ..ok }.validate(), Err(ShadeError::Scene(_))), "{mode:?}");
+        }
+        assert!(Fog { color: Vec3::NAN, ..ok }.validate().is_err());
+    }
+}

@@ -302,3 +302,200 @@ pub fn srgb8_to_linear(b: u8) -> f32 {
 fn srgb8_lut() -> [f32; 256] {
     std::array::from_fn(|i| srgb8_to_linear(i as u8))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        std::env::temp_dir().join(format!("prism-shade-test-{}-{name}", std::process::id()))
+    }
+
+    #[test]
+    fn srgb_round_trip() {
+        for b in 0..=255u8 {
+            assert_eq!(crate::linear_to_srgb8(srgb8_to_linear(b)), b);
+        }
+        assert_eq!(srgb8_to_linear(0), 0.0);
+        assert_eq!(srgb8_to_linear(255), 1.0);
+        assert!((srgb_to_linear(0.5) - 0.214_041_14).abs() < 1e-6);
+        assert_eq!(srgb_to_linear(f32::NAN), 0.0);
+    }
+
+    #[test]
+    fn bilinear_interpolates_between_texel_centres() {
+        let t = ImageTexture::from_linear(
+            2,
+            2,
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 1.0)],
+            Wrap::Clamp,
+        )
+        .expect("valid");
+        // Texel centres are exact.
+        assert_eq!(t.sample(Vec2::new(0.25, 0.25)), Vec3::ZERO);
+        assert_eq!(t.sample(Vec2::new(0.75, 0.25)), Vec3::X);
+        assert_eq!(t.sample(Vec2::new(0.25, 0.75)), Vec3::Y);
+        // Halfway between all four: their mean.
+        assert!((t.sample(Vec2::new(0.5, 0.5)) - Vec3::new(0.5, 0.5, 0.25)).length() < 1e-6);
+        // A quarter of the way from texel 0 to texel 1 along u.
+        assert!((t.sample(Vec2::new(0.375, 0.25)) - Vec3::new(0.25, 0.0, 0.0)).length() < 1e-6);
+        // Clamp holds the edge; repeat wraps to the opposite texel.
+        assert_eq!(t.sample(Vec2::new(-3.0, 0.25)), Vec3::ZERO);
+        let r = ImageTexture::from_linear(2, 1, vec![Vec3::ZERO, Vec3::ONE], Wrap::Repeat).expect("valid");
+        assert!((r.sample(Vec2::new(0.0, 0.5)) - Vec3::splat(0.5)).length() < 1e-6);
+        assert!((r.sample(Vec2::new(1.25, 0.5)) - Vec3::ZERO).length() < 1e-6);
+        assert!((r.sample(Vec2::new(-0.25, 0.5)) - Vec3::ONE).length() < 1e-6);
+        // Non-finite or huge coordinates do not panic.
+        for uv in [Vec2::NAN, Vec2::INFINITY, Vec2::splat(1e30), Vec2::splat(-1e30)] {
+            assert!(t.sample(uv).is_finite());
+            assert!(r.sample(uv).is_finite());
+        }
+    }
+
+    #[test]
+    fn mappings() {
+        let uv = Vec2::new(0.3, 0.7);
+        assert_eq!(Mapping::Uv.uv(uv, Vec3::ONE), uv);
+        assert_eq!(Mapping::Planar.uv(uv, Vec3::new(2.0, 5.0, -3.0)), Vec2::new(2.0, -3.0));
+        let c = Mapping::Cylindrical.uv(uv, Vec3::new(0.0, 0.25, 2.0));
+        assert!((c - Vec2::new(0.75, 0.75)).length() < 1e-6);
+        let s = Mapping::Spherical.uv(uv, Vec3::new(0.0, 3.0, 0.0));
+        assert!((s - Vec2::new(0.5, 0.0)).length() < 1e-6);
+        let s = Mapping::Spherical.uv(uv, Vec3::new(-2.0, 0.0, 0.0));
+        assert!((s.y - 0.5).abs() < 1e-6 && (s.x - 1.0).abs() < 1e-6);
+        // The centre itself maps somewhere finite.
+        assert!(Mapping::Spherical.uv(uv, Vec3::ZERO).is_finite());
+    }
+
+    #[test]
+    fn checker_in_uv_space() {
+        let t = Texture::Checker { a: Vec3::ONE, b: Vec3::ZERO, size: 0.5, world: false };
+        let at = |u, v| t.color_at(Vec3::ZERO, Vec2::new(u, v), &Affine3A::IDENTITY);
+        assert_eq!(at(0.1, 0.1), Vec3::ONE);
+        assert_eq!(at(0.6, 0.1), Vec3::ZERO);
+        assert_eq!(at(0.6, 0.6), Vec3::ONE);
+        assert_eq!(at(-0.1, 0.1), Vec3::ZERO);
+        assert!(at(f32::NAN, 1e30).is_finite());
+    }
+
+    #[test]
+    fn image_texture_uses_its_mapping_in_object_space() {
+        let img =
+            Arc::new(ImageTexture::from_linear(2, 1, vec![Vec3::ZERO, Vec3::ONE], Wrap::Clamp).expect("ok"));
+        let t = Texture::Image {
+            image: img,
+            mapping: Mapping::Planar,
+            scale: Vec2::ONE,
+            tint: Vec3::new(1.0, 0.5, 0.0),
+        };
+        // The object sits at x = 10: world x = 10.75 is object x = 0.75.
+        let to_object = Affine3A::from_translation(Vec3::new(-10.0, 0.0, 0.0));
+        let c = t.color_at(Vec3::new(10.75, 0.0, 0.5), Vec2::ZERO, &to_object);
+        assert!((c - Vec3::new(1.0, 0.5, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn load_decodes_srgb_png_to_linear() {
+        let path = temp("ok.png");
+        let bytes = [0u8, 128, 255, 255, 64, 0];
+        image::save_buffer(&path, &bytes, 2, 1, image::ExtendedColorType::Rgb8).expect("can write temp png");
+        let t = ImageTexture::load(&path, Wrap::Clamp);
+        let _ = std::fs::remove_file(&path);
+        let t = t.expect("loads");
+        assert_eq!((t.width(), t.height(), t.wrap()), (2, 1, Wrap::Clamp));
+        let want0 = Vec3::new(0.0, srgb8_to_linear(128), 1.0);
+        assert_eq!(t.texel(0, 0), want0);
+        assert_eq!(t.texel(1, 0), Vec3::new(1.0, srgb8_to_linear(64), 0.0));
+        // The file's name, not its extension, is trusted for nothing.
+        let path = temp("png-named.bmp");
+        image::save_buffer_with_format(
+            &path,
+            &bytes,
+            2,
+            1,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .expect("can write");
+        let t = ImageTexture::load(&path, Wrap::Repeat);
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(t.expect("loads by content").texel(0, 0), want0);
+    }
+
+    #[test]
+    fn load_keeps_float_images_linear() {
+        let path = temp("lin.exr");
+        let img = image::Rgb32FImage::from_raw(1, 1, vec![0.5, 2.0, 0.25]).expect("sized");
+        img.save(&path).expect("can write exr");
+        let t = ImageTexture::load(&path, Wrap::Clamp);
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(t.expect("loads").texel(0, 0), Vec3::new(0.5, 2.0, 0.25));
+    }
+
+    fn crc32(data: &[u8]) -> u32 {
+        let mut c = 0xFFFF_FFFFu32;
+        for &b in data {
+            c ^= u32::from(b);
+            for _ in 0..8 {
+                c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+            }
+        }
+        !c
+    }
+
+    #[test]
+    fn load_refuses_bad_files_without_panicking() {
+        let missing = temp("missing.png");
+        assert!(matches!(ImageTexture::load(&missing, Wrap::Clamp), Err(ShadeError::Texture { .. })));
+        let garbage = temp("garbage.png");
+        std::fs::write(&garbage, b"this is not an image at all").expect("can write");
+        let e = ImageTexture::load(&garbage, Wrap::Clamp);
+        // A truncated PNG: a real header, then nothing.
+        let truncated = temp("truncated.png");
+        let mut ok = Vec::new();
+        {
+            use image::ImageEncoder;
+            image::codecs::png::PngEncoder::new(&mut ok)
+                .write_image(&[1u8; 48], 4, 4, image::ExtendedColorType::Rgb8)
+                .expect("encodes");
+        }
+        std::fs::write(&truncated, &ok[..ok.len() / 2]).expect("can write");
+        let t = ImageTexture::load(&truncated, Wrap::Clamp);
+        // A PNG header claiming 100000 × 100000 texels.
+        let huge = temp("huge.png");
+        let mut f = b"\x89PNG\r\n\x1a\n".to_vec();
+        let mut ihdr = b"IHDR".to_vec();
+        ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+        ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+        f.extend_from_slice(&13u32.to_be_bytes());
+        f.extend_from_slice(&ihdr);
+        f.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+        // Then a small (wrong) IDAT and the end: decoding must stop at the size.
+        let mut idat = b"IDAT".to_vec();
+        idat.extend_from_slice(&[0x78, 0x9c, 0x63, 0, 0, 0, 1, 0, 1]);
+        f.extend_from_slice(&9u32.to_be_bytes());
+        f.extend_from_slice(&idat);
+        f.extend_from_slice(&crc32(&idat).to_be_bytes());
+        f.extend_from_slice(&0u32.to_be_bytes());
+        f.extend_from_slice(b"IEND");
+        f.extend_from_slice(&crc32(b"IEND").to_be_bytes());
+        std::fs::write(&huge, &f).expect("can write");
+        let h = ImageTexture::load(&huge, Wrap::Clamp);
+        for p in [&garbage, &truncated, &huge] {
+            let _ = std::fs::remove_file(p);
+        }
+        for (what, r) in [("garbage", e), ("truncated", t), ("huge", h)] {
+            match r {
+                Err(ShadeError::Texture { path, reason }) => {
+                    assert!(path.to_string_lossy().contains("prism-shade-test"), "{what}: {path:?}");
+                    assert!(!reason.is_empty());
+                    if what == "huge" {
+                        assert!(reason.to_lowercase().contains("limit"), "{reason}");
+                    }
+                }
+                other => panic!("{what}: expected a texture error, got {other:?}"),
+            }
+        }
+    }
+}

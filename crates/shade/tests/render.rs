@@ -1,0 +1,276 @@
+//! The renderer as a whole: determinism, progressive passes, robustness,
+//! ray counts.
+
+mod common;
+use common::*;
+use prism_geometry::glam::{Vec2, Vec3};
+use prism_geometry::{Cone, Cuboid, Cylinder, Plane, Shear, Sphere, Transform};
+use prism_shade::{
+    FogMode, ImageTexture, Mapping, Material, PointLight, RenderHooks, RenderSettings, Texture, Wrap,
+};
+use std::sync::Arc;
+
+const I: Transform = Transform::IDENTITY;
+
+/// Every feature at once: the report's scene in miniature.
+fn busy_scene(w: u32, h: u32) -> prism_shade::Scene {
+    let planet = ImageTexture::from_linear(
+        4,
+        2,
+        (0..8).map(|k| Vec3::new(k as f32 / 8.0, 0.5, 1.0 - k as f32 / 8.0)).collect(),
+        Wrap::Repeat,
+    )
+    .expect("valid");
+    let shear = Transform::shear(Shear { xy: 0.3, ..Shear::NONE }).expect("invertible");
+    let rot = Transform::rotate_y(45f32.to_radians())
+        .then(&Transform::translate(Vec3::new(2.0, 0.0, -2.0)).expect("ok"));
+    let mut s = scene(
+        vec![
+            (
+                Plane::new(Vec3::new(0.0, -1.0, 0.0), Vec3::Y).expect("ok").into(),
+                I,
+                Material::diffuse(Vec3::ONE).with_texture(Texture::Checker {
+                    a: Vec3::splat(0.9),
+                    b: Vec3::new(0.1, 0.1, 0.4),
+                    size: 1.0,
+                    world: true,
+                }),
+            ),
+            (
+                Sphere::new(Vec3::new(-1.5, 0.5, -3.0), 1.5).expect("ok").into(),
+                I,
+                Material { reflectivity: 0.7, specular: 0.5, ..Material::diffuse(Vec3::new(0.1, 0.2, 0.8)) },
+            ),
+            (
+                Sphere::new(Vec3::new(1.0, 0.0, 0.0), 0.8).expect("ok").into(),
+                I,
+                Material { absorption: Vec3::new(0.1, 0.0, 0.3), ..glass(1.5) },
+            ),
+            (
+                Sphere::new(Vec3::new(-1.0, -0.3, 1.0), 0.6).expect("ok").into(),
+                I,
+                Material { transparency: 0.6, ..Material::diffuse(Vec3::new(0.9, 0.3, 0.3)) },
+            ),
+            (
+                Sphere::new(Vec3::ZERO, 0.7).expect("ok").into(),
+                Transform::translate(Vec3::new(3.0, 0.5, -1.0)).expect("ok"),
+                Material::diffuse(Vec3::ONE).with_texture(Texture::Image {
+                    image: Arc::new(planet),
+                    mapping: Mapping::Spherical,
+                    scale: Vec2::ONE,
+                    tint: Vec3::ONE,
+                }),
+            ),
+            (
+                Cuboid::new(Vec3::new(-0.5, -1.0, -0.5), Vec3::new(0.5, 0.0, 0.5)).expect("ok").into(),
+                rot,
+                Material::diffuse(Vec3::new(0.8, 0.5, 0.2)),
+            ),
+            (
+                Cuboid::new(Vec3::new(-3.5, -1.0, -0.5), Vec3::new(-2.5, 0.0, 0.5)).expect("ok").into(),
+                shear,
+                Material::diffuse(Vec3::new(0.2, 0.8, 0.2)),
+            ),
+            (
+                Cone::new(Vec3::new(0.0, -1.0, -5.0), 0.8, 2.0).expect("ok").into(),
+                I,
+                Material::diffuse(Vec3::new(0.8, 0.8, 0.2)),
+            ),
+            (
+                Cylinder::new(Vec3::new(2.5, -1.0, 2.0), 0.4, 1.0).expect("ok").into(),
+                I,
+                Material::diffuse(Vec3::new(0.5, 0.2, 0.7)),
+            ),
+        ],
+        vec![
+            light(Vec3::new(5.0, 8.0, 6.0)),
+            PointLight {
+                position: Vec3::new(-4.0, 3.0, 2.0),
+                color: Vec3::new(0.3, 0.3, 0.5),
+                intensity: 0.8,
+            },
+        ],
+        camera(Vec3::new(0.0, 2.0, 8.0), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 50.0, w, h),
+    );
+    s.ambient = Vec3::splat(0.2);
+    s.background = Vec3::new(0.3, 0.5, 0.8);
+    s.fog = fog(Vec3::ONE, FogMode::Linear { start: 5.0, end: 30.0 });
+    s
+}
+
+trait WithTexture {
+    fn with_texture(self, t: Texture) -> Self;
+}
+
+impl WithTexture for Material {
+    fn with_texture(self, texture: Texture) -> Self {
+        Material { texture, ..self }
+    }
+}
+
+fn settings_t(spp: u32, threads: usize) -> RenderSettings {
+    RenderSettings { spp, max_depth: 6, min_contribution: 1e-3, threads: Some(threads) }
+}
+
+#[test]
+fn busy_scene_validates() {
+    busy_scene(4, 3).validate().expect("valid scene");
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_image_bit_for_bit() {
+    let s = busy_scene(48, 32);
+    let (a, sa) = prism_shade::render(&s, &settings_t(5, 1), RenderHooks::default());
+    let (b, sb) = prism_shade::render(&s, &settings_t(5, 2), RenderHooks::default());
+    let (c, _) = prism_shade::render(&s, &settings_t(5, 3), RenderHooks::default());
+    assert!(
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .all(|(p, q)| p.to_array().map(f32::to_bits) == q.to_array().map(f32::to_bits))
+    );
+    assert_eq!(a, c);
+    assert_eq!(sa.rays, sb.rays);
+    assert_eq!(sa.nonfinite_samples, 0);
+    // The picture is not trivial: the scene's objects show.
+    let distinct: std::collections::HashSet<[u32; 3]> =
+        a.pixels.iter().map(|p| p.to_array().map(f32::to_bits)).collect();
+    assert!(distinct.len() > 500);
+}
+
+#[test]
+fn render_is_the_sum_of_sample_passes() {
+    let s = busy_scene(24, 16);
+    let set = settings_t(4, 2);
+    let (full, full_stats) = prism_shade::render(&s, &set, RenderHooks::default());
+    // One-sample passes, added in order to a zeroed buffer: exact.
+    let mut acc = vec![Vec3::ZERO; full.pixels.len()];
+    let mut rays = 0;
+    for k in 0..4 {
+        let (pass, st) = prism_shade::render_samples(&s, &set, k..k + 1, RenderHooks::default());
+        rays += st.rays;
+        for (a, p) in acc.iter_mut().zip(&pass.pixels) {
+            *a += *p;
+        }
+    }
+    assert_eq!(rays, full_stats.rays);
+    let inv = 1.0 / 4.0f32;
+    for (a, f) in acc.iter().zip(&full.pixels) {
+        assert_eq!(*a * inv, *f);
+    }
+    // Two two-sample passes: the same up to float rounding of the sums.
+    let (p1, _) = prism_shade::render_samples(&s, &set, 0..2, RenderHooks::default());
+    let (p2, _) = prism_shade::render_samples(&s, &set, 2..4, RenderHooks::default());
+    for ((a, b), f) in p1.pixels.iter().zip(&p2.pixels).zip(&full.pixels) {
+        assert_close((*a + *b) * inv, *f, 1e-6 * (1.0 + f.max_element()));
+    }
+}
+
+#[test]
+fn degenerate_inputs_never_make_nan() {
+    let mut s = busy_scene(24, 16);
+    // A light exactly on a surface, a light inside a sphere, a dark light,
+    // shininess 0, ior 1 and huge, enormous absorption, zero fog density.
+    s.lights.push(light(Vec3::new(0.0, -1.0, 0.0)));
+    s.lights.push(light(Vec3::new(1.0, 0.0, 0.0)));
+    s.lights.push(PointLight { position: Vec3::new(0.0, 5.0, 0.0), color: Vec3::ZERO, intensity: 0.0 });
+    s.materials[1].shininess = 0.0;
+    s.materials[1].specular = 1.0;
+    s.materials[2].ior = 1.0;
+    s.materials[2].absorption = Vec3::splat(1e30);
+    s.materials[3] = Material { transmission: 0.5, transparency: 0.5, ior: 1e6, ..s.materials[3].clone() };
+    s.materials[4] = s.materials[4].clone().with_texture(Texture::Image {
+        image: Arc::new(ImageTexture::from_linear(1, 1, vec![Vec3::ONE], Wrap::Clamp).expect("valid")),
+        mapping: Mapping::Cylindrical,
+        scale: Vec2::ZERO,
+        tint: Vec3::ONE,
+    });
+    for mode in [
+        FogMode::Exponential { density: 0.0 },
+        FogMode::ExponentialSquared { density: 0.0 },
+        FogMode::Linear { start: 3.0, end: 3.0 },
+        FogMode::Linear { start: -5.0, end: 1.0 },
+        FogMode::Exponential { density: 1e30 },
+    ] {
+        s.fog = fog(Vec3::splat(0.5), mode);
+        for (max_depth, min_contribution) in [(u32::MAX, 0.0), (3, f32::NAN), (2, f32::INFINITY), (1, -1.0)] {
+            let set = RenderSettings { spp: 2, max_depth, min_contribution, threads: Some(2) };
+            let (img, stats) = prism_shade::render(&s, &set, RenderHooks::default());
+            assert!(img.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0), "{mode:?}");
+            assert_eq!(stats.nonfinite_samples, 0);
+        }
+    }
+    // A camera inside a glass sphere, and an object naming no material.
+    s.camera = camera(Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, -1.0), Vec3::Y, 90.0, 8, 8);
+    s.object_materials[5] = 99;
+    assert!(s.validate().is_err());
+    let (img, _) = prism_shade::render(&s, &settings_t(3, 1), RenderHooks::default());
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+    // spp 0 acts as 1.
+    let (img, _) = prism_shade::render(&s, &settings_t(0, 1), RenderHooks::default());
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+}
+
+fn wall_scene(material: Material, lights: Vec<PointLight>, w: u32, h: u32) -> prism_shade::Scene {
+    scene(
+        vec![(Plane::new(Vec3::ZERO, Vec3::Z).expect("ok").into(), I, material)],
+        lights,
+        camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 20.0, w, h),
+    )
+}
+
+fn rays(s: &prism_shade::Scene, spp: u32, max_depth: u32) -> u64 {
+    prism_shade::render(s, &settings(spp, max_depth), RenderHooks::default()).1.rays
+}
+
+#[test]
+fn every_ray_is_counted() {
+    let front = light(Vec3::new(0.0, 1.0, 4.0));
+    let behind = light(Vec3::new(0.0, 0.0, -4.0));
+    // A lit wall: a camera ray and a shadow ray per sample.
+    assert_eq!(rays(&wall_scene(Material::diffuse(Vec3::ONE), vec![front], 2, 2), 3, 5), 4 * 3 * 2);
+    // Two lights, one behind the wall (no shadow ray for it).
+    assert_eq!(
+        rays(&wall_scene(Material::diffuse(Vec3::ONE), vec![front, behind, front], 2, 1), 1, 5),
+        2 * 3
+    );
+    // A perfect mirror: no local shading, one reflection ray (a miss).
+    let mirror = Material { reflectivity: 1.0, ..Material::diffuse(Vec3::ONE) };
+    assert_eq!(rays(&wall_scene(mirror.clone(), vec![front], 1, 1), 1, 5), 2);
+    assert_eq!(rays(&wall_scene(mirror, vec![front], 1, 1), 1, 0), 1);
+    // A half mirror: camera, shadow, reflection.
+    let half = Material { reflectivity: 0.5, ..Material::diffuse(Vec3::ONE) };
+    assert_eq!(rays(&wall_scene(half, vec![front], 1, 1), 1, 5), 3);
+    // A transparent sphere in front of nothing: camera, the straight ray to
+    // the exit, the ray from the far side.
+    let glassy = Material { transparency: 1.0, ..Material::diffuse(Vec3::ONE) };
+    let s = scene(
+        vec![(Sphere::new(Vec3::ZERO, 1.0).expect("ok").into(), I, glassy)],
+        vec![],
+        camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1),
+    );
+    assert_eq!(rays(&s, 1, 5), 3);
+    // Nothing at all: one ray per sample.
+    let empty = scene(vec![], vec![front], camera(Vec3::Z, Vec3::ZERO, Vec3::Y, 10.0, 3, 2));
+    assert_eq!(rays(&empty, 2, 5), 12);
+}
+
+#[test]
+fn cancel_and_progress() {
+    let s = busy_scene(16, 8);
+    let seen = std::sync::atomic::AtomicU32::new(0);
+    let progress = |done: u32, all: u32| {
+        assert!(done <= all && all == 8);
+        seen.fetch_max(done, std::sync::atomic::Ordering::Relaxed);
+    };
+    let (_, stats) =
+        prism_shade::render(&s, &settings_t(1, 2), RenderHooks { progress: Some(&progress), cancel: None });
+    assert_eq!(seen.into_inner(), 8);
+    assert!(!stats.cancelled);
+    let cancel = std::sync::atomic::AtomicBool::new(true);
+    let (img, stats) =
+        prism_shade::render(&s, &settings_t(1, 2), RenderHooks { progress: None, cancel: Some(&cancel) });
+    assert!(stats.cancelled);
+    assert_eq!(stats.rays, 0);
+    assert!(img.pixels.iter().all(|p| *p == Vec3::ZERO));
+}

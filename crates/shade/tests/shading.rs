@@ -1,0 +1,399 @@
+//! Numerical checks of the Whitted integrator against closed-form answers.
+
+mod common;
+use common::*;
+use prism_geometry::glam::Vec3;
+use prism_geometry::{Cuboid, Disk, Plane, Sphere, Transform};
+use prism_shade::{Material, PointLight, Texture};
+
+fn sphere(c: Vec3, r: f32) -> prism_geometry::Shape {
+    Sphere::new(c, r).expect("valid sphere").into()
+}
+
+fn plane(p: Vec3, n: Vec3) -> prism_geometry::Shape {
+    Plane::new(p, n).expect("valid plane").into()
+}
+
+fn cuboid(min: Vec3, max: Vec3) -> prism_geometry::Shape {
+    Cuboid::new(min, max).expect("valid box").into()
+}
+
+const I: Transform = Transform::IDENTITY;
+
+/// Ambient + Lambert (+ Phong) at a point of a unit sphere at the origin.
+fn phong(p: Vec3, eye: Vec3, m: &Material, albedo: Vec3, ambient: Vec3, l: &PointLight) -> Vec3 {
+    let n = p.normalize();
+    let to_l = (l.position - p).normalize();
+    let v = (eye - p).normalize();
+    let mut c = m.ambient * albedo * ambient;
+    let ndl = n.dot(to_l);
+    if ndl > 0.0 {
+        let r = 2.0 * ndl * n - to_l;
+        c += l.color * l.intensity * (m.diffuse * ndl * albedo);
+        c += l.color * l.intensity * m.specular * r.dot(v).max(0.0).powf(m.shininess) * m.specular_color;
+    }
+    c
+}
+
+fn lit_sphere_case(specular: f32) {
+    let albedo = Vec3::new(0.8, 0.6, 0.4);
+    let m = Material { ambient: 0.1, diffuse: 0.9, specular, shininess: 20.0, ..Material::diffuse(albedo) };
+    let l =
+        PointLight { position: Vec3::new(4.0, 3.0, 5.0), color: Vec3::new(1.0, 0.9, 0.8), intensity: 1.2 };
+    let eye = Vec3::new(0.0, 0.0, 5.0);
+    let cam = camera(eye, Vec3::ZERO, Vec3::Y, 30.0, 41, 41);
+    let mut s = scene(vec![(sphere(Vec3::ZERO, 1.0), I, m.clone())], vec![l], cam);
+    s.ambient = Vec3::splat(0.3);
+    let img = render(&s, 1, 3);
+    let mut checked = 0;
+    for j in 0..41 {
+        for i in 0..41 {
+            let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
+            let got = px(&img, i, j);
+            match sphere_t(ray.origin, ray.dir, Vec3::ZERO, 1.0) {
+                Some(t) => {
+                    let want = phong(ray.at(t), eye, &m, albedo, s.ambient, &l);
+                    assert_close(got, want, 2e-4);
+                    checked += 1;
+                }
+                None if sphere_t(ray.origin, ray.dir, Vec3::ZERO, 1.01).is_none() => {
+                    assert_eq!(got, Vec3::ZERO, "background at ({i}, {j})")
+                }
+                None => {}
+            }
+        }
+    }
+    assert!(checked > 300, "only {checked} pixels on the sphere");
+}
+
+#[test]
+fn lambert_sphere_matches_analytic_shading() {
+    lit_sphere_case(0.0);
+}
+
+#[test]
+fn phong_highlight_matches_its_formula() {
+    lit_sphere_case(0.5);
+}
+
+/// A floor seen from straight above, lit from (4, 4, 0), with `occluder`
+/// on the segment from the floor's centre point to the light.
+fn floor_under(occluder: prism_geometry::Shape, material: Material) -> (Vec3, Vec3) {
+    let floor_albedo = Vec3::new(0.5, 0.7, 0.9);
+    let floor = Material { ambient: 0.2, diffuse: 0.8, ..Material::diffuse(floor_albedo) };
+    let l = light(Vec3::new(4.0, 4.0, 0.0));
+    let cam = camera(Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 20.0, 33, 33);
+    let s =
+        scene(vec![(plane(Vec3::ZERO, Vec3::Y), I, floor.clone()), (occluder, I, material)], vec![l], cam);
+    let img = render(&s, 1, 4);
+    let ambient = 0.2 * floor_albedo;
+    let direct = 0.8 * floor_albedo * Vec3::Y.dot(l.position.normalize());
+    let got = px(&img, 16, 16);
+    // got = ambient + shadow · direct: return the measured shadow factor.
+    ((got - ambient) / direct, got)
+}
+
+#[test]
+fn opaque_occluder_leaves_only_ambient() {
+    let (shadow, got) = floor_under(sphere(Vec3::new(2.0, 2.0, 0.0), 0.3), Material::diffuse(Vec3::ONE));
+    assert_close(got, 0.2 * Vec3::new(0.5, 0.7, 0.9), 1e-6);
+    assert_close(shadow, Vec3::ZERO, 1e-6);
+}
+
+#[test]
+fn unobstructed_floor_is_fully_lit() {
+    // The same occluder moved off the segment.
+    let (shadow, _) = floor_under(sphere(Vec3::new(2.0, 2.0, 3.0), 0.3), Material::diffuse(Vec3::ONE));
+    assert_close(shadow, Vec3::ONE, 1e-5);
+}
+
+#[test]
+fn transparent_sphere_casts_a_lighter_coloured_shadow_counted_once() {
+    let tint = Vec3::new(1.0, 0.5, 0.25);
+    let m = Material { transparency: 0.6, ..Material::diffuse(tint) };
+    let (shadow, _) = floor_under(sphere(Vec3::new(2.0, 2.0, 0.0), 0.3), m);
+    // Once (entering), not twice: 0.6 · tint, not (0.6 · tint)².
+    assert_close(shadow, 0.6 * tint, 1e-5);
+}
+
+#[test]
+fn clear_glass_sphere_casts_no_shadow_and_tinted_glass_a_tinted_one() {
+    let (shadow, _) = floor_under(sphere(Vec3::new(2.0, 2.0, 0.0), 0.3), glass(1.5));
+    assert_close(shadow, Vec3::ONE, 1e-5);
+    let green =
+        Material { texture: Texture::Solid(Vec3::new(0.2, 1.0, 0.2)), transmission: 0.7, ..glass(1.5) };
+    let (shadow, _) = floor_under(sphere(Vec3::new(2.0, 2.0, 0.0), 0.3), green);
+    assert_close(shadow, Vec3::new(0.14, 0.7, 0.14), 1e-5);
+}
+
+#[test]
+fn open_surfaces_count_every_crossing() {
+    // A transparent disk across the segment: one crossing.
+    let disk = Disk::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(1.0, 1.0, 0.0), 0.5).expect("valid disk");
+    let m = Material { transparency: 0.5, ..Material::diffuse(Vec3::ONE) };
+    let (shadow, _) = floor_under(disk.into(), m);
+    assert_close(shadow, Vec3::splat(0.5), 1e-5);
+}
+
+#[test]
+fn mirror_shows_what_it_reflects() {
+    // Camera at z = 5 looking at a mirror wall z = 0; behind the camera a
+    // flat red sphere that the mirror shows at the image centre.
+    let red = Vec3::new(0.9, 0.1, 0.2);
+    let blue = Vec3::new(0.0, 0.0, 1.0);
+    let mirror = Material { reflectivity: 0.8, ..flat(blue) };
+    let cam = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 20.0, 9, 9);
+    let s = scene(
+        vec![(plane(Vec3::ZERO, Vec3::Z), I, mirror), (sphere(Vec3::new(0.0, 0.0, 12.0), 2.0), I, flat(red))],
+        vec![],
+        cam,
+    );
+    let img = render(&s, 1, 2);
+    assert_close(px(&img, 4, 4), 0.2 * blue + 0.8 * red, 1e-6);
+    // With no recursion the mirror shows only its own colour.
+    let img = render(&s, 1, 0);
+    assert_close(px(&img, 4, 4), 0.2 * blue, 1e-6);
+}
+
+#[test]
+fn transparent_sphere_passes_the_ray_straight_through() {
+    let m = Material { transparency: 0.7, ..flat(Vec3::new(1.0, 1.0, 0.0)) };
+    let wall = Vec3::new(0.1, 0.3, 0.9);
+    let cam = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 20.0, 9, 9);
+    let s = scene(
+        vec![(sphere(Vec3::ZERO, 1.0), I, m), (plane(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), I, flat(wall))],
+        vec![],
+        cam,
+    );
+    let img = render(&s, 1, 1);
+    // 0.3 · own colour + 0.7 · the wall behind, the exit not shaded.
+    assert_close(px(&img, 4, 4), 0.3 * Vec3::new(1.0, 1.0, 0.0) + 0.7 * wall, 1e-6);
+}
+
+/// A 2×1 black-to-white ramp on the back wall z = −3: the wall's value
+/// tells where a ray met it, `value = ((x + 2) / 8 − 0.25) / 0.5`.
+fn ramp_wall() -> (prism_geometry::Shape, Material) {
+    let ramp =
+        prism_shade::ImageTexture::from_linear(2, 1, vec![Vec3::ZERO, Vec3::ONE], prism_shade::Wrap::Clamp)
+            .expect("valid texture");
+    let t = Texture::Image {
+        image: std::sync::Arc::new(ramp),
+        mapping: prism_shade::Mapping::Uv,
+        scale: prism_geometry::glam::Vec2::new(0.125, 0.125),
+        tint: Vec3::ONE,
+    };
+    (plane(Vec3::new(-2.0, 0.0, -3.0), Vec3::Z), flat_texture(t))
+}
+
+fn wall_x(value: f32) -> f32 {
+    (value * 0.5 + 0.25) * 8.0 - 2.0
+}
+
+#[test]
+fn glass_slab_displaces_the_ray_by_the_analytic_amount() {
+    let (n, thick) = (1.5f32, 1.0f32);
+    let slab = cuboid(Vec3::new(-50.0, -50.0, -0.5 * thick), Vec3::new(50.0, 50.0, 0.5 * thick));
+    let absorption = Vec3::new(0.0, 0.3, 1.0);
+    let (wall, wall_m) = ramp_wall();
+    let eye = Vec3::new(-3.0, 0.0, 5.0);
+    let cam = camera(eye, Vec3::ZERO, Vec3::Y, 10.0, 1, 1);
+    let mut s = scene(vec![(slab, I, Material { absorption, ..glass(n) }), (wall, I, wall_m)], vec![], cam);
+    // Depth 2: in, out, and the wall; the internal reflections end at depth 2.
+    let img = render(&s, 1, 2);
+    let d = cam.ray(0.5, 0.5).dir;
+    let cos_i = -d.z;
+    let (theta_i, theta_t) = (cos_i.acos(), (cos_i.acos().sin() / n).asin());
+    let f = prism_shade::optics::schlick(cos_i, 1.0, n);
+    // Beer–Lambert over the path inside: thick / cos θt.
+    let inside = thick / theta_t.cos();
+    let got = px(&img, 0, 0) / ((1.0 - f) * (1.0 - f));
+    let x_got = wall_x(got.x);
+    let absorbed = (-absorption * inside).exp();
+    assert_close(got, got.x * absorbed, 1e-4);
+    // Without the slab the ray would meet the wall at x_straight; inside the
+    // glass it runs at θt instead of θi for `thick`.
+    let x_straight = eye.x + d.x * (eye.z + 3.0) / cos_i;
+    let shift = thick * (theta_i.tan() - theta_t.tan());
+    // Perpendicular displacement, the textbook form.
+    let perp = thick * (theta_i - theta_t).sin() / theta_t.cos();
+    assert!((perp - shift * theta_i.cos()).abs() < 1e-5);
+    assert!(shift > 0.2);
+    assert!(
+        (x_got - (x_straight - shift)).abs() < 2e-3,
+        "wall hit at {x_got}, expected {}",
+        x_straight - shift
+    );
+    // And without the slab: straight.
+    s.materials[0] = Material { transparency: 1.0, ..flat(Vec3::ZERO) };
+    let img = render(&s, 1, 2);
+    assert!((wall_x(px(&img, 0, 0).x) - x_straight).abs() < 2e-3);
+}
+
+/// A camera inside a wide glass block looks up at its top face at
+/// `angle` from the normal; above the block a red ceiling.
+fn inside_glass(angle_deg: f32) -> (Vec3, f32) {
+    let n = 1.5;
+    let a = angle_deg.to_radians();
+    let block = cuboid(Vec3::new(-1e4, -1e4, -1e4), Vec3::new(1e4, 1.0, 1e4));
+    let red = Vec3::new(1.0, 0.0, 0.0);
+    let cam = camera(Vec3::ZERO, Vec3::new(a.sin(), a.cos(), 0.0), Vec3::Z, 10.0, 1, 1);
+    let s = scene(
+        vec![(block, I, glass(n)), (plane(Vec3::new(0.0, 3.0, 0.0), Vec3::NEG_Y), I, flat(red))],
+        vec![],
+        cam,
+    );
+    let img = render(&s, 1, 1);
+    (px(&img, 0, 0), prism_shade::optics::schlick(a.cos(), n, 1.0))
+}
+
+#[test]
+fn total_internal_reflection_past_the_critical_angle() {
+    let critical = (1.0f32 / 1.5).asin().to_degrees();
+    for a in [0.0, 20.0, critical - 1.0] {
+        let (got, f) = inside_glass(a);
+        assert!(f < 1.0);
+        assert_close(got, (1.0 - f) * Vec3::X, 1e-5);
+        assert!(got.x > 0.0, "refracts at {a}°");
+    }
+    for a in [critical + 1.0, 60.0, 80.0] {
+        let (got, _) = inside_glass(a);
+        assert_eq!(got, Vec3::ZERO, "total internal reflection at {a}°");
+    }
+}
+
+/// A flat wall at distance `d` straight ahead, seen through `fog`.
+fn fogged_wall(d: f32, mode: prism_shade::FogMode, enabled: bool) -> Vec3 {
+    let cam = camera(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 10.0, 1, 1);
+    let mut s = scene(
+        vec![(plane(Vec3::new(0.0, 0.0, -d), Vec3::Z), I, flat(Vec3::new(0.2, 0.4, 0.6)))],
+        vec![],
+        cam,
+    );
+    s.fog = fog(Vec3::new(0.9, 0.8, 0.7), mode);
+    if let Some(f) = &mut s.fog {
+        f.enabled = enabled;
+    }
+    px(&render(&s, 1, 1), 0, 0)
+}
+
+#[test]
+fn linear_fog_at_start_and_end() {
+    let obj = Vec3::new(0.2, 0.4, 0.6);
+    let fogc = Vec3::new(0.9, 0.8, 0.7);
+    use prism_shade::FogMode::Linear;
+    assert_close(fogged_wall(4.0, Linear { start: 4.0, end: 12.0 }, true), obj, 1e-6);
+    assert_close(fogged_wall(4.0, Linear { start: 5.0, end: 12.0 }, true), obj, 1e-6);
+    assert_close(fogged_wall(12.0, Linear { start: 4.0, end: 12.0 }, true), fogc, 1e-6);
+    assert_close(fogged_wall(20.0, Linear { start: 4.0, end: 12.0 }, true), fogc, 1e-6);
+    assert_close(fogged_wall(8.0, Linear { start: 4.0, end: 12.0 }, true), 0.5 * (obj + fogc), 1e-5);
+    // Switched off: no effect.
+    assert_close(fogged_wall(12.0, Linear { start: 4.0, end: 12.0 }, false), obj, 1e-6);
+}
+
+#[test]
+fn exponential_fog_laws() {
+    let obj = Vec3::new(0.2, 0.4, 0.6);
+    let fogc = Vec3::new(0.9, 0.8, 0.7);
+    let (d, rho) = (7.0f32, 0.13f32);
+    let t = (-rho * d).exp();
+    let got = fogged_wall(d, prism_shade::FogMode::Exponential { density: rho }, true);
+    assert_close(got, t * obj + (1.0 - t) * fogc, 1e-5);
+    let t2 = (-(rho * d) * (rho * d)).exp();
+    let got = fogged_wall(d, prism_shade::FogMode::ExponentialSquared { density: rho }, true);
+    assert_close(got, t2 * obj + (1.0 - t2) * fogc, 1e-5);
+}
+
+#[test]
+fn fog_covers_misses_and_reflected_segments() {
+    let fogc = Vec3::new(0.9, 0.8, 0.7);
+    let red = Vec3::new(0.9, 0.1, 0.2);
+    // Mirror 2 ahead; it reflects a sphere whose near side is at z = 4:
+    // the path is 2 + 6 = 8 long.
+    let cam = camera(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 10.0, 1, 1);
+    let mirror = Material { reflectivity: 1.0, ..flat(Vec3::ZERO) };
+    let mut s = scene(
+        vec![
+            (plane(Vec3::new(0.0, 0.0, -2.0), Vec3::Z), I, mirror),
+            (sphere(Vec3::new(0.0, 0.0, 5.0), 1.0), I, flat(red)),
+        ],
+        vec![],
+        cam,
+    );
+    let rho = 0.1f32;
+    s.fog = fog(fogc, prism_shade::FogMode::Exponential { density: rho });
+    let t = (-rho * 8.0).exp();
+    assert_close(px(&render(&s, 1, 1), 0, 0), t * red + (1.0 - t) * fogc, 1e-5);
+    // Linear: the reflection is as foggy as its path length 8 of 10.
+    s.fog = fog(fogc, prism_shade::FogMode::Linear { start: 0.0, end: 10.0 });
+    assert_close(px(&render(&s, 1, 1), 0, 0), 0.2 * red + 0.8 * fogc, 1e-5);
+    // A ray that hits nothing (looking along +Z beside the sphere) is all fog.
+    s.camera = camera(Vec3::new(5.0, 0.0, 0.0), Vec3::new(5.0, 0.0, 1.0), Vec3::Y, 10.0, 1, 1);
+    assert_close(px(&render(&s, 1, 1), 0, 0), fogc, 1e-6);
+    s.fog = None;
+    assert_close(px(&render(&s, 1, 1), 0, 0), s.background, 0.0);
+}
+
+#[test]
+fn sphere_texture_follows_the_reports_formula() {
+    // A 16×8 texture of distinct colours.
+    let (w, h) = (16u32, 8u32);
+    let texels = (0..w * h)
+        .map(|k| {
+            Vec3::new((k % w) as f32 / w as f32, (k / w) as f32 / h as f32, ((k * 7) % 11) as f32 / 11.0)
+        })
+        .collect();
+    let image = std::sync::Arc::new(
+        prism_shade::ImageTexture::from_linear(w, h, texels, prism_shade::Wrap::Repeat).expect("valid"),
+    );
+    let tex = |mapping| Texture::Image {
+        image: image.clone(),
+        mapping,
+        scale: prism_geometry::glam::Vec2::ONE,
+        tint: Vec3::ONE,
+    };
+    let cam = camera(Vec3::new(1.0, 2.0, 5.0), Vec3::ZERO, Vec3::Y, 30.0, 31, 31);
+    let s =
+        scene(vec![(sphere(Vec3::ZERO, 1.0), I, flat_texture(tex(prism_shade::Mapping::Uv)))], vec![], cam);
+    let img = render(&s, 1, 0);
+    let mut checked = 0;
+    for j in 0..31 {
+        for i in 0..31 {
+            let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
+            let Some(t) = sphere_t(ray.origin, ray.dir, Vec3::ZERO, 1.0) else { continue };
+            let d = ray.at(t).normalize();
+            let u = 0.5 + d.z.atan2(d.x) / (2.0 * std::f32::consts::PI);
+            let v = 0.5 - d.y.asin() / std::f32::consts::PI;
+            let want = image.sample(prism_geometry::glam::Vec2::new(u, v));
+            assert_close(px(&img, i, j), want, 2e-3);
+            checked += 1;
+        }
+    }
+    assert!(checked > 150);
+    // The object-space spherical mapping of a unit sphere moved by a
+    // transform gives the same picture.
+    let moved = Transform::translate(Vec3::new(3.0, 0.0, 0.0)).expect("finite");
+    let cam2 = camera(Vec3::new(4.0, 2.0, 5.0), Vec3::new(3.0, 0.0, 0.0), Vec3::Y, 30.0, 31, 31);
+    let s2 = scene(
+        vec![(sphere(Vec3::ZERO, 1.0), moved, flat_texture(tex(prism_shade::Mapping::Spherical)))],
+        vec![],
+        cam2,
+    );
+    let img2 = render(&s2, 1, 0);
+    for (a, b) in img.pixels.iter().zip(&img2.pixels) {
+        assert_close(*a, *b, 2e-3);
+    }
+}
+
+#[test]
+fn world_checker_floor() {
+    let a = Vec3::new(1.0, 1.0, 1.0);
+    let b = Vec3::new(0.1, 0.0, 0.0);
+    let t = Texture::Checker { a, b, size: 1.0, world: true };
+    let cam = camera(Vec3::new(0.25, 10.0, 0.25), Vec3::new(0.25, 0.0, 0.25), Vec3::NEG_Z, 0.5, 1, 1);
+    let mut s = scene(vec![(plane(Vec3::ZERO, Vec3::Y), I, flat_texture(t))], vec![], cam);
+    assert_close(px(&render(&s, 1, 0), 0, 0), a, 0.0);
+    s.camera = camera(Vec3::new(1.25, 10.0, 0.25), Vec3::new(1.25, 0.0, 0.25), Vec3::NEG_Z, 0.5, 1, 1);
+    assert_close(px(&render(&s, 1, 0), 0, 0), b, 0.0);
+    s.camera = camera(Vec3::new(-0.75, 10.0, -0.75), Vec3::new(-0.75, 0.0, -0.75), Vec3::NEG_Z, 0.5, 1, 1);
+    assert_close(px(&render(&s, 1, 0), 0, 0), a, 0.0);
+}
