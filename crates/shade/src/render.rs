@@ -162,7 +162,6 @@ pub fn render_samples(
     }
     let cancelled = hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let nonfinite_samples = nonfinite.into_inner();
-    debug_assert!(nonfinite_samples == 0, "{nonfinite_samples} non-finite samples");
     let stats = RenderStats {
         seconds: start.elapsed().as_secs_f64(),
         rays: rays.into_inner(),
