@@ -2,7 +2,40 @@
 //! lights, fog, and the parallel, deterministic renderer.
 //!
 //! A [`Scene`] is plain data over a [`prism_bvh::Accel`]; [`render`] turns
-//! it into a linear-radiance [`Image`].
+//! it into a linear-radiance [`Image`]. The shading model is documented on
+//! [`Material`], fog on [`Fog`], sampling on [`render`] (a 1-spp
+//! render samples pixel centres exactly; more samples are stratified and
+//! the same for any number of threads).
+//!
+//! # Example
+//!
+//! A red Lambert sphere under one light, one pixel, looked at head-on:
+//!
+//! ```
+//! use prism_bvh::{Accel, Object};
+//! use prism_geometry::glam::Vec3;
+//! use prism_geometry::{Instance, Sphere, Transform};
+//! use prism_shade::{Camera, Material, PointLight, RenderHooks, RenderSettings, Scene};
+//!
+//! let sphere = Instance::new(Sphere::new(Vec3::ZERO, 1.0)?.into(), Transform::IDENTITY);
+//! let scene = Scene {
+//!     accel: Accel::build(Vec::new(), vec![Object::Shape(sphere)])?,
+//!     object_materials: vec![0],
+//!     materials: vec![Material { ambient: 0.1, diffuse: 0.9, ..Material::diffuse(Vec3::X) }],
+//!     lights: vec![PointLight { position: Vec3::new(0.0, 0.0, 10.0), color: Vec3::ONE, intensity: 1.0 }],
+//!     ambient: Vec3::ONE,
+//!     background: Vec3::ZERO,
+//!     fog: None,
+//!     camera: Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1)?,
+//! };
+//! scene.validate()?;
+//! let settings = RenderSettings { spp: 1, max_depth: 4, min_contribution: 1e-3, threads: None };
+//! let (image, stats) = prism_shade::render(&scene, &settings, RenderHooks::default());
+//! // The light is straight behind the eye: ambient 0.1 + Lambert 0.9 · cos 0.
+//! assert!((image.pixels[0] - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5);
+//! assert_eq!(stats.rays, 2); // the camera ray and one shadow ray
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 #![warn(missing_docs)]
 

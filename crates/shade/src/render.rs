@@ -1,14 +1,4 @@
 //! The renderer: rows in parallel, deterministic per-pixel samples.
-//!
-//! Sampling: with `spp = n`, pixel `(i, j)` is divided into an `m × m`
-//! grid of strata, `m = ⌈√n⌉`. Sample `s` falls in stratum
-//! `(s · stride) mod m²` (a fixed stride coprime with `m²`, about 0.618·m²,
-//! so that the first samples spread over the pixel), at a point jittered
-//! inside it by a hash of `(pixel index, s)`. A pixel's samples therefore
-//! depend on nothing but the pixel and the sample index: the image is the
-//! same, bit for bit, for any number of threads. With `spp = 1` the single
-//! sample is the pixel centre, so a 1-spp render measures the scene
-//! exactly.
 
 use crate::Scene;
 use crate::integrator::Tracer;
@@ -86,6 +76,16 @@ pub struct RenderStats {
 
 /// Renders the whole image with `settings.spp` samples per pixel: the
 /// per-pixel sums of [`render_samples`] over `0..spp`, times `1 / spp`.
+///
+/// Sampling: with `spp = n`, pixel `(i, j)` is divided into an `m × m`
+/// grid of strata, `m = ⌈√n⌉`. Sample `s` falls in stratum
+/// `(s · stride) mod m²` (a fixed stride coprime with `m²`, about 0.618·m²,
+/// so that the first samples spread over the pixel), at a point jittered
+/// inside it by a hash of `(pixel index, s)`. A pixel's samples therefore
+/// depend on nothing but the pixel and the sample index: the image is the
+/// same, bit for bit, for any number of threads. With `spp = 1` the single
+/// sample is the pixel centre, so a 1-spp render measures the scene
+/// exactly.
 pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) -> (Image, RenderStats) {
     let (mut image, stats) = render_samples(scene, settings, 0..settings.spp.max(1), hooks);
     let inv = 1.0 / settings.spp.max(1) as f32;
