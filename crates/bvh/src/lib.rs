@@ -56,6 +56,7 @@
 #![warn(missing_docs)]
 
 mod cwbvh;
+mod tri;
 
 use cwbvh::BoxRay;
 use obvhs::BvhBuildParams;
@@ -69,6 +70,7 @@ use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, Tria
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
+use tri::TriRay;
 
 /// One object of the scene: an analytic shape or an instance of a mesh.
 #[derive(Clone, Debug)]
@@ -263,13 +265,12 @@ impl Blas {
     /// Closest triangle hit by the object-space `ray`: `(face, t, b1, b2)`.
     #[inline]
     fn closest(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
-        let mut tr = TriangleRay::new(ray);
+        let mut tr = TriRay::new(ray);
         let mut br = BoxRay::new(ray);
         let mut found = None;
         cwbvh::walk_any(&self.bvh, self.depth, &mut br, |slot, br| {
-            let [a, b, c] = self.tris[slot as usize];
-            if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
-                tr.set_t_max(t);
+            if let Some((t, b1, b2)) = tr.intersect(&self.tris[slot as usize]) {
+                tr.t_max = t;
                 br.t_max = t;
                 found = Some((slot, t, b1, b2));
             }
@@ -281,12 +282,11 @@ impl Blas {
     /// Whether any triangle lies in the ray's interval.
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
-        let tr = TriangleRay::new(ray);
+        let tr = TriRay::new(ray);
         let mut br = BoxRay::new(ray);
         let mut hit = false;
         cwbvh::walk_any(&self.bvh, self.depth, &mut br, |slot, _| {
-            let [a, b, c] = self.tris[slot as usize];
-            hit = tr.intersect(a, b, c).is_some();
+            hit = tr.intersect(&self.tris[slot as usize]).is_some();
             !hit
         });
         hit
@@ -299,13 +299,12 @@ impl Blas {
         ray: &Ray,
         mut f: impl FnMut(u32, f32, f32, f32) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
-        let tr = TriangleRay::new(ray);
+        let tr = TriRay::new(ray);
         let mut br = BoxRay::new(ray);
         let mut flow = ControlFlow::Continue(());
         let mut seen: Vec<u32> = Vec::new();
         cwbvh::walk_any(&self.bvh, self.depth, &mut br, |slot, _| {
-            let [a, b, c] = self.tris[slot as usize];
-            if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+            if let Some((t, b1, b2)) = tr.intersect(&self.tris[slot as usize]) {
                 let face = self.faces[slot as usize];
                 if self.split {
                     if seen.contains(&face) {
@@ -422,6 +421,7 @@ impl Accel {
         let mut instanced = 0;
         let mut used = vec![false; meshes.len()];
         let mut object_bounds = Vec::with_capacity(objects.len());
+        let mesh_bounds: Vec<Aabb> = meshes.par_iter().map(|m| m.bounds()).collect();
         for (i, o) in objects.iter().enumerate() {
             let b = match o {
                 Object::Shape(s) => {
@@ -437,7 +437,7 @@ impl Accel {
                         .ok_or(BuildError::NoSuchMesh { object: i, mesh: *mesh })?;
                     used[*mesh as usize] = true;
                     instanced += m.len();
-                    transform.aabb(&m.bounds())
+                    transform.aabb(&mesh_bounds[*mesh as usize])
                 }
             };
             if b.is_finite() && !b.is_empty() {
