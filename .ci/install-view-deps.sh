@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs what the viewer's real-window test (crates/view/tests/window.rs)
+# needs: Xvfb, xdotool, ImageMagick's `import` (screenshots), and the X
+# client libraries that minifb loads at run time. Idempotent: does nothing
+# when everything is there. Without root or apt-get it says so and exits 0:
+# the test then skips itself with the reason printed.
+set -euo pipefail
+
+have_libs() {
+    # minifb dlopens libX11 and libXcursor.
+    command -v ldconfig >/dev/null 2>&1 || return 1
+    ldconfig -p | grep -q 'libX11\.so' && ldconfig -p | grep -q 'libXcursor\.so'
+}
+
+if command -v Xvfb >/dev/null 2>&1 && command -v xdotool >/dev/null 2>&1 \
+    && command -v import >/dev/null 2>&1 && have_libs; then
+    echo "install-view-deps: Xvfb, xdotool, import and the X libraries are present"
+    exit 0
+fi
+
+if ! command -v apt-get >/dev/null 2>&1; then
+    echo "install-view-deps: no apt-get here; the window test will skip itself" >&2
+    exit 0
+fi
+if [ "$(id -u)" -ne 0 ]; then
+    echo "install-view-deps: not root; the window test will skip itself" >&2
+    exit 0
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends \
+    xvfb xdotool imagemagick libx11-6 libxcursor1 >/dev/null
+echo "install-view-deps: installed xvfb xdotool imagemagick libx11-6 libxcursor1"

@@ -1,0 +1,268 @@
+//! The thin window layer: minifb input to [`Action`]s, frames to the
+//! screen. Everything it decides is in [`ViewerState`]; rendering, saving
+//! and reloading run on other threads, so this loop never waits on them.
+
+use crate::state::{Action, Key, Outcome, ViewerState, drag_action, key_action};
+use crate::worker::{FrameKind, Renderer};
+use crate::{SceneLoader, SceneSetup, ViewError, ViewOptions, prepare, save_png_atomic, window_size};
+use minifb::{InputCallback, MouseButton, MouseMode, Window, WindowOptions};
+use std::path::PathBuf;
+use std::sync::mpsc::{self, Sender};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
+
+/// Re-send the image this often even without a new frame (after the window
+/// was covered, say).
+const REFRESH: Duration = Duration::from_millis(250);
+/// Poll interval of the input while nothing new arrives.
+const IDLE_TICK: Duration = Duration::from_millis(4);
+/// One mouse-wheel notch moves this fraction of the way to the target.
+const WHEEL_DOLLY: f32 = 0.1;
+
+/// Results of the helper threads.
+enum Event {
+    Saved(Result<PathBuf, ViewError>),
+    Loaded(Result<Box<SceneSetup>, String>),
+}
+
+/// Every key press, in order, as the window system reports it (also
+/// presses released before the next poll, which polling the key state
+/// would miss, e.g. from `xdotool key`).
+#[derive(Clone, Default)]
+struct KeyQueue(Arc<Mutex<Vec<(minifb::Key, Instant)>>>);
+
+impl KeyQueue {
+    fn take(&self) -> Vec<(minifb::Key, Instant)> {
+        std::mem::take(&mut *self.0.lock().unwrap_or_else(PoisonError::into_inner))
+    }
+}
+
+impl InputCallback for KeyQueue {
+    fn add_char(&mut self, _uni_char: u32) {}
+
+    fn set_key_state(&mut self, key: minifb::Key, state: bool) {
+        if state {
+            self.0.lock().unwrap_or_else(PoisonError::into_inner).push((key, Instant::now()));
+        }
+    }
+}
+
+fn map_key(k: minifb::Key) -> Option<Key> {
+    use minifb::Key as M;
+    Some(match k {
+        M::F => Key::F,
+        M::C => Key::C,
+        M::S => Key::S,
+        M::R => Key::R,
+        M::Q => Key::Q,
+        M::Escape => Key::Escape,
+        M::W => Key::W,
+        M::A => Key::A,
+        M::D => Key::D,
+        M::X => Key::X,
+        M::Left => Key::Left,
+        M::Right => Key::Right,
+        M::Up => Key::Up,
+        M::Down => Key::Down,
+        M::PageUp => Key::PageUp,
+        M::PageDown => Key::PageDown,
+        M::Home => Key::Home,
+        _ => return None,
+    })
+}
+
+fn window_error(e: &minifb::Error) -> ViewError {
+    let msg = e.to_string();
+    if msg.contains("XOpenDisplay") { ViewError::NoDisplay } else { ViewError::Window(msg) }
+}
+
+pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup) -> Result<(), ViewError> {
+    let file_cam = setup.scene.camera;
+    let (w, h) = window_size(file_cam.width(), file_cam.height(), opts.width, opts.height);
+    let (scene, settings) = prepare(setup, &opts, (w, h), true)?;
+    let mut state = ViewerState::new(scene.camera, scene.fog.map(|f| f.enabled), settings.clone());
+    if opts.fog == Some(true) && !state.fog_available() {
+        state.set_message(Some("this scene has no fog".into()));
+    }
+    let name = opts.scene.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    let save_dir = opts.save_dir.clone().unwrap_or_else(|| PathBuf::from("."));
+    let verbose = opts.verbose;
+
+    let mut title = state.title(&name);
+    let mut window = Window::new(&title, w as usize, h as usize, WindowOptions::default())
+        .map_err(|e| window_error(&e))?;
+    window.set_target_fps(0);
+    let keys = KeyQueue::default();
+    window.set_input_callback(Box::new(keys.clone()));
+    let renderer = Renderer::new(scene, settings.threads)?;
+    let started = Instant::now();
+    renderer.submit(state.view());
+
+    let (events_tx, events) = mpsc::channel::<Event>();
+    let mut buffer = vec![0u32; w as usize * h as usize];
+    let mut last_blit: Option<Instant> = None;
+    let mut reloading = false;
+    let mut drag: Option<(f32, f32)> = None;
+    let mut next_save = 1u32;
+    let mut first_frame_logged = false;
+
+    'main: while window.is_open() {
+        // Input.
+        let now = Instant::now();
+        let mut actions: Vec<(Action, Instant)> =
+            keys.take().into_iter().filter_map(|(k, at)| Some((key_action(map_key(k)?)?, at))).collect();
+        if window.get_mouse_down(MouseButton::Left) {
+            if let Some((x, y)) = window.get_mouse_pos(MouseMode::Pass) {
+                if let Some(a) = drag.and_then(|(px, py)| drag_action(x - px, y - py)) {
+                    actions.push((a, now));
+                }
+                drag = Some((x, y));
+            }
+        } else {
+            drag = None;
+        }
+        if let Some((_, dy)) = window.get_scroll_wheel()
+            && dy != 0.0
+            && dy.is_finite()
+        {
+            actions.push((Action::Dolly(dy.signum() * WHEEL_DOLLY), now));
+        }
+        let mut restart = false;
+        for (a, at) in actions {
+            match state.apply_at(a, at) {
+                Outcome::Nothing => {}
+                Outcome::Restart => restart = true,
+                Outcome::Save => {
+                    let (path, n) = crate::next_snapshot_path(&save_dir, &name, next_save);
+                    next_save = n + 1;
+                    spawn_save(path, w, h, buffer.clone(), events_tx.clone());
+                }
+                Outcome::Reload if reloading => {}
+                Outcome::Reload => {
+                    reloading = true;
+                    state.set_message(Some("reloading...".into()));
+                    spawn_reload(Arc::clone(&loader), opts.scene.clone(), events_tx.clone());
+                }
+                Outcome::Quit => break 'main,
+            }
+        }
+        if restart {
+            // Only the last view of this batch matters.
+            renderer.submit(state.view());
+        }
+
+        // Results of saves and reloads.
+        while let Ok(ev) = events.try_recv() {
+            match ev {
+                Event::Saved(Ok(path)) => {
+                    println!("saved {}", path.display());
+                    state.set_message(Some(format!("saved {}", path.display())));
+                }
+                Event::Saved(Err(e)) => {
+                    eprintln!("prism view: {e}");
+                    state.set_message(Some(e.to_string()));
+                }
+                Event::Loaded(result) => {
+                    reloading = false;
+                    let prepared = result
+                        .and_then(|setup| prepare(*setup, &opts, (w, h), false).map_err(|e| e.to_string()));
+                    match prepared {
+                        Ok((scene, settings)) => {
+                            state.scene_reloaded(scene.camera, scene.fog.map(|f| f.enabled), settings);
+                            renderer.submit_scene(state.view(), scene);
+                            println!("reloaded {}", opts.scene.display());
+                            state.set_message(None);
+                        }
+                        Err(msg) => {
+                            eprintln!("prism view: reload failed, keeping the last good scene: {msg}");
+                            state.set_message(Some(format!("reload failed: {msg}")));
+                        }
+                    }
+                }
+            }
+        }
+
+        // Finished frames of the current view (stale ones are dropped).
+        let mut shown = None;
+        while let Some(frame) = renderer.try_frame() {
+            if !state.accept(frame.generation) || frame.width != w || frame.height != h {
+                continue;
+            }
+            if let FrameKind::Pass { samples_done, .. } = frame.kind {
+                state.pass_shown(frame.generation, samples_done, frame.seconds);
+            }
+            buffer = frame.pixels;
+            shown = Some((frame.generation, frame.kind, frame.seconds));
+        }
+
+        // Present.
+        if shown.is_some() || last_blit.is_none_or(|t| t.elapsed() >= REFRESH) {
+            window
+                .update_with_buffer(&buffer, w as usize, h as usize)
+                .map_err(|e| ViewError::Window(e.to_string()))?;
+            last_blit = Some(Instant::now());
+        } else {
+            window.update();
+        }
+        if let Some((generation, kind, seconds)) = shown {
+            let latency = state.frame_presented(generation);
+            if verbose {
+                if let Some(l) = latency {
+                    eprintln!(
+                        "prism-view: latency gen={generation} key-to-frame={:.1} ms",
+                        l.as_secs_f64() * 1000.0
+                    );
+                } else if !first_frame_logged {
+                    eprintln!(
+                        "prism-view: first frame after {:.1} ms",
+                        started.elapsed().as_secs_f64() * 1000.0
+                    );
+                }
+                let what = match kind {
+                    FrameKind::Coarse { factor } => format!("coarse/{factor}"),
+                    FrameKind::Pass { pass, .. } => format!("pass{pass}"),
+                };
+                eprintln!(
+                    "prism-view: frame gen={generation} {what} samples={}/{} render={:.1} ms",
+                    state.samples_done(),
+                    state.settings().spp,
+                    seconds * 1000.0
+                );
+                if state.converged() && matches!(kind, FrameKind::Pass { .. }) {
+                    eprintln!("prism-view: converged gen={generation}");
+                }
+            }
+            first_frame_logged = true;
+        }
+        let t = state.title(&name);
+        if t != title {
+            window.set_title(&t);
+            title = t;
+        }
+        if shown.is_none() {
+            std::thread::sleep(IDLE_TICK);
+        }
+    }
+    Ok(())
+}
+
+fn spawn_save(path: PathBuf, w: u32, h: u32, pixels: Vec<u32>, tx: Sender<Event>) {
+    let err_tx = tx.clone();
+    let spawned = std::thread::Builder::new().name("prism-view-save".into()).spawn(move || {
+        let result = save_png_atomic(&path, w, h, &pixels).map(|()| path);
+        let _ = tx.send(Event::Saved(result));
+    });
+    if let Err(e) = spawned {
+        let _ = err_tx.send(Event::Saved(Err(ViewError::Threads(e.to_string()))));
+    }
+}
+
+fn spawn_reload(loader: Arc<SceneLoader>, path: PathBuf, tx: Sender<Event>) {
+    let err_tx = tx.clone();
+    let spawned = std::thread::Builder::new().name("prism-view-load".into()).spawn(move || {
+        let _ = tx.send(Event::Loaded(loader(&path).map(Box::new)));
+    });
+    if let Err(e) = spawned {
+        let _ = err_tx.send(Event::Loaded(Err(format!("cannot start the loader thread: {e}"))));
+    }
+}
