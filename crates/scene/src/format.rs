@@ -1,0 +1,358 @@
+//! The scene file as written: serde definitions mirroring
+//! `docs/scene-format.md`. Every table rejects unknown keys; fields that
+//! are validated after deserialising keep their spans.
+
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use std::collections::BTreeMap;
+use std::fmt;
+use toml::Spanned;
+
+/// A spanned number.
+pub type Num = Spanned<f64>;
+/// A spanned 3-vector.
+pub type V3 = Spanned<[f64; 3]>;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    #[serde(default)]
+    pub render: Option<Spanned<RenderDef>>,
+    pub camera: Spanned<CameraDef>,
+    #[serde(default)]
+    pub lights: Vec<Spanned<LightDef>>,
+    #[serde(default)]
+    pub fog: Option<Spanned<FogDef>>,
+    #[serde(default)]
+    pub materials: BTreeMap<Spanned<String>, Spanned<MaterialDef>>,
+    #[serde(default)]
+    pub objects: Vec<Spanned<ObjectDef>>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDef {
+    pub width: Option<Spanned<u64>>,
+    pub height: Option<Spanned<u64>>,
+    pub spp: Option<Spanned<u64>>,
+    pub max_depth: Option<Spanned<u64>>,
+    pub min_contribution: Option<Num>,
+    pub background: Option<Spanned<Color>>,
+    pub ambient: Option<Spanned<Color>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDef {
+    pub position: V3,
+    pub look_at: V3,
+    pub up: Option<V3>,
+    pub fov: Option<Num>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDef {
+    pub position: V3,
+    pub color: Option<Spanned<Color>>,
+    pub intensity: Option<Num>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum FogModeDef {
+    Linear,
+    Exponential,
+    ExponentialSquared,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FogDef {
+    pub mode: Option<Spanned<FogModeDef>>,
+    pub start: Option<Num>,
+    pub end: Option<Num>,
+    pub density: Option<Num>,
+    pub color: Option<Spanned<Color>>,
+    pub enabled: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDef {
+    pub color: Option<Spanned<Color>>,
+    pub texture: Option<Spanned<TextureDef>>,
+    pub ambient: Option<Num>,
+    pub diffuse: Option<Num>,
+    pub specular: Option<Num>,
+    pub shininess: Option<Num>,
+    pub specular_color: Option<Spanned<Color>>,
+    pub reflectivity: Option<Num>,
+    pub transparency: Option<Num>,
+    pub transmission: Option<Num>,
+    pub ior: Option<Num>,
+    pub absorption: Option<Spanned<Color>>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum TextureKind {
+    Checker,
+    Image,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum SpaceDef {
+    World,
+    Uv,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum MappingDef {
+    Uv,
+    Spherical,
+    Cylindrical,
+    Planar,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum WrapDef {
+    Repeat,
+    Clamp,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDef {
+    #[serde(rename = "type")]
+    pub kind: Spanned<TextureKind>,
+    // checker
+    pub a: Option<Spanned<Color>>,
+    pub b: Option<Spanned<Color>>,
+    pub size: Option<Num>,
+    pub space: Option<Spanned<SpaceDef>>,
+    // image
+    pub path: Option<Spanned<String>>,
+    pub mapping: Option<Spanned<MappingDef>>,
+    pub wrap: Option<Spanned<WrapDef>>,
+    pub scale: Option<Spanned<Scale2>>,
+    pub tint: Option<Spanned<Color>>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum ObjectKind {
+    Sphere,
+    Plane,
+    Cuboid,
+    Cylinder,
+    Cone,
+    Disk,
+    Triangle,
+    Mesh,
+}
+
+impl ObjectKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sphere => "sphere",
+            Self::Plane => "plane",
+            Self::Cuboid => "cuboid",
+            Self::Cylinder => "cylinder",
+            Self::Cone => "cone",
+            Self::Disk => "disk",
+            Self::Triangle => "triangle",
+            Self::Mesh => "mesh",
+        }
+    }
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalsDef {
+    Auto,
+    Smooth,
+    Flat,
+}
+
+/// One object. The shape fields are all optional here; which are required
+/// or allowed depends on `type` and is checked after deserialising, with
+/// spans.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDef {
+    #[serde(rename = "type")]
+    pub kind: Spanned<ObjectKind>,
+    pub material: Option<Spanned<String>>,
+    #[serde(default)]
+    pub transform: Option<Spanned<Vec<Spanned<Step>>>>,
+    /// A label for the user; not used by the renderer.
+    #[allow(dead_code)]
+    pub name: Option<Spanned<String>>,
+    // shape fields
+    pub center: Option<V3>,
+    pub radius: Option<Num>,
+    pub point: Option<V3>,
+    pub normal: Option<V3>,
+    pub min: Option<V3>,
+    pub max: Option<V3>,
+    pub size: Option<Spanned<Scale3>>,
+    pub base: Option<V3>,
+    pub height: Option<Num>,
+    pub vertices: Option<Spanned<[[f64; 3]; 3]>>,
+    pub path: Option<Spanned<String>>,
+    pub normals: Option<Spanned<NormalsDef>>,
+}
+
+/// One transform step, a table with a single key.
+#[derive(Deserialize, Debug)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Step {
+    Translate([f64; 3]),
+    RotateX(f64),
+    RotateY(f64),
+    RotateZ(f64),
+    Rotate(AxisAngle),
+    Scale(Scale3),
+    Shear(ShearDef),
+    ShearAngle(ShearDef),
+    Matrix([[f64; 4]; 4]),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct AxisAngle {
+    pub axis: [f64; 3],
+    pub degrees: f64,
+}
+
+#[derive(Deserialize, Debug, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ShearDef {
+    #[serde(default)]
+    pub xy: f64,
+    #[serde(default)]
+    pub xz: f64,
+    #[serde(default)]
+    pub yx: f64,
+    #[serde(default)]
+    pub yz: f64,
+    #[serde(default)]
+    pub zx: f64,
+    #[serde(default)]
+    pub zy: f64,
+}
+
+/// A colour: `[r, g, b]` (linear) or `"#rrggbb"` (sRGB, decoded to linear).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Color(pub [f64; 3]);
+
+impl<'de> Deserialize<'de> for Color {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Color;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a colour: an array [r, g, b] of linear values or a \"#rrggbb\" sRGB string")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Color, A::Error> {
+                Ok(Color(seq3(seq, &self)?))
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<Color, E> {
+                parse_hex(s).map(Color).ok_or_else(|| E::invalid_value(de::Unexpected::Str(s), &self))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+fn parse_hex(s: &str) -> Option<[f64; 3]> {
+    let hex = s.strip_prefix('#')?;
+    if hex.len() != 6 || !hex.is_ascii() {
+        return None;
+    }
+    let mut out = [0.0; 3];
+    for (i, c) in out.iter_mut().enumerate() {
+        let byte = u8::from_str_radix(hex.get(2 * i..2 * i + 2)?, 16).ok()?;
+        let s = f64::from(byte) / 255.0;
+        *c = if s <= 0.04045 { s / 12.92 } else { ((s + 0.055) / 1.055).powf(2.4) };
+    }
+    Some(out)
+}
+
+fn seq3<'de, A: SeqAccess<'de>>(mut seq: A, exp: &dyn de::Expected) -> Result<[f64; 3], A::Error> {
+    let mut out = [0.0; 3];
+    for (i, v) in out.iter_mut().enumerate() {
+        *v = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(i, exp))?;
+    }
+    if seq.next_element::<de::IgnoredAny>()?.is_some() {
+        return Err(de::Error::invalid_length(4, exp));
+    }
+    Ok(out)
+}
+
+/// A number (uniform) or `[x, y, z]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale3(pub [f64; 3]);
+
+impl<'de> Deserialize<'de> for Scale3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Scale3;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number or an array [x, y, z] of numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Scale3, A::Error> {
+                Ok(Scale3(seq3(seq, &self)?))
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale3, E> {
+                Ok(Scale3([v; 3]))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale3, E> {
+                Ok(Scale3([v as f64; 3]))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale3, E> {
+                Ok(Scale3([v as f64; 3]))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A number (uniform) or `[u, v]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale2(pub [f64; 2]);
+
+impl<'de> Deserialize<'de> for Scale2 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Scale2;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number or an array [u, v] of numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Scale2, A::Error> {
+                let u = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(0, &self))?;
+                let v = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(1, &self))?;
+                if seq.next_element::<de::IgnoredAny>()?.is_some() {
+                    return Err(de::Error::invalid_length(3, &self));
+                }
+                Ok(Scale2([u, v]))
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale2, E> {
+                Ok(Scale2([v; 2]))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale2, E> {
+                Ok(Scale2([v as f64; 2]))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale2, E> {
+                Ok(Scale2([v as f64; 2]))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}

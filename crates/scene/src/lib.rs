@@ -1,0 +1,267 @@
+//! The prism scene loader: reads the TOML scene format documented in
+//! `docs/scene-format.md`, with OBJ meshes (and their MTL materials)
+//! through tobj, into a renderable [`prism_shade::Scene`].
+//!
+//! Every error names the file, the line and column where possible, and
+//! what was expected; nothing in a scene file, mesh or texture can make
+//! the loader panic. Paths in a scene are relative to the scene file.
+//!
+//! # Example
+//!
+//! ```
+//! use prism_scene::parse_scene_str;
+//! use std::path::Path;
+//!
+//! let text = r#"
+//! [camera]
+//! position = [0, 1, 5]
+//! look_at = [0, 1, 0]
+//!
+//! [[lights]]
+//! position = [5, 5, 5]
+//!
+//! [materials.red]
+//! color = [0.8, 0.1, 0.1]
+//!
+//! [[objects]]
+//! type = "sphere"
+//! center = [0, 1, 0]
+//! radius = 1
+//! material = "red"
+//! "#;
+//! let loaded = parse_scene_str(text, Path::new("."), Path::new("inline.toml"))?;
+//! assert_eq!(loaded.info.objects, 1);
+//! assert_eq!(loaded.info.materials, ["red"]);
+//!
+//! let bad = text.replace("radius = 1", "radius = -1");
+//! let err = parse_scene_str(&bad, Path::new("."), Path::new("inline.toml")).unwrap_err();
+//! assert_eq!(err.to_string(), "inline.toml:15:10: sphere radius must be greater than 0, got -1");
+//! # Ok::<(), prism_scene::SceneError>(())
+//! ```
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod error;
+mod format;
+mod load;
+mod obj;
+
+pub use error::{Location, SceneError, line_col};
+
+use prism_geometry::Aabb;
+use prism_shade::{Camera, Fog, PointLight, RenderSettings, Scene};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Limits that protect against absurd (or hostile) scene files. Every
+/// limit is checked before anything large is allocated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest image width or height in pixels (default 16384).
+    pub max_side: u32,
+    /// Largest number of pixels (default 100 000 000).
+    pub max_pixels: u64,
+    /// Largest recursion depth (default 64).
+    pub max_depth: u32,
+    /// Largest number of samples per pixel (default 65536).
+    pub max_spp: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self { max_side: 16_384, max_pixels: 100_000_000, max_depth: 64, max_spp: 65_536 }
+    }
+}
+
+/// Values given outside the scene file (on the command line) that replace
+/// the file's. Errors in them are reported as [`SceneError::Option`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overrides {
+    /// Image width. If only one of width and height is given, the other
+    /// follows the scene's aspect ratio.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Maximum recursion depth.
+    pub max_depth: Option<u32>,
+    /// Fog on or off. On in a scene without `[fog]` adds a linear white
+    /// fog reaching total at 1.5 times the distance to the farthest corner
+    /// of the scene's bounds (with a warning).
+    pub fog: Option<bool>,
+}
+
+/// How to load a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Size limits.
+    pub limits: Limits,
+    /// Command-line replacements.
+    pub overrides: Overrides,
+}
+
+/// One OBJ file used by the scene (stored once however many objects use it).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MeshInfo {
+    /// The file (canonical path).
+    pub path: PathBuf,
+    /// Models (groups with one material each) in the file.
+    pub models: usize,
+    /// Triangles in the file.
+    pub triangles: usize,
+    /// Objects of the scene that use it.
+    pub instances: usize,
+}
+
+/// What a scene holds, for `prism info` and for checking.
+#[derive(Clone, Debug)]
+pub struct SceneInfo {
+    /// The scene file.
+    pub file: PathBuf,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum recursion depth.
+    pub max_depth: u32,
+    /// Contribution cut-off.
+    pub min_contribution: f32,
+    /// Objects in the acceleration structure (a mesh file with several
+    /// models counts once per model and instance).
+    pub objects: usize,
+    /// Objects by kind (`sphere`, `mesh`, ...).
+    pub objects_by_kind: BTreeMap<String, usize>,
+    /// The mesh files.
+    pub meshes: Vec<MeshInfo>,
+    /// Triangles stored (each mesh once).
+    pub stored_triangles: usize,
+    /// Triangles as rays see them (each instance counted).
+    pub instanced_triangles: usize,
+    /// Material names, in index order (MTL materials as `file.obj/name`).
+    pub materials: Vec<String>,
+    /// The lights.
+    pub lights: Vec<PointLight>,
+    /// Bounds of every bounded object (planes excluded).
+    pub bounds: Aabb,
+    /// The fog, if any.
+    pub fog: Option<Fog>,
+    /// The camera.
+    pub camera: Camera,
+}
+
+/// A loaded scene, ready to render.
+#[derive(Debug)]
+pub struct LoadedScene {
+    /// What the renderer needs.
+    pub scene: Scene,
+    /// Render settings from the file and the overrides (`threads: None`).
+    pub settings: RenderSettings,
+    /// A description.
+    pub info: SceneInfo,
+    /// Every file read (canonical paths): the scene, meshes, material
+    /// libraries, textures. A renderer must not write over them.
+    pub inputs: Vec<PathBuf>,
+    /// Problems that did not stop the load (no lights, degenerate
+    /// triangles, ...), each starting with the file it is about.
+    pub warnings: Vec<String>,
+}
+
+/// Loads the scene file `path` with default limits.
+///
+/// # Errors
+/// A [`SceneError`] naming the file, the place and the problem.
+pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
+    load_scene_with(path, &LoadOptions::default())
+}
+
+/// Loads the scene file `path` with `options`.
+///
+/// # Errors
+/// A [`SceneError`] naming the file, the place and the problem.
+pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let read_err = |reason: String| SceneError::Read {
+        location: Location::file(path),
+        what: "scene file",
+        path: path.to_path_buf(),
+        reason,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| read_err(load::io_reason(&e)))?;
+    if meta.is_dir() {
+        return Err(read_err("it is a directory, expected a .toml file".into()));
+    }
+    let bytes = std::fs::read(path).map_err(|e| read_err(load::io_reason(&e)))?;
+    let text = decode_scene_text(&bytes).map_err(|(offset, message)| {
+        let location = match offset {
+            Some(o) => Location::at_offset(path, std::str::from_utf8(&bytes[..o]).unwrap_or(""), o),
+            None => Location::file(path),
+        };
+        SceneError::Syntax { location, message }
+    })?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let base = if base.as_os_str().is_empty() { PathBuf::from(".") } else { base };
+    let mut loaded = parse_scene_str_with(text, &base, path, options)?;
+    if let Ok(c) = std::fs::canonicalize(path) {
+        loaded.inputs.insert(0, c);
+    }
+    Ok(loaded)
+}
+
+/// Parses a scene from `text` as if read from `file_name` (used in
+/// messages), resolving relative paths against `base_dir`. Default limits.
+///
+/// # Errors
+/// A [`SceneError`] naming `file_name`, the place and the problem.
+pub fn parse_scene_str(text: &str, base_dir: &Path, file_name: &Path) -> Result<LoadedScene, SceneError> {
+    parse_scene_str_with(text, base_dir, file_name, &LoadOptions::default())
+}
+
+/// [`parse_scene_str`] with `options`.
+///
+/// # Errors
+/// A [`SceneError`] naming `file_name`, the place and the problem.
+pub fn parse_scene_str_with(
+    text: &str,
+    base_dir: &Path,
+    file_name: &Path,
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
+    let file: format::SceneFile = toml::from_str(text).map_err(|e| {
+        let location = match e.span() {
+            Some(span) => Location::at_span(file_name, text, &span),
+            None => Location::file(file_name),
+        };
+        SceneError::Syntax { location, message: syntax_message(e.message()) }
+    })?;
+    load::Builder::new(file_name, text, base_dir, options).build(file)
+}
+
+/// toml's messages, made to say what was expected in scene terms.
+fn syntax_message(m: &str) -> String {
+    let m = m.trim();
+    if m.starts_with("missing field `camera`") {
+        return "missing [camera] table (position and look_at are required)".into();
+    }
+    m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value")
+}
+
+/// The text of a scene file, or the byte offset (if any) and the reason
+/// it is not UTF-8 text.
+fn decode_scene_text(bytes: &[u8]) -> Result<&str, (Option<usize>, String)> {
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Err((None, "the file is UTF-16 text; scene files must be UTF-8".into()));
+    }
+    let bom = if bytes.starts_with(b"\xEF\xBB\xBF") { 3 } else { 0 };
+    std::str::from_utf8(&bytes[bom..]).map_err(|e| {
+        (
+            Some(bom + e.valid_up_to()),
+            "invalid UTF-8 here: scene files are UTF-8 TOML text (is this a binary file?)".to_string(),
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,268 @@
+//! OBJ meshes and their MTL materials, through tobj.
+//!
+//! Before tobj sees a file, a line-by-line check reports the problems that
+//! tobj reports without a place (or not at all): numbers that do not parse
+//! or are not finite, faces with fewer than three corners, and face indices
+//! that are zero or out of range, each with the OBJ file's line.
+
+use crate::error::{Location, SceneError};
+use prism_geometry::TriangleMesh;
+use prism_geometry::glam::{Vec2, Vec3};
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+
+/// One model of an OBJ file (an `o`/`g` group with one material).
+#[derive(Debug)]
+pub struct ObjModel {
+    /// The geometry.
+    pub mesh: TriangleMesh,
+    /// Index into [`ObjFile::materials`], if the model uses one.
+    pub material: Option<usize>,
+    /// Faces of zero area (kept but never hit).
+    pub degenerate: usize,
+}
+
+/// A loaded OBJ file.
+#[derive(Debug)]
+pub struct ObjFile {
+    /// Its models.
+    pub models: Vec<ObjModel>,
+    /// Materials from its MTL libraries (empty when unavailable).
+    pub materials: Vec<tobj::Material>,
+    /// Why the MTL libraries could not be used, if they could not.
+    pub material_error: Option<String>,
+    /// The MTL files that were read.
+    pub mtl_files: Vec<PathBuf>,
+}
+
+/// How vertex normals are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalMode {
+    /// The file's normals when every vertex has one, else computed smooth.
+    Auto,
+    /// Always computed smooth normals (area-weighted).
+    Smooth,
+    /// No vertex normals: each face shaded with its geometric normal.
+    Flat,
+}
+
+/// Loads and validates the OBJ file `path` (already read as `bytes`).
+/// `referenced_at` is where the scene names it, for error messages.
+pub fn load_obj(
+    path: &Path,
+    bytes: &[u8],
+    normals: NormalMode,
+    referenced_at: &Location,
+) -> Result<ObjFile, SceneError> {
+    let asset = |location: Location, message: String| SceneError::Asset {
+        location,
+        message,
+        referenced_at: Box::new(referenced_at.clone()),
+    };
+    let text = decode_text(bytes).map_err(|m| asset(Location::file(path), m))?;
+    let mtllibs = precheck(text).map_err(|(line, m)| asset(Location::at_line(path, line), m))?;
+
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mtl_files: Vec<PathBuf> = mtllibs.iter().map(|m| dir.join(m)).collect();
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let loader = |p: &Path| tobj::load_mtl(dir.join(p));
+    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
+        .map_err(|e| asset(Location::file(path), format!("malformed OBJ: {e}")))?;
+    let (materials, material_error) = match materials {
+        Ok(m) => (m, None),
+        Err(e) => {
+            let names: Vec<String> = mtl_files.iter().map(|p| p.display().to_string()).collect();
+            (Vec::new(), Some(format!("cannot use material library {}: {e}", names.join(", "))))
+        }
+    };
+
+    let mut out = Vec::with_capacity(models.len());
+    for model in models {
+        let m = model.mesh;
+        if m.indices.is_empty() {
+            continue;
+        }
+        let n = m.positions.len() / 3;
+        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let file_normals = (m.normals.len() == 3 * n)
+            .then(|| m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>());
+        // OBJ's v runs upward; prism's image rows run downward from v = 0.
+        let uvs = (m.texcoords.len() == 2 * n)
+            .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
+        let indices: Vec<[u32; 3]> = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let (given, smooth) = match normals {
+            NormalMode::Auto => (file_normals.clone(), file_normals.is_none()),
+            NormalMode::Smooth => (None, true),
+            NormalMode::Flat => (None, false),
+        };
+        let mut mesh = TriangleMesh::new(positions, given, uvs, indices)
+            .map_err(|e| asset(Location::file(path), format!("model `{}`: {e}", model.name)))?;
+        if smooth {
+            mesh.compute_smooth_normals();
+        }
+        let degenerate = mesh.degenerate_count();
+        out.push(ObjModel { mesh, material: m.material_id, degenerate });
+    }
+    if out.is_empty() {
+        return Err(asset(
+            Location::file(path),
+            "the OBJ file has no faces (lines and points are not rendered)".into(),
+        ));
+    }
+    Ok(ObjFile { models: out, materials, material_error, mtl_files })
+}
+
+/// UTF-8 text, with a clear word for the usual wrong encodings.
+fn decode_text(bytes: &[u8]) -> Result<&str, String> {
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Err("the file is UTF-16 text; expected UTF-8 (or ASCII) text".into());
+    }
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        format!(
+            "the file is not UTF-8 text (invalid byte at offset {}); is it a binary file?",
+            e.valid_up_to()
+        )
+    })
+}
+
+/// Checks every line that tobj would read; returns the `mtllib` names.
+/// Errors carry the 1-based line.
+fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
+    let (mut nv, mut nvt, mut nvn, mut faces) = (0_i64, 0_i64, 0_i64, 0_usize);
+    let mut mtllibs = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut words = line.split_whitespace();
+        let Some(key) = words.next() else { continue };
+        let numbers = |min: usize, max: usize, what: &str| -> Result<(), (usize, String)> {
+            let vals: Vec<&str> = line.split_whitespace().skip(1).collect();
+            if vals.len() < min || vals.len() > max {
+                let want = if min == max { format!("{min}") } else { format!("{min} to {max}") };
+                return Err((
+                    line_no,
+                    format!("`{key}` needs {want} numbers ({what}), found {}", vals.len()),
+                ));
+            }
+            for v in vals {
+                match v.parse::<f32>() {
+                    Ok(x) if x.is_finite() => {}
+                    Ok(_) => return Err((line_no, format!("`{key}` value `{v}` is not finite"))),
+                    Err(_) => return Err((line_no, format!("`{key}` value `{v}` is not a number"))),
+                }
+            }
+            Ok(())
+        };
+        match key {
+            "v" => {
+                // x y z [w] or x y z r g b (vertex colours).
+                numbers(3, 7, "x y z")?;
+                nv += 1;
+            }
+            "vt" => {
+                numbers(1, 3, "u [v [w]]")?;
+                nvt += 1;
+            }
+            "vn" => {
+                numbers(3, 3, "x y z")?;
+                nvn += 1;
+            }
+            "f" => {
+                let corners: Vec<&str> = words.collect();
+                if corners.len() < 3 {
+                    return Err((
+                        line_no,
+                        format!("a face needs at least 3 corners, found {}", corners.len()),
+                    ));
+                }
+                for c in corners {
+                    let parts: Vec<&str> = c.split('/').collect();
+                    if parts.len() > 3 || parts[0].is_empty() {
+                        return Err((line_no, format!("face corner `{c}` is not v, v/vt, v//vn or v/vt/vn")));
+                    }
+                    for (k, (part, count, what)) in [
+                        (parts[0], nv, "vertex"),
+                        (parts.get(1).copied().unwrap_or(""), nvt, "texture coordinate"),
+                        (parts.get(2).copied().unwrap_or(""), nvn, "normal"),
+                    ]
+                    .into_iter()
+                    .enumerate()
+                    {
+                        if part.is_empty() && k > 0 {
+                            continue;
+                        }
+                        let idx: i64 = part.parse().map_err(|_| {
+                            (line_no, format!("face corner `{c}`: `{part}` is not an integer index"))
+                        })?;
+                        let resolved = if idx < 0 { count + idx + 1 } else { idx };
+                        if idx == 0 {
+                            return Err((
+                                line_no,
+                                format!(
+                                    "face corner `{c}`: {what} index 0 is invalid (OBJ indices start at 1)"
+                                ),
+                            ));
+                        }
+                        if resolved < 1 || resolved > count {
+                            return Err((
+                                line_no,
+                                format!(
+                                    "face corner `{c}`: {what} index {idx} is out of range ({count} defined before this line)"
+                                ),
+                            ));
+                        }
+                    }
+                }
+                faces += 1;
+            }
+            "mtllib" => {
+                let name = line["mtllib".len()..].trim();
+                if !name.is_empty() {
+                    mtllibs.push(name.to_string());
+                }
+            }
+            _ => {}
+        }
+    }
+    if faces == 0 {
+        return Err((
+            text.lines().count().max(1),
+            "the OBJ file has no faces (`f` lines); lines and points are not rendered".into(),
+        ));
+    }
+    Ok(mtllibs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn precheck_reports_lines() {
+        assert_eq!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").map(|m| m.len()), Ok(0));
+        let e = precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
+        assert_eq!(e.0, 4);
+        assert!(e.1.contains("out of range"), "{}", e.1);
+        let e = precheck("v 0 0 0\nv 1 0 0\nf 1 2\n").unwrap_err();
+        assert_eq!(e.0, 3);
+        let e = precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n").unwrap_err();
+        assert!(e.1.contains("index 0"));
+        let e = precheck("v 0 nan 0\n").unwrap_err();
+        assert!(e.1.contains("not finite"));
+        let e = precheck("v 0 0 0\nv 1 0 0\nl 1 2\n").unwrap_err();
+        assert!(e.1.contains("no faces"));
+        assert!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n").is_ok());
+        assert!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 -2 -1\n").is_err());
+        assert_eq!(
+            precheck("mtllib my lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+            Ok(vec!["my lib.mtl".into()])
+        );
+    }
+
+    #[test]
+    fn utf16_and_binary_are_named() {
+        assert!(decode_text(&[0xFF, 0xFE, b'v', 0]).unwrap_err().contains("UTF-16"));
+        assert!(decode_text(&[0x80, 0x81, 0x00]).unwrap_err().contains("not UTF-8"));
+    }
+}
