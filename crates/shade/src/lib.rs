@@ -7,6 +7,12 @@
 //! render samples pixel centres exactly; more samples are stratified and
 //! the same for any number of threads).
 //!
+//! Geometric passes (depth, normals, albedo, object ids) come from
+//! [`render_aovs`] or, with the beauty in the same pass over the pixels,
+//! [`render_with_aovs`]; [`write_image_exr`], [`write_aov_files`] and
+//! [`write_aov_preview_png`] write them as float OpenEXR files and PNG
+//! previews (see `docs/aov.md`).
+//!
 //! # Example
 //!
 //! A red Lambert sphere under one light, one pixel, looked at head-on:
@@ -39,18 +45,27 @@
 
 #![warn(missing_docs)]
 
+mod aov;
 mod camera;
 mod integrator;
 mod material;
 pub mod optics;
+mod output;
 mod render;
 mod scene;
 mod texture;
 
+pub use aov::{Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_aovs};
 pub use camera::Camera;
 pub use integrator::MAX_DEPTH_LIMIT;
 pub use material::Material;
-pub use render::{Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples};
+pub use output::{
+    OutputError, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
+    write_aov_preview_png, write_exr_rgb, write_image_exr, write_png_rgb8,
+};
+pub use render::{
+    Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples, sample_position,
+};
 pub use scene::{Fog, FogMode, PointLight, Scene};
 pub use texture::{
     ImageTexture, MAX_TEXTURE_EDGE, MAX_TEXTURE_TEXELS, Mapping, Texture, Wrap, srgb_to_linear,

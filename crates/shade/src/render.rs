@@ -153,13 +153,7 @@ pub fn render_samples(
             }
         });
     };
-    match settings.threads {
-        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build() {
-            Ok(pool) => pool.install(|| work(&mut pixels)),
-            Err(_) => work(&mut pixels),
-        },
-        None => work(&mut pixels),
-    }
+    in_pool(settings.threads, || work(&mut pixels));
     let cancelled = hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let nonfinite_samples = nonfinite.into_inner();
     let stats = RenderStats {
@@ -171,9 +165,32 @@ pub fn render_samples(
     (Image { width: w, height: h, pixels }, stats)
 }
 
+/// Runs `f` on a pool of `threads` workers (`None`: the global pool, every
+/// core; a pool that cannot be built falls back to the global one).
+pub(crate) fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
+    match threads {
+        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build() {
+            Ok(pool) => pool.install(f),
+            Err(_) => f(),
+        },
+        None => f(),
+    }
+}
+
+/// The image-plane position of sample `s` of pixel `(i, j)` in a render of
+/// `spp` samples per pixel on an image `width` pixels wide: the point that
+/// [`render`] (and [`crate::render_aovs`]) passes to [`crate::Camera::ray`].
+/// It lies in `[i, i + 1) × [j, j + 1)`; with `spp = 1` it is the pixel
+/// centre `(i + 0.5, j + 0.5)`. See [`render`] for the pattern.
+#[must_use]
+pub fn sample_position(spp: u32, width: u32, i: u32, j: u32, s: u32) -> (f32, f32) {
+    let (dx, dy) = SamplePattern::new(spp).offset(u64::from(j) * u64::from(width) + u64::from(i), s);
+    (i as f32 + dx, j as f32 + dy)
+}
+
 /// The stratified, hashed sample positions within a pixel.
 #[derive(Clone, Copy, Debug)]
-struct SamplePattern {
+pub(crate) struct SamplePattern {
     /// Strata per side (`⌈√spp⌉`); 0 means "pixel centre only" (spp = 1).
     m: u32,
     /// Number of strata, `m²`.
@@ -183,7 +200,7 @@ struct SamplePattern {
 }
 
 impl SamplePattern {
-    fn new(spp: u32) -> Self {
+    pub(crate) fn new(spp: u32) -> Self {
         let spp = spp.max(1);
         if spp == 1 {
             return Self { m: 0, strata: 1, stride: 1 };
@@ -202,7 +219,7 @@ impl SamplePattern {
 
     /// Offset of sample `s` of pixel number `pixel` inside its pixel, in `[0, 1)²`.
     #[inline]
-    fn offset(&self, pixel: u64, s: u32) -> (f32, f32) {
+    pub(crate) fn offset(&self, pixel: u64, s: u32) -> (f32, f32) {
         if self.m == 0 {
             return (0.5, 0.5);
         }

@@ -1,0 +1,401 @@
+//! Arbitrary output variables (AOVs): per-pixel geometric measurements of
+//! the first surface each camera ray meets, as float images. The
+//! definitions are on [`render_aovs`] and in `docs/aov.md`.
+
+use crate::integrator::Tracer;
+use crate::render::{SamplePattern, in_pool};
+use crate::{Image, RenderHooks, RenderSettings, RenderStats, Scene};
+use prism_geometry::glam::Vec3;
+use rayon::prelude::*;
+use std::fmt;
+use std::str::FromStr;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// One kind of AOV pass. Names (for [`FromStr`], [`Aov::name`] and the
+/// file names of [`crate::write_aov_files`]): `depth`, `normal`,
+/// `geo_normal`, `albedo`, `object_id`. [`render_aovs`] has the exact
+/// definitions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Aov {
+    /// Distance from the camera position to the first hit; `+∞` for a miss.
+    Depth,
+    /// World-space outward shading normal; 0 for a miss.
+    Normal,
+    /// World-space outward geometric normal; 0 for a miss.
+    GeoNormal,
+    /// Linear surface colour after textures; 0 for a miss.
+    Albedo,
+    /// Scene object index as a float; −1 for a miss. Not averaged: the
+    /// pixel-centre ray decides.
+    ObjectId,
+}
+
+impl Aov {
+    /// Every pass, in the canonical order.
+    pub const ALL: [Aov; 5] = [Aov::Depth, Aov::Normal, Aov::GeoNormal, Aov::Albedo, Aov::ObjectId];
+
+    /// The pass's name: `depth`, `normal`, `geo_normal`, `albedo` or `object_id`.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Aov::Depth => "depth",
+            Aov::Normal => "normal",
+            Aov::GeoNormal => "geo_normal",
+            Aov::Albedo => "albedo",
+            Aov::ObjectId => "object_id",
+        }
+    }
+
+    /// Values per pixel: 1 for depth and object id, 3 for the others.
+    #[must_use]
+    pub const fn channels(self) -> usize {
+        match self {
+            Aov::Depth | Aov::ObjectId => 1,
+            Aov::Normal | Aov::GeoNormal | Aov::Albedo => 3,
+        }
+    }
+
+    /// The value of a pixel whose ray hits nothing (per channel).
+    #[must_use]
+    pub const fn miss_value(self) -> f32 {
+        match self {
+            Aov::Depth => f32::INFINITY,
+            Aov::ObjectId => -1.0,
+            Aov::Normal | Aov::GeoNormal | Aov::Albedo => 0.0,
+        }
+    }
+
+    /// Parses a comma-separated list such as `"depth,normal,object_id"`
+    /// (the form of a `--aov` flag). Spaces around names are ignored, `all`
+    /// stands for every pass, repeated names count once, and the passes
+    /// keep their first order of appearance.
+    ///
+    /// # Errors
+    /// [`AovParseError`] naming the first item that is not a pass name
+    /// (an empty item included).
+    pub fn parse_list(list: &str) -> Result<Vec<Aov>, AovParseError> {
+        let mut out = Vec::new();
+        for item in list.split(',') {
+            let item = item.trim();
+            let found: Vec<Aov> = if item == "all" { Aov::ALL.to_vec() } else { vec![item.parse()?] };
+            for a in found {
+                if !out.contains(&a) {
+                    out.push(a);
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+impl fmt::Display for Aov {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Aov {
+    type Err = AovParseError;
+
+    /// Exact, case-sensitive pass names (see [`Aov`]).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| AovParseError { name: s.to_owned() })
+    }
+}
+
+/// A name that is not an AOV pass.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown AOV pass `{name}`: expected one of depth, normal, geo_normal, albedo, object_id (or all)")]
+pub struct AovParseError {
+    /// The name given.
+    pub name: String,
+}
+
+/// One AOV pass: `aov.channels()` floats per pixel, interleaved, rows in
+/// order from the top (row 0 at the top, as [`Image`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovImage {
+    /// Which pass.
+    pub aov: Aov,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width · height · aov.channels()` values, row-major.
+    pub data: Vec<f32>,
+}
+
+impl AovImage {
+    /// Values per pixel (`aov.channels()`).
+    #[must_use]
+    pub fn channels(&self) -> usize {
+        self.aov.channels()
+    }
+
+    /// The values of pixel `(i, j)`, or `None` outside the image.
+    #[must_use]
+    pub fn pixel(&self, i: u32, j: u32) -> Option<&[f32]> {
+        if i >= self.width || j >= self.height {
+            return None;
+        }
+        let c = self.channels();
+        let at = (j as usize * self.width as usize + i as usize) * c;
+        self.data.get(at..at + c)
+    }
+
+    /// The first value of pixel `(i, j)` (depth or object id for the
+    /// one-channel passes), or `None` outside the image.
+    #[must_use]
+    pub fn scalar(&self, i: u32, j: u32) -> Option<f32> {
+        self.pixel(i, j).and_then(|p| p.first().copied())
+    }
+
+    /// Pixel `(i, j)` as a vector (a one-channel value repeated in all
+    /// three), or `None` outside the image.
+    #[must_use]
+    pub fn vec3(&self, i: u32, j: u32) -> Option<Vec3> {
+        match self.pixel(i, j)? {
+            [x] => Some(Vec3::splat(*x)),
+            [x, y, z] => Some(Vec3::new(*x, *y, *z)),
+            _ => None,
+        }
+    }
+
+    /// Interleaved RGB floats, one-channel values repeated in R, G and B:
+    /// what [`crate::write_aov_exr`] stores.
+    #[must_use]
+    pub fn to_rgb(&self) -> Vec<f32> {
+        if self.channels() == 3 {
+            self.data.clone()
+        } else {
+            self.data.iter().flat_map(|&v| [v, v, v]).collect()
+        }
+    }
+}
+
+/// The passes of one render, in the order they were asked for (repeats
+/// dropped).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovImages {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The passes.
+    pub passes: Vec<AovImage>,
+}
+
+impl AovImages {
+    /// The pass `aov`, if it was rendered.
+    #[must_use]
+    pub fn get(&self, aov: Aov) -> Option<&AovImage> {
+        self.passes.iter().find(|p| p.aov == aov)
+    }
+}
+
+/// Renders the AOV passes `aovs` (no shading: one primary ray per sample,
+/// plus the pixel-centre ray for [`Aov::ObjectId`] when `spp > 1`).
+///
+/// Definitions, exactly:
+/// - rays: the scene's pinhole camera ([`crate::Camera::ray`]) through the
+///   sample positions of the beauty render, [`crate::sample_position`]
+///   (with `settings.spp = 1`, the pixel centre `(i + 0.5, j + 0.5)` and no
+///   jitter, so that a pass is an exact geometric measurement);
+/// - `depth`: the Euclidean distance from the camera position to the first
+///   hit along the ray, in scene units; `+∞` where nothing is hit;
+/// - `normal`: the world-space unit shading normal at the first hit,
+///   outward as the surface defines it (not flipped toward the camera);
+///   `geo_normal` the world-space unit geometric normal; both 0 where
+///   nothing is hit;
+/// - `albedo`: the linear surface colour after textures
+///   ([`Scene::albedo_at`]); 0 (not the background) where nothing is hit;
+/// - `object_id`: the index of the object hit in the scene's
+///   [`prism_bvh::Accel`], as a float; −1 where nothing is hit.
+///
+/// With `spp > 1` each pass is the mean of the samples (summed in sample
+/// order, times `1 / spp`), except `object_id`, which takes the ray through
+/// the pixel centre. A pixel with any missed sample thus has depth `+∞`,
+/// and averaged normals at edges are shorter than 1. No value is NaN;
+/// `+∞` appears only in depth. Results are the same for any number of
+/// threads. Rows run in parallel (`settings.threads`); `hooks` report
+/// progress and cancel (rows not rendered hold the miss values).
+/// `settings.max_depth` and `min_contribution` do not matter here.
+/// `stats.rays` counts the rays traced.
+pub fn render_aovs(
+    scene: &Scene,
+    settings: &RenderSettings,
+    aovs: &[Aov],
+    hooks: RenderHooks<'_>,
+) -> (AovImages, RenderStats) {
+    let (_, images, stats) = render_impl(scene, settings, aovs, false, hooks);
+    (images, stats)
+}
+
+/// The beauty image and the AOV passes `aovs` in one pass over the pixels.
+///
+/// The image is the same, bit for bit, as [`crate::render`]'s with the same
+/// settings, and the passes as [`render_aovs`]'s; `stats.rays` counts the
+/// rays of both (the passes trace their own primary rays).
+pub fn render_with_aovs(
+    scene: &Scene,
+    settings: &RenderSettings,
+    aovs: &[Aov],
+    hooks: RenderHooks<'_>,
+) -> (Image, AovImages, RenderStats) {
+    render_impl(scene, settings, aovs, true, hooks)
+}
+
+/// Per-pixel sums of the averaged passes.
+#[derive(Clone, Copy)]
+struct Sums {
+    depth: f32,
+    normal: Vec3,
+    geo: Vec3,
+    albedo: Vec3,
+}
+
+/// One rendered row.
+struct Row {
+    beauty: Vec<Vec3>,
+    passes: Vec<Vec<f32>>,
+    rays: u64,
+    nonfinite: u64,
+}
+
+fn finite_or_zero(v: Vec3) -> Vec3 {
+    if v.is_finite() { v } else { Vec3::ZERO }
+}
+
+fn render_impl(
+    scene: &Scene,
+    settings: &RenderSettings,
+    aovs: &[Aov],
+    beauty: bool,
+    hooks: RenderHooks<'_>,
+) -> (Image, AovImages, RenderStats) {
+    let start = std::time::Instant::now();
+    let mut wanted: Vec<Aov> = Vec::with_capacity(aovs.len());
+    for &a in aovs {
+        if !wanted.contains(&a) {
+            wanted.push(a);
+        }
+    }
+    let cam = &scene.camera;
+    let (w, h) = (cam.width(), cam.height());
+    let spp = settings.spp.max(1);
+    let inv = 1.0 / spp as f32;
+    let pattern = SamplePattern::new(spp);
+    let see_through = beauty && Tracer::scene_is_see_through(scene);
+    let want_averaged = wanted.iter().any(|&a| a != Aov::ObjectId);
+    let want_id = wanted.contains(&Aov::ObjectId);
+    let rows_done = AtomicU64::new(0);
+
+    let miss_row = |row_len: usize| Row {
+        beauty: if beauty { vec![Vec3::ZERO; row_len] } else { Vec::new() },
+        passes: wanted.iter().map(|a| vec![a.miss_value(); row_len * a.channels()]).collect(),
+        rays: 0,
+        nonfinite: 0,
+    };
+
+    let render_row = |j: u32| -> Row {
+        let mut row = miss_row(w as usize);
+        if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return row;
+        }
+        let mut tracer = Tracer::new(scene, settings, see_through);
+        let mut aov_rays = 0u64;
+        let row_start = u64::from(j) * u64::from(w);
+        for i in 0..w {
+            let index = row_start + u64::from(i);
+            let mut sum = Vec3::ZERO;
+            let mut sums = Sums { depth: 0.0, normal: Vec3::ZERO, geo: Vec3::ZERO, albedo: Vec3::ZERO };
+            let mut centre_id: Option<f32> = None;
+            for s in 0..spp {
+                let (dx, dy) = pattern.offset(index, s);
+                let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+                if beauty {
+                    let l = tracer.trace_camera(&ray);
+                    if l.is_finite() {
+                        sum += l;
+                    } else {
+                        row.nonfinite += 1;
+                    }
+                }
+                if want_averaged || (want_id && spp == 1) {
+                    aov_rays += 1;
+                    let hit = scene.accel.closest_hit(&ray);
+                    match &hit {
+                        Some(hit) => {
+                            let d = hit.hit.t * ray.dir.length();
+                            sums.depth += if d.is_nan() { f32::INFINITY } else { d };
+                            sums.normal += finite_or_zero(hit.hit.normal);
+                            sums.geo += finite_or_zero(hit.hit.geo_normal);
+                            sums.albedo += finite_or_zero(scene.albedo_at(hit));
+                        }
+                        None => sums.depth = f32::INFINITY,
+                    }
+                    if spp == 1 {
+                        centre_id = Some(hit.map_or(-1.0, |h| h.object as f32));
+                    }
+                }
+            }
+            if want_id && centre_id.is_none() {
+                aov_rays += 1;
+                let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
+                centre_id = Some(scene.accel.closest_hit(&ray).map_or(-1.0, |h| h.object as f32));
+            }
+            let i = i as usize;
+            if beauty {
+                row.beauty[i] = sum * inv;
+            }
+            for (a, buf) in wanted.iter().zip(&mut row.passes) {
+                match a {
+                    Aov::Depth => buf[i] = sums.depth * inv,
+                    Aov::ObjectId => buf[i] = centre_id.unwrap_or(-1.0),
+                    Aov::Normal | Aov::GeoNormal | Aov::Albedo => {
+                        let v = match a {
+                            Aov::Normal => sums.normal,
+                            Aov::GeoNormal => sums.geo,
+                            _ => sums.albedo,
+                        } * inv;
+                        buf[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
+                    }
+                }
+            }
+        }
+        row.rays = tracer.rays + aov_rays;
+        let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(p) = hooks.progress {
+            p(done as u32, h);
+        }
+        row
+    };
+
+    let rows: Vec<Row> = in_pool(settings.threads, || (0..h).into_par_iter().map(render_row).collect());
+
+    let n = w as usize * h as usize;
+    let mut pixels = Vec::with_capacity(if beauty { n } else { 0 });
+    let mut data: Vec<Vec<f32>> = wanted.iter().map(|a| Vec::with_capacity(n * a.channels())).collect();
+    let (mut rays, mut nonfinite) = (0u64, 0u64);
+    for row in rows {
+        pixels.extend_from_slice(&row.beauty);
+        for (d, p) in data.iter_mut().zip(&row.passes) {
+            d.extend_from_slice(p);
+        }
+        rays += row.rays;
+        nonfinite += row.nonfinite;
+    }
+    let passes =
+        wanted.iter().zip(data).map(|(&aov, data)| AovImage { aov, width: w, height: h, data }).collect();
+    let stats = RenderStats {
+        seconds: start.elapsed().as_secs_f64(),
+        rays,
+        cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
+        nonfinite_samples: nonfinite,
+    };
+    (
+        Image { width: w, height: h, pixels: if beauty { pixels } else { Vec::new() } },
+        AovImages { width: w, height: h, passes },
+        stats,
+    )
+}

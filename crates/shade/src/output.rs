@@ -1,0 +1,296 @@
+//! Writing renders and AOV passes to disk: 32-bit float OpenEXR and 8-bit
+//! PNG previews, each written atomically (a temporary file in the same
+//! directory, renamed over the target once complete).
+
+use crate::{Aov, AovImage, AovImages, Image, linear_to_srgb8};
+use image::codecs::openexr::OpenExrEncoder;
+use image::codecs::png::PngEncoder;
+use image::{ImageBuffer, Rgb};
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Why an output file could not be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The file system refused (directory missing, no permission, disk full…).
+    #[error("cannot write {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The image could not be encoded or decoded.
+    #[error("image error in {}: {reason}", path.display())]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// The request makes no sense (an empty image, a buffer of the wrong
+    /// length, a path without a file name).
+    #[error("{}: {reason}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+}
+
+fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
+    OutputError::Invalid { path: path.to_path_buf(), reason: reason.into() }
+}
+
+fn check_len(path: &Path, width: u32, height: u32, got: usize, per_pixel: usize) -> Result<(), OutputError> {
+    if width == 0 || height == 0 {
+        return Err(invalid(path, format!("cannot write an empty {width}×{height} image")));
+    }
+    let want = (width as usize).checked_mul(height as usize).and_then(|n| n.checked_mul(per_pixel));
+    if want != Some(got) {
+        return Err(invalid(
+            path,
+            format!("a {width}×{height} image needs {per_pixel} values per pixel, got {got} values"),
+        ));
+    }
+    Ok(())
+}
+
+/// Writes `path` atomically: `encode` fills a new temporary file next to
+/// it, which then replaces `path`; on any error the temporary file is
+/// removed and `path` is left as it was.
+fn write_atomic(
+    path: &Path,
+    encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    let name = path.file_name().ok_or_else(|| invalid(path, "not a file path"))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".{}.{n}.tmp", std::process::id()));
+    let tmp = dir.join(tmp_name);
+    let file = OpenOptions::new().write(true).create_new(true).open(&tmp).map_err(io)?;
+    let result = (|| {
+        let mut w = BufWriter::new(file);
+        encode(&mut w)?;
+        w.flush().map_err(io)?;
+        let file = w.into_inner().map_err(|e| io(e.into_error()))?;
+        file.sync_all().map_err(io)?;
+        drop(file);
+        std::fs::rename(&tmp, path).map_err(io)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Writes a 32-bit float RGB OpenEXR file (channels `R`, `G`, `B`, no
+/// alpha, row 0 at the top) from `width · height · 3` interleaved floats,
+/// atomically. Every float is stored as is, `+∞` included.
+///
+/// # Errors
+/// [`OutputError::Invalid`] for an empty image or a buffer of the wrong
+/// length, [`OutputError::Io`] or [`OutputError::Image`] if writing fails
+/// (the target is then untouched and no temporary file is left).
+pub fn write_exr_rgb(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), OutputError> {
+    check_len(path, width, height, rgb.len(), 3)?;
+    let buffer: ImageBuffer<Rgb<f32>, &[f32]> =
+        ImageBuffer::from_raw(width, height, rgb).ok_or_else(|| invalid(path, "buffer too small"))?;
+    write_atomic(path, |w| {
+        buffer
+            .write_with_encoder(OpenExrEncoder::new(w))
+            .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
+    })
+}
+
+/// Writes a linear [`Image`] (the beauty) as a float RGB OpenEXR file; see
+/// [`write_exr_rgb`].
+///
+/// # Errors
+/// As [`write_exr_rgb`].
+pub fn write_image_exr(path: &Path, image: &Image) -> Result<(), OutputError> {
+    let rgb: Vec<f32> = image.pixels.iter().flat_map(|p| p.to_array()).collect();
+    write_exr_rgb(path, image.width, image.height, &rgb)
+}
+
+/// Writes one AOV pass as a float RGB OpenEXR file: three-channel passes
+/// as `R, G, B = x, y, z`, one-channel passes (depth, object id) with the
+/// value repeated in `R`, `G` and `B` (the image crate writes RGB or RGBA
+/// only); see [`write_exr_rgb`].
+///
+/// # Errors
+/// As [`write_exr_rgb`].
+pub fn write_aov_exr(path: &Path, pass: &AovImage) -> Result<(), OutputError> {
+    check_len(path, pass.width, pass.height, pass.data.len(), pass.channels())?;
+    write_exr_rgb(path, pass.width, pass.height, &pass.to_rgb())
+}
+
+/// Reads an OpenEXR (or any image the crate decodes) as `(width, height,
+/// interleaved RGB floats)`, e.g. to check a pass written by
+/// [`write_aov_exr`]. A one-channel pass reads back from `R`.
+///
+/// # Errors
+/// [`OutputError::Io`] if the file cannot be opened,
+/// [`OutputError::Image`] if it cannot be decoded.
+pub fn read_exr_rgb(path: &Path) -> Result<(u32, u32, Vec<f32>), OutputError> {
+    let reader = image::ImageReader::open(path)
+        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?;
+    let image = reader
+        .with_guessed_format()
+        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?
+        .decode()
+        .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })?
+        .into_rgb32f();
+    let (w, h) = image.dimensions();
+    Ok((w, h, image.into_raw()))
+}
+
+/// The file of pass `aov` that goes with the output `base`, with extension
+/// `ext`: `<dir>/<stem>.<pass name>.<ext>` where `<stem>` is `base`'s file
+/// name without its last extension. For `renders/out.exr` and `"exr"`:
+/// `renders/out.depth.exr`, `renders/out.normal.exr`, …; for `out.png` the
+/// same `out.depth.exr` (passes are always float files); previews use
+/// `"png"`: `out.depth.png`.
+///
+/// # Errors
+/// [`OutputError::Invalid`] if `base` has no file name (e.g. `..`).
+pub fn aov_path(base: &Path, aov: Aov, ext: &str) -> Result<PathBuf, OutputError> {
+    let stem = base.file_stem().ok_or_else(|| invalid(base, "the output path has no file name"))?;
+    let mut name = stem.to_os_string();
+    name.push(format!(".{}.{ext}", aov.name()));
+    Ok(base.with_file_name(name))
+}
+
+/// Writes every pass of `aovs` next to the output `base` as
+/// `<stem>.<pass>.exr` ([`aov_path`], [`write_aov_exr`]), and with
+/// `previews` also `<stem>.<pass>.png` ([`write_aov_preview_png`]). The
+/// beauty itself is the caller's to write (e.g. [`write_image_exr`] to
+/// `base`). Returns the files written, in order.
+///
+/// # Errors
+/// The first [`OutputError`]; files written before it stay.
+pub fn write_aov_files(base: &Path, aovs: &AovImages, previews: bool) -> Result<Vec<PathBuf>, OutputError> {
+    let mut written = Vec::new();
+    for pass in &aovs.passes {
+        let exr = aov_path(base, pass.aov, "exr")?;
+        write_aov_exr(&exr, pass)?;
+        written.push(exr);
+        if previews {
+            let png = aov_path(base, pass.aov, "png")?;
+            write_aov_preview_png(&png, pass)?;
+            written.push(png);
+        }
+    }
+    Ok(written)
+}
+
+/// An 8-bit RGB preview of a pass (`width · height · 3` bytes, row 0 at
+/// the top), for looking rather than measuring:
+/// - `normal`, `geo_normal`: each component `n` as `(n + 1) / 2` of 255
+///   (so +X is red, +Y green, +Z blue); pixels whose value is exactly 0
+///   (nothing hit) black;
+/// - `depth`: grey from white at the smallest finite depth to 10% grey at
+///   the largest (all white if they are equal); `+∞` (misses) black;
+/// - `albedo`: sRGB-encoded, clamped to `[0, 1]`;
+/// - `object_id`: a distinct colour per id from a hash of the id (each
+///   channel at least 64, so never black); −1 (nothing hit) black.
+#[must_use]
+pub fn aov_preview_rgb8(pass: &AovImage) -> Vec<u8> {
+    let n = pass.width as usize * pass.height as usize;
+    let c = pass.channels();
+    let px = |k: usize| pass.data.get(k * c..k * c + c).unwrap_or(&[]);
+    let unit = |x: f32| -> u8 {
+        let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+        (x * 255.0 + 0.5) as u8
+    };
+    let mut out = Vec::with_capacity(n * 3);
+    match pass.aov {
+        Aov::Normal | Aov::GeoNormal => {
+            for k in 0..n {
+                match px(k) {
+                    [x, y, z] if [*x, *y, *z] != [0.0; 3] => {
+                        out.extend([*x, *y, *z].map(|v| unit((v + 1.0) * 0.5)));
+                    }
+                    _ => out.extend([0; 3]),
+                }
+            }
+        }
+        Aov::Albedo => {
+            for k in 0..n {
+                match px(k) {
+                    [x, y, z] => out.extend([*x, *y, *z].map(linear_to_srgb8)),
+                    _ => out.extend([0; 3]),
+                }
+            }
+        }
+        Aov::Depth => {
+            let finite = pass.data.iter().copied().filter(|d| d.is_finite());
+            let (lo, hi) =
+                finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+            for k in 0..n {
+                match px(k) {
+                    [d] if d.is_finite() => {
+                        let t = if hi > lo { (d - lo) / (hi - lo) } else { 0.0 };
+                        out.extend([unit(1.0 - 0.9 * t); 3]);
+                    }
+                    _ => out.extend([0; 3]),
+                }
+            }
+        }
+        Aov::ObjectId => {
+            for k in 0..n {
+                match px(k) {
+                    [id] if *id >= 0.0 => out.extend(id_color(*id)),
+                    _ => out.extend([0; 3]),
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A colour for object id `id`: a hash of it, each channel in `[64, 255]`.
+fn id_color(id: f32) -> [u8; 3] {
+    let mut z = u64::from(id.to_bits()).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    [0u32, 16, 32].map(|shift| (64 + ((z >> shift) & 0xFFFF) as u32 * 192 / 0x1_0000) as u8)
+}
+
+/// Writes 8-bit RGB bytes (`width · height · 3`, row 0 at the top) as a
+/// PNG file, atomically.
+///
+/// # Errors
+/// As [`write_exr_rgb`].
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
+    check_len(path, width, height, rgb.len(), 3)?;
+    let buffer: ImageBuffer<Rgb<u8>, &[u8]> =
+        ImageBuffer::from_raw(width, height, rgb).ok_or_else(|| invalid(path, "buffer too small"))?;
+    write_atomic(path, |w| {
+        buffer
+            .write_with_encoder(PngEncoder::new(w))
+            .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
+    })
+}
+
+/// Writes the preview of a pass ([`aov_preview_rgb8`]) as a PNG file,
+/// atomically.
+///
+/// # Errors
+/// As [`write_exr_rgb`].
+pub fn write_aov_preview_png(path: &Path, pass: &AovImage) -> Result<(), OutputError> {
+    check_len(path, pass.width, pass.height, pass.data.len(), pass.channels())?;
+    write_png_rgb8(path, pass.width, pass.height, &aov_preview_rgb8(pass))
+}
