@@ -118,12 +118,34 @@ pub struct SceneSetup {
 /// line and column where known). Called again on every `r`.
 pub type SceneLoader = dyn Fn(&Path) -> Result<SceneSetup, String> + Send + Sync;
 
-/// Loads a scene file with the prism scene loader.
+/// Loads a scene file with the prism scene loader, with the size, sample
+/// and fog overrides of `opts` (checked against the loader's limits, as
+/// `prism render` does; `--fog` on a scene without fog adds the loader's
+/// default fog). Warnings go to stderr.
 ///
 /// # Errors
-/// The loader's message.
-pub fn load_scene_file(path: &Path) -> Result<SceneSetup, String> {
-    Err(format!("cannot read {}: the scene loader is not wired in yet", path.display()))
+/// The loader's message (file, line and column).
+pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, String> {
+    let overrides = prism_scene::Overrides {
+        width: opts.width,
+        height: opts.height,
+        spp: opts.spp,
+        fog: opts.fog,
+        ..prism_scene::Overrides::default()
+    };
+    let options = prism_scene::LoadOptions { overrides, ..prism_scene::LoadOptions::default() };
+    let loaded = prism_scene::load_scene_with(path, &options).map_err(|e| e.to_string())?;
+    for w in &loaded.warnings {
+        eprintln!("prism view: warning: {w}");
+    }
+    Ok(SceneSetup { scene: loaded.scene, settings: loaded.settings })
+}
+
+/// The loader [`run`] uses: [`load_scene_file`] with `opts`.
+#[must_use]
+pub fn file_loader(opts: &ViewOptions) -> Arc<SceneLoader> {
+    let opts = opts.clone();
+    Arc::new(move |path: &Path| load_scene_file(path, &opts))
 }
 
 /// Opens the viewer on `opts.scene` and runs until the window is closed
@@ -135,7 +157,8 @@ pub fn load_scene_file(path: &Path) -> Result<SceneSetup, String> {
 /// window instead), and the other [`ViewError`]s if the window or the
 /// threads cannot start.
 pub fn run(opts: ViewOptions) -> Result<(), ViewError> {
-    run_with_loader(opts, Arc::new(load_scene_file))
+    let loader = file_loader(&opts);
+    run_with_loader(opts, loader)
 }
 
 /// [`run`] with another scene loader (tests, built-in scenes).

@@ -209,12 +209,12 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
             if verbose {
                 if let Some(l) = latency {
                     eprintln!(
-                        "prism-view: latency gen={generation} key-to-frame={:.1} ms",
+                        "prism view: latency gen={generation} key-to-frame={:.1} ms",
                         l.as_secs_f64() * 1000.0
                     );
                 } else if !first_frame_logged {
                     eprintln!(
-                        "prism-view: first frame after {:.1} ms",
+                        "prism view: first frame after {:.1} ms",
                         started.elapsed().as_secs_f64() * 1000.0
                     );
                 }
@@ -223,13 +223,13 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                     FrameKind::Pass { pass, .. } => format!("pass{pass}"),
                 };
                 eprintln!(
-                    "prism-view: frame gen={generation} {what} samples={}/{} render={:.1} ms",
+                    "prism view: frame gen={generation} {what} samples={}/{} render={:.1} ms",
                     state.samples_done(),
                     state.settings().spp,
                     seconds * 1000.0
                 );
                 if state.converged() && matches!(kind, FrameKind::Pass { .. }) {
-                    eprintln!("prism-view: converged gen={generation}");
+                    eprintln!("prism view: converged gen={generation}");
                 }
             }
             first_frame_logged = true;

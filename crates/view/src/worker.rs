@@ -237,7 +237,7 @@ impl Worker {
                 if stats.cancelled || self.cancelled() {
                     return Ok(());
                 }
-                self.coarse_factor = adapt_coarse_factor(factor, stats.seconds);
+                self.coarse_factor = adapt_coarse_factor(factor, stats.seconds, initial_coarse_factor(w, h));
                 let pixels = upscale(&to_pixels(&image, 1.0), cw, ch, w, h);
                 let kind = FrameKind::Coarse { factor };
                 self.tx.send(Frame {
@@ -291,11 +291,13 @@ fn initial_coarse_factor(w: u32, h: u32) -> u32 {
     f
 }
 
-/// Coarsens the preview after a slow one, refines it after a fast one.
-fn adapt_coarse_factor(factor: u32, seconds: f64) -> u32 {
+/// Coarsens the preview after a slow one, refines it after a fast one, but
+/// never below `finest` (the initial factor: the preview is there to be
+/// quick, the first full pass follows at once).
+fn adapt_coarse_factor(factor: u32, seconds: f64, finest: u32) -> u32 {
     if seconds > COARSE_SLOW_SECS {
         (factor * 2).min(MAX_COARSE_FACTOR)
-    } else if seconds < COARSE_FAST_SECS && factor > 2 {
+    } else if seconds < COARSE_FAST_SECS && factor > finest {
         factor / 2
     } else {
         factor
@@ -519,6 +521,38 @@ mod tests {
         let _ = without;
     }
 
+    /// Measures (prints, does not assert) how long a change takes to show
+    /// at 800×600 while a refinement pass is running: from `submit` to the
+    /// first frame of the new view.
+    #[test]
+    fn change_to_first_frame_latency_at_800x600() {
+        let setup = demo_scene(800, 600).unwrap();
+        let settings = RenderSettings { spp: 64, threads: None, ..setup.settings };
+        let camera = setup.scene.camera;
+        let r = Renderer::new(setup.scene, None).unwrap();
+        r.submit(View { generation: 1, camera, fog: true, settings: settings.clone() });
+        let mut times = Vec::new();
+        for generation in 2..=6u64 {
+            // Let a full-size pass get going, then toggle the fog.
+            while let Some(f) = r.frame_timeout(WAIT) {
+                if f.generation == generation - 1 && matches!(f.kind, FrameKind::Pass { .. }) {
+                    break;
+                }
+            }
+            std::thread::sleep(Duration::from_millis(20));
+            let t = Instant::now();
+            r.submit(View { generation, camera, fog: generation % 2 == 1, settings: settings.clone() });
+            let first = loop {
+                let f = r.frame_timeout(WAIT).expect("a frame");
+                if f.generation == generation {
+                    break f;
+                }
+            };
+            times.push((t.elapsed().as_secs_f64() * 1000.0, first.kind));
+        }
+        eprintln!("change-to-first-frame at 800x600 (demo scene): {times:?}");
+    }
+
     #[test]
     fn coarse_factor_and_upscale() {
         assert_eq!(initial_coarse_factor(64, 48), 1);
@@ -526,11 +560,12 @@ mod tests {
         assert_eq!(initial_coarse_factor(1280, 720), 8);
         assert_eq!(initial_coarse_factor(1920, 1080), 16);
         assert_eq!(initial_coarse_factor(100_000, 100_000), MAX_COARSE_FACTOR);
-        assert_eq!(adapt_coarse_factor(4, 0.1), 8);
-        assert_eq!(adapt_coarse_factor(16, 0.1), 16);
-        assert_eq!(adapt_coarse_factor(8, 0.001), 4);
-        assert_eq!(adapt_coarse_factor(2, 0.001), 2);
-        assert_eq!(adapt_coarse_factor(4, 0.02), 4);
+        assert_eq!(adapt_coarse_factor(4, 0.1, 4), 8);
+        assert_eq!(adapt_coarse_factor(16, 0.1, 4), 16);
+        assert_eq!(adapt_coarse_factor(8, 0.001, 4), 4);
+        assert_eq!(adapt_coarse_factor(4, 0.001, 4), 4);
+        assert_eq!(adapt_coarse_factor(4, 0.001, 2), 2);
+        assert_eq!(adapt_coarse_factor(4, 0.02, 4), 4);
         let up = upscale(&[1, 2, 3, 4], 2, 2, 4, 3);
         assert_eq!(up, vec![1, 1, 2, 2, 1, 1, 2, 2, 3, 3, 4, 4]);
         assert_eq!(upscale(&[], 0, 0, 2, 1), vec![0, 0]);

@@ -1,9 +1,14 @@
-//! The viewer in a real window, under Xvfb, driven by xdotool: `c`, save,
-//! `f`, save, `r`, `q`; the two images must differ where fog is and
-//! neither may be blank. Skipped, with the reason printed, where Xvfb or
-//! xdotool is missing (`.ci/install-view-deps.sh` installs them).
+//! The viewer in a real window, under Xvfb, driven by xdotool.
 //!
-//! Also: without a display the viewer fails with a clear message.
+//! - `scenes/seed.toml` (or, until it exists, a small scene written here):
+//!   `c`, save, `f`, save, `q`; the two images must differ where fog is,
+//!   neither may be blank, and what was on screen must be what was saved.
+//! - A scene written here: `r` reloads it; after it is broken, `r` shows
+//!   the error (stderr and title) and the last good scene stays.
+//!
+//! Skipped, with the reason printed, where Xvfb or xdotool is missing
+//! (`.ci/install-view-deps.sh` installs them). Also, always: without a
+//! display the viewer fails with a clear message.
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -112,106 +117,206 @@ fn bad_arguments_are_usage_errors() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("usage: prism-view"));
 }
 
-#[test]
-fn fog_keys_in_a_real_window() {
-    let (Some(_), Some(_)) = (on_path("Xvfb"), on_path("xdotool")) else {
-        println!(
-            "SKIPPED fog_keys_in_a_real_window: Xvfb and xdotool are not on PATH (run .ci/install-view-deps.sh)"
-        );
-        return;
-    };
-    let deadline = Instant::now() + BUDGET;
-    let mut guard = Guard::default();
+/// A small foggy scene: chequered floor, a mirror sphere, two matte ones.
+const TEST_SCENE: &str = r#"
+[render]
+width = 320
+height = 240
+spp = 2
+background = [0.05, 0.05, 0.1]
 
-    // Xvfb picks a free display and writes its number to stdout.
-    let mut xvfb = Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "640x480x24", "-nolisten", "tcp"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let xvfb_out = xvfb.stdout.take().unwrap();
-    guard.0.push(xvfb);
-    let number =
-        wait_line(&lines(xvfb_out), deadline, "Xvfb's display number", |l| l.trim().parse::<u32>().is_ok());
-    let display = format!(":{}", number.trim());
-    eprintln!("Xvfb on {display}");
+[camera]
+position = [0, 1.5, 4]
+look_at = [0, 0, -8]
+fov = 50
 
-    let dir = std::env::temp_dir().join(format!("prism-view-smoke-{}", std::process::id()));
+[[lights]]
+position = [8, 12, 4]
+
+[fog]
+mode = "linear"
+start = 2
+end = 40
+color = [1, 1, 1]
+
+[materials.floor]
+texture = { type = "checker", a = [0.8, 0.8, 0.8], b = [0.1, 0.1, 0.4], size = 1 }
+
+[materials.mirror]
+color = [0.1, 0.2, 0.8]
+reflectivity = 0.7
+
+[materials.red]
+color = [0.9, 0.2, 0.1]
+specular = 0.5
+
+[[objects]]
+type = "plane"
+point = [0, -1, 0]
+material = "floor"
+
+[[objects]]
+type = "sphere"
+center = [0, 0.5, -8]
+radius = 1.5
+material = "mirror"
+
+[[objects]]
+type = "sphere"
+center = [-3, 0, -5]
+radius = 1
+material = "red"
+"#;
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("prism-view-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let mut args: Vec<String> = vec!["--demo".into()];
-    args.extend(
-        [
-            "--width",
-            "240",
-            "--height",
-            "180",
-            "--spp",
-            "2",
-            "--threads",
-            "2",
-            "--fog",
-            "--verbose",
-            "--save-dir",
-        ]
-        .map(String::from),
-    );
-    args.push(dir.to_string_lossy().into_owned());
-    eprintln!("prism-view {}", args.join(" "));
-    let mut viewer = Command::new(BIN)
-        .args(&args)
-        .env("DISPLAY", &display)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let out = lines(viewer.stdout.take().unwrap());
-    let err = lines(viewer.stderr.take().unwrap());
-    guard.0.push(viewer);
+    dir
+}
 
-    wait_line(&err, deadline, "the first view to converge", |l| l.contains("converged gen=1"));
-    let wid = loop {
-        if let Some(w) = xdotool(&display, &["search", "--name", "prism view"])
-            && let Some(first) = w.lines().next()
-        {
-            break first.to_string();
-        }
-        assert!(Instant::now() < deadline, "the window never appeared");
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    xdotool(&display, &["windowfocus", "--sync", &wid]).expect("xdotool windowfocus");
+/// Xvfb and one viewer, killed when dropped.
+struct Session {
+    guard: Guard,
+    display: String,
+    wid: String,
+    out: Receiver<String>,
+    err: Receiver<String>,
+    deadline: Instant,
+}
 
-    // Press a key, wait for that view to converge, save it.
-    let press_and_save = |key: &str, generation: u32, name: &str| -> (PathBuf, Option<image::RgbImage>) {
-        xdotool(&display, &["key", key]).expect("xdotool key");
-        wait_line(&err, deadline, &format!("the view after `{key}`"), |l| {
-            l.contains(&format!("converged gen={generation}"))
+impl Session {
+    /// `None` (with the reason printed) where Xvfb or xdotool is missing.
+    /// Waits for the first view to converge and focuses the window.
+    fn start(test: &str, scene: &Path, save_dir: &Path) -> Option<Self> {
+        let (Some(_), Some(_)) = (on_path("Xvfb"), on_path("xdotool")) else {
+            println!("SKIPPED {test}: Xvfb and xdotool are not on PATH (run .ci/install-view-deps.sh)");
+            return None;
+        };
+        let deadline = Instant::now() + BUDGET;
+        let mut guard = Guard::default();
+        // Xvfb picks a free display and writes its number to stdout.
+        let mut xvfb = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "640x480x24", "-nolisten", "tcp"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let xvfb_out = xvfb.stdout.take().unwrap();
+        guard.0.push(xvfb);
+        let number = wait_line(&lines(xvfb_out), deadline, "Xvfb's display number", |l| {
+            l.trim().parse::<u32>().is_ok()
         });
-        let shot = screenshot(&display, &wid, &dir.join(format!("screen-{name}.png")));
-        xdotool(&display, &["key", "s"]).expect("xdotool key s");
-        let saved = wait_line(&out, deadline, "the saved path", |l| l.starts_with("saved "));
-        (PathBuf::from(saved.trim_start_matches("saved ")), shot)
-    };
-    let (clear_path, clear_shot) = press_and_save("c", 2, "clear");
-    let (foggy_path, foggy_shot) = press_and_save("f", 3, "foggy");
+        let display = format!(":{}", number.trim());
+        let mut args = vec![scene.to_string_lossy().into_owned()];
+        args.extend(
+            [
+                "--width",
+                "240",
+                "--height",
+                "180",
+                "--spp",
+                "2",
+                "--threads",
+                "2",
+                "--fog",
+                "--verbose",
+                "--save-dir",
+            ]
+            .map(String::from),
+        );
+        args.push(save_dir.to_string_lossy().into_owned());
+        eprintln!("{test}: DISPLAY={display} prism-view {}", args.join(" "));
+        let mut viewer = Command::new(BIN)
+            .args(&args)
+            .env("DISPLAY", &display)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = lines(viewer.stdout.take().unwrap());
+        let err = lines(viewer.stderr.take().unwrap());
+        guard.0.push(viewer);
+        wait_line(&err, deadline, "the first view to converge", |l| l.contains("converged gen=1"));
+        let wid = loop {
+            if let Some(w) = xdotool(&display, &["search", "--name", "prism view"])
+                && let Some(first) = w.lines().next()
+            {
+                break first.to_string();
+            }
+            assert!(Instant::now() < deadline, "the window never appeared");
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        xdotool(&display, &["windowfocus", "--sync", &wid]).expect("xdotool windowfocus");
+        Some(Self { guard, display, wid, out, err, deadline })
+    }
 
-    // Reload, then quit.
-    xdotool(&display, &["key", "r"]).expect("xdotool key r");
-    wait_line(&out, deadline, "the reload", |l| l.starts_with("reloaded "));
-    xdotool(&display, &["key", "q"]).expect("xdotool key q");
-    let viewer = guard.0.last_mut().unwrap();
-    let status = loop {
-        if let Some(s) = viewer.try_wait().unwrap() {
-            break s;
-        }
-        assert!(Instant::now() < deadline, "the viewer did not quit on q");
-        std::thread::sleep(Duration::from_millis(20));
+    fn key(&self, key: &str) {
+        xdotool(&self.display, &["key", key]).unwrap_or_else(|| panic!("xdotool key {key}"));
+    }
+
+    fn wait_err(&self, what: &str, want: impl Fn(&str) -> bool) -> String {
+        wait_line(&self.err, self.deadline, what, want)
+    }
+
+    fn wait_out(&self, what: &str, want: impl Fn(&str) -> bool) -> String {
+        wait_line(&self.out, self.deadline, what, want)
+    }
+
+    /// Presses `s` and returns the saved file.
+    fn save(&self) -> PathBuf {
+        self.key("s");
+        let saved = self.wait_out("the saved path", |l| l.starts_with("saved "));
+        PathBuf::from(saved.trim_start_matches("saved "))
+    }
+
+    fn title(&self) -> String {
+        xdotool(&self.display, &["getwindowname", &self.wid]).unwrap_or_default()
+    }
+
+    /// Presses `q` and checks the viewer exits cleanly.
+    fn quit(mut self) {
+        self.key("q");
+        let viewer = self.guard.0.last_mut().unwrap();
+        let status = loop {
+            if let Some(s) = viewer.try_wait().unwrap() {
+                break s;
+            }
+            assert!(Instant::now() < self.deadline, "the viewer did not quit on q");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        assert!(status.success(), "viewer exit: {status}");
+    }
+}
+
+#[test]
+fn fog_keys_in_a_real_window() {
+    let dir = temp_dir("fog");
+    let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/seed.toml");
+    let scene = if seed.is_file() {
+        seed
+    } else {
+        println!("note: scenes/seed.toml is missing; using a small foggy test scene");
+        let p = dir.join("foggy.toml");
+        std::fs::write(&p, TEST_SCENE).unwrap();
+        p
     };
-    assert!(status.success(), "viewer exit: {status}");
-    drop(guard);
+    let Some(session) = Session::start("fog_keys_in_a_real_window", &scene, &dir) else { return };
+
+    // c, wait for that view to converge, screenshot, save; then f.
+    session.key("c");
+    session.wait_err("the view after c", |l| l.contains("converged gen=2"));
+    let clear_shot = screenshot(&session.display, &session.wid, &dir.join("screen-clear.png"));
+    let clear_path = session.save();
+    assert!(session.title().contains("fog off"), "{}", session.title());
+    session.key("f");
+    session.wait_err("the view after f", |l| l.contains("converged gen=3"));
+    let foggy_shot = screenshot(&session.display, &session.wid, &dir.join("screen-foggy.png"));
+    let foggy_path = session.save();
+    assert!(session.title().contains("fog on"), "{}", session.title());
+    session.quit();
 
     // The saved images: complete PNGs, not blank, and different where fog is.
     let (clear, foggy) = (rgb(&clear_path), rgb(&foggy_path));
@@ -229,10 +334,11 @@ fn fog_keys_in_a_real_window() {
         }
     }
     let total = 240 * 180;
+    let n = changed.max(1) as f64;
     eprintln!(
         "fog changed {changed} of {total} pixels; mean luma {:.1} -> {:.1}",
-        lum_clear / changed.max(1) as f64,
-        lum_foggy / changed.max(1) as f64
+        lum_clear / n,
+        lum_foggy / n
     );
     assert!(changed * 20 > total, "fog changed only {changed} of {total} pixels");
     assert!(lum_foggy > lum_clear, "fog should lighten toward its colour, as the report's");
@@ -250,5 +356,40 @@ fn fog_keys_in_a_real_window() {
             println!("note: no screenshots (ImageMagick's `import` missing); compared the saved images only")
         }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn reload_in_a_real_window_keeps_the_last_good_scene() {
+    let dir = temp_dir("reload");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, TEST_SCENE).unwrap();
+    let Some(session) = Session::start("reload_in_a_real_window_keeps_the_last_good_scene", &scene, &dir)
+    else {
+        return;
+    };
+    let before = rgb(&session.save());
+
+    // A good edit: the red sphere turns green.
+    std::fs::write(&scene, TEST_SCENE.replace("[0.9, 0.2, 0.1]", "[0.1, 0.9, 0.1]")).unwrap();
+    session.key("r");
+    session.wait_out("the reload", |l| l.starts_with("reloaded "));
+    session.wait_err("the reloaded view", |l| l.contains("converged gen=2"));
+    let green = rgb(&session.save());
+    assert_ne!(before, green, "the edit shows");
+
+    // A broken edit: the error is shown, the green scene stays.
+    std::fs::write(&scene, "[render]\nwidth = \"wide\"\n").unwrap();
+    session.key("r");
+    let msg = session.wait_err("the reload error", |l| l.contains("reload failed"));
+    assert!(msg.contains("scene.toml"), "the error names the file: {msg}");
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while !session.title().contains("reload failed") {
+        assert!(Instant::now() < deadline, "the title does not show the error: {}", session.title());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let after = rgb(&session.save());
+    assert_eq!(after, green, "the last good scene stays");
+    session.quit();
     let _ = std::fs::remove_dir_all(&dir);
 }

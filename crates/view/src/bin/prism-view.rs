@@ -69,7 +69,7 @@ fn main() -> ExitCode {
     let loader: Arc<SceneLoader> = if demo {
         Arc::new(|_: &std::path::Path| demo::demo_scene(800, 600).map_err(|e| e.to_string()))
     } else {
-        Arc::new(prism_view::load_scene_file)
+        prism_view::file_loader(&opts)
     };
     match prism_view::run_with_loader(opts, loader) {
         Ok(()) => ExitCode::SUCCESS,
