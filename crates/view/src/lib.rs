@@ -87,8 +87,10 @@ pub struct ViewOptions {
     pub height: Option<u32>,
     /// Samples per pixel to refine toward.
     pub spp: Option<u32>,
-    /// Render threads (`None`: the scene's setting, else every core).
+    /// Render threads (`None`: every core).
     pub threads: Option<usize>,
+    /// Maximum recursion depth of reflection and refraction rays.
+    pub max_depth: Option<u32>,
     /// Fog at start: `Some(true)` on, `Some(false)` off.
     pub fog: Option<bool>,
     /// Where `s` saves snapshots (`None`: the current directory).
@@ -130,8 +132,8 @@ pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, St
         width: opts.width,
         height: opts.height,
         spp: opts.spp,
+        max_depth: opts.max_depth,
         fog: opts.fog,
-        ..prism_scene::Overrides::default()
     };
     let options = prism_scene::LoadOptions { overrides, ..prism_scene::LoadOptions::default() };
     let loaded = prism_scene::load_scene_with(path, &options).map_err(|e| e.to_string())?;
@@ -199,7 +201,8 @@ pub fn window_size(scene_w: u32, scene_h: u32, width: Option<u32>, height: Optio
 }
 
 /// Applies the options to a freshly loaded scene: window size, samples,
-/// threads and, at start, fog. Returns the scene (camera at `size`) and the
+/// depth, threads and, at start, fog (for loaders that do not apply them
+/// themselves; applying them twice changes nothing). Returns the scene (camera at `size`) and the
 /// effective settings.
 ///
 /// # Errors
@@ -216,6 +219,9 @@ pub fn prepare(
         settings.spp = spp;
     }
     settings.spp = settings.spp.max(1);
+    if let Some(depth) = opts.max_depth {
+        settings.max_depth = depth;
+    }
     if opts.threads.is_some() {
         settings.threads = opts.threads;
     }
@@ -248,11 +254,18 @@ mod tests {
     #[test]
     fn prepare_applies_overrides() {
         let setup = demo::demo_scene(64, 48).unwrap();
-        let opts = ViewOptions { spp: Some(3), threads: Some(1), fog: Some(false), ..ViewOptions::new("x") };
+        let opts = ViewOptions {
+            spp: Some(3),
+            threads: Some(1),
+            fog: Some(false),
+            max_depth: Some(2),
+            ..ViewOptions::new("x")
+        };
         let (scene, settings) = prepare(setup, &opts, (32, 24), true).unwrap();
         assert_eq!((scene.camera.width(), scene.camera.height()), (32, 24));
         assert_eq!(settings.spp, 3);
         assert_eq!(settings.threads, Some(1));
+        assert_eq!(settings.max_depth, 2);
         assert!(!scene.fog.unwrap().enabled);
         let bad = prepare(demo::demo_scene(64, 48).unwrap(), &opts, (0, 24), true);
         assert!(matches!(bad, Err(ViewError::Camera(_))));

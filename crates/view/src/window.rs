@@ -105,6 +105,7 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
     let mut drag: Option<(f32, f32)> = None;
     let mut next_save = 1u32;
     let mut first_frame_logged = false;
+    let mut render_dead = false;
 
     'main: while window.is_open() {
         // Input.
@@ -193,6 +194,12 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
             }
             buffer = frame.pixels;
             shown = Some((frame.generation, frame.kind, frame.seconds));
+        }
+
+        if !renderer.is_running() && !render_dead {
+            render_dead = true;
+            eprintln!("prism view: the render thread stopped unexpectedly; the image is no longer updated");
+            state.set_message(Some("render thread stopped".into()));
         }
 
         // Present.

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 
-const USAGE: &str = "usage: prism-view (SCENE | --demo) [--width N] [--height N] [--spp N] [--threads N] \
+const USAGE: &str =
+    "usage: prism-view (SCENE | --demo) [--width N] [--height N] [--spp N] [--threads N] [--max-depth N] \
 [--fog | --no-fog] [--save-dir DIR] [--verbose]
 
 Opens a window that renders SCENE progressively.
@@ -31,6 +32,7 @@ fn parse() -> Result<(ViewOptions, bool), String> {
             "--height" => opts.height = Some(num(&a, args.next())?),
             "--spp" => opts.spp = Some(num(&a, args.next())?),
             "--threads" => opts.threads = Some(num(&a, args.next())?),
+            "--max-depth" => opts.max_depth = Some(num(&a, args.next())?),
             "--fog" => opts.fog = Some(true),
             "--no-fog" => opts.fog = Some(false),
             "--save-dir" => {
