@@ -32,8 +32,8 @@ mod worker;
 
 pub use save::{next_snapshot_path, save_png_atomic};
 pub use state::{
-    Action, DRAG_ORBIT_PER_PIXEL, KEY_MOVE_FRACTION, KEY_ORBIT_STEP, Key, MAX_PASS_SAMPLES, Outcome,
-    SamplePlan, View, ViewerState, drag_action, key_action,
+    Action, DRAG_ORBIT_PER_PIXEL, KEY_MOVE_FRACTION, KEY_ORBIT_STEP, Key, Outcome, SamplePlan, View,
+    ViewerState, drag_action, key_action,
 };
 pub use worker::{Accumulator, Frame, FrameKind, Renderer, pixels_to_rgb8, to_pixels, upscale};
 

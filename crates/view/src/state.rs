@@ -17,8 +17,6 @@ pub const DRAG_ORBIT_PER_PIXEL: f32 = 0.25 * std::f32::consts::PI / 180.0;
 /// Move step of one W/A/D/X/PageUp/PageDown press, as a fraction of the
 /// eye's distance to the point looked at.
 pub const KEY_MOVE_FRACTION: f32 = 0.05;
-/// The largest number of samples per pixel in one refinement pass.
-pub const MAX_PASS_SAMPLES: u32 = 8;
 /// Closest the view direction may come to the up vector when orbiting
 /// (radians, 2°), so the camera never becomes degenerate.
 const MIN_POLAR: f32 = 2.0 * std::f32::consts::PI / 180.0;
@@ -368,18 +366,19 @@ impl ViewerState {
         generation == self.generation
     }
 
-    /// A refinement pass of the current generation is shown: `samples_done`
-    /// samples per pixel in all, the pass took `seconds`. Returns false
-    /// (and changes nothing) for a stale generation.
-    pub fn pass_shown(&mut self, generation: u64, samples_done: u32, seconds: f64) -> bool {
+    /// A frame of the current generation is shown after `passes` more
+    /// refinement passes, which took `seconds`; it has `samples_done`
+    /// samples per pixel in all. Returns false (and changes nothing) for a
+    /// stale generation.
+    pub fn pass_shown(&mut self, generation: u64, samples_done: u32, passes: u32, seconds: f64) -> bool {
         if !self.accept(generation) {
             return false;
         }
         self.samples_done = samples_done;
-        self.passes += 1;
-        self.total_passes += 1;
-        if seconds > 0.0 && seconds.is_finite() {
-            let rate = 1.0 / seconds;
+        self.passes += passes;
+        self.total_passes += u64::from(passes);
+        if passes > 0 && seconds > 0.0 && seconds.is_finite() {
+            let rate = f64::from(passes) / seconds;
             self.pass_rate = if self.pass_rate == 0.0 { rate } else { 0.7 * self.pass_rate + 0.3 * rate };
         }
         true
@@ -469,8 +468,11 @@ fn dolly(c: &Camera, fraction: f32) -> Option<Camera> {
 }
 
 /// Plans the sample ranges of the refinement passes: disjoint, in order,
-/// covering `0..spp` exactly; the first pass has one sample and each next
-/// one doubles the samples done so far, up to [`MAX_PASS_SAMPLES`].
+/// covering `0..spp` exactly, one sample each. Added in order to a zeroed
+/// buffer, one-sample passes give exactly the per-pixel sums that
+/// `prism_shade::render` uses, so the refined image is `render`'s bit for
+/// bit. (The render thread shows a frame only every so often, not after
+/// every pass.)
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SamplePlan {
     spp: u32,
@@ -492,8 +494,7 @@ impl Iterator for SamplePlan {
         if self.next >= self.spp {
             return None;
         }
-        let len = self.next.clamp(1, MAX_PASS_SAMPLES).min(self.spp - self.next);
-        let r = self.next..self.next + len;
+        let r = self.next..self.next + 1;
         self.next = r.end;
         Some(r)
     }
@@ -639,19 +640,22 @@ mod tests {
         let mut s = state();
         let old = s.generation();
         assert!(s.accept(old));
-        assert!(s.pass_shown(old, 1, 0.1));
+        assert!(s.pass_shown(old, 1, 1, 0.1));
         assert_eq!(s.samples_done(), 1);
         s.apply(Action::FogOn);
         assert!(!s.accept(old));
-        assert!(!s.pass_shown(old, 2, 0.1), "a stale pass is not counted");
+        assert!(!s.pass_shown(old, 2, 1, 0.1), "a stale pass is not counted");
         assert_eq!(s.samples_done(), 0);
         assert_eq!(s.passes(), 0);
         assert!(s.frame_presented(old).is_none());
         assert!(s.frame_presented(s.generation()).is_some(), "latency of the change");
         assert!(s.frame_presented(s.generation()).is_none(), "measured once");
-        assert!(s.pass_shown(s.generation(), 4, 0.1));
+        assert!(s.pass_shown(s.generation(), 4, 4, 0.2));
         assert!(s.converged());
-        assert_eq!(s.total_passes(), 2);
+        assert_eq!(s.passes(), 4);
+        assert_eq!(s.total_passes(), 5);
+        // A moving average: 10 passes/s, then 20.
+        assert!(s.title("seed").contains("13.0 passes/s"), "{}", s.title("seed"));
         assert!(s.title("seed").contains("4/4 spp"));
     }
 
@@ -680,12 +684,12 @@ mod tests {
             let mut next = 0;
             for r in &ranges {
                 assert_eq!(r.start, next, "spp {spp}: {ranges:?}");
-                assert!(r.end > r.start && r.end - r.start <= MAX_PASS_SAMPLES);
+                assert_eq!(r.end, r.start + 1);
                 next = r.end;
             }
             assert_eq!(next, spp.max(1), "spp {spp}");
         }
-        let r: Vec<_> = SamplePlan::new(16).collect();
-        assert_eq!(r, vec![0..1, 1..2, 2..4, 4..8, 8..16]);
+        let r: Vec<_> = SamplePlan::new(3).collect();
+        assert_eq!(r, vec![0..1, 1..2, 2..3]);
     }
 }

@@ -189,8 +189,8 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
             if !state.accept(frame.generation) || frame.width != w || frame.height != h {
                 continue;
             }
-            if let FrameKind::Pass { samples_done, .. } = frame.kind {
-                state.pass_shown(frame.generation, samples_done, frame.seconds);
+            if let FrameKind::Pass { samples_done, passes } = frame.kind {
+                state.pass_shown(frame.generation, samples_done, passes, frame.seconds);
             }
             buffer = frame.pixels;
             shown = Some((frame.generation, frame.kind, frame.seconds));
@@ -227,7 +227,7 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                 }
                 let what = match kind {
                     FrameKind::Coarse { factor } => format!("coarse/{factor}"),
-                    FrameKind::Pass { pass, .. } => format!("pass{pass}"),
+                    FrameKind::Pass { passes, .. } => format!("passes+{passes}"),
                 };
                 eprintln!(
                     "prism view: frame gen={generation} {what} samples={}/{} render={:.1} ms",
