@@ -16,6 +16,9 @@ use std::time::{Duration, Instant};
 const REFRESH: Duration = Duration::from_millis(250);
 /// Poll interval of the input while nothing new arrives.
 const IDLE_TICK: Duration = Duration::from_millis(4);
+/// Longest wait for the previous view's first frame before a drag moves
+/// the camera again.
+const DRAG_MAX_WAIT: Duration = Duration::from_millis(100);
 /// One mouse-wheel notch moves this fraction of the way to the target.
 const WHEEL_DOLLY: f32 = 0.1;
 
@@ -106,18 +109,24 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
     let mut next_save = 1u32;
     let mut first_frame_logged = false;
     let mut render_dead = false;
+    let mut have_image = false;
 
     'main: while window.is_open() {
         // Input.
         let now = Instant::now();
         let mut actions: Vec<(Action, Instant)> =
             keys.take().into_iter().filter_map(|(k, at)| Some((key_action(map_key(k)?)?, at))).collect();
+        // A drag moves the camera only once the previous move is on screen
+        // (or after DRAG_MAX_WAIT): restarting at every mouse event would
+        // cancel each preview before it is shown.
         if window.get_mouse_down(MouseButton::Left) {
             if let Some((x, y)) = window.get_mouse_pos(MouseMode::Pass) {
-                if let Some(a) = drag.and_then(|(px, py)| drag_action(x - px, y - py)) {
+                let (px, py) = *drag.get_or_insert((x, y));
+                let shown = state.changed_at().is_none_or(|t| t.elapsed() >= DRAG_MAX_WAIT);
+                if shown && let Some(a) = drag_action(x - px, y - py) {
                     actions.push((a, now));
+                    drag = Some((x, y));
                 }
-                drag = Some((x, y));
             }
         } else {
             drag = None;
@@ -133,6 +142,9 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
             match state.apply_at(a, at) {
                 Outcome::Nothing => {}
                 Outcome::Restart => restart = true,
+                Outcome::Save if !have_image => {
+                    state.set_message(Some("nothing to save yet".into()));
+                }
                 Outcome::Save => {
                     let (path, n) = crate::next_snapshot_path(&save_dir, &name, next_save);
                     next_save = n + 1;
@@ -193,6 +205,7 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                 state.pass_shown(frame.generation, samples_done, passes, frame.seconds);
             }
             buffer = frame.pixels;
+            have_image = true;
             shown = Some((frame.generation, frame.kind, frame.seconds));
         }
 
