@@ -2,11 +2,14 @@
 //! progressively and reacts at once to the keys.
 //!
 //! A quick coarse preview comes first (one sample per pixel on a grid 4–16
-//! times coarser, upscaled), then full-size refinement passes accumulate
-//! toward the scene's samples per pixel. Rendering runs on worker threads;
-//! the window thread only polls input and shows finished frames. Any change
-//! (fog toggle, camera move, reload) cancels the passes in flight and
-//! starts over.
+//! times coarser, upscaled; coarser when it is slow), then full-size
+//! refinement passes of one sample each accumulate toward the scene's
+//! samples per pixel: the finished image is `prism render`'s, bit for bit.
+//! Rendering runs on worker threads; the window thread only polls input and
+//! shows finished frames. Any change (fog toggle, camera move, reload)
+//! cancels the passes in flight through the renderer's cancel flag and
+//! starts over with a new preview. `--verbose` prints each frame and the
+//! time from a key press to the first frame of its new view.
 //!
 //! | key | effect |
 //! |---|---|
@@ -51,7 +54,7 @@ pub enum ViewError {
     #[error("cannot open a window: {0}")]
     Window(String),
     /// The scene file could not be loaded.
-    #[error("cannot load scene {}: {message}", path.display())]
+    #[error("{}", scene_message(path, message))]
     Scene {
         /// The scene file.
         path: PathBuf,
@@ -72,6 +75,16 @@ pub enum ViewError {
         /// Why.
         reason: String,
     },
+}
+
+/// The loader's message, prefixed with the file unless it names it already.
+fn scene_message(path: &Path, message: &str) -> String {
+    let shown = path.display().to_string();
+    if message.contains(&shown) {
+        message.to_string()
+    } else {
+        format!("cannot load scene {shown}: {message}")
+    }
 }
 
 /// How to view a scene. Every `Option` left `None` takes the scene file's
@@ -242,6 +255,14 @@ mod tests {
         assert_eq!(window_size(800, 600, None, Some(300)), (400, 300));
         assert_eq!(window_size(800, 600, Some(10), Some(20)), (10, 20));
         assert_eq!(window_size(800, 600, Some(1), None), (1, 1));
+    }
+
+    #[test]
+    fn scene_errors_name_the_file_once() {
+        let e = ViewError::Scene { path: "a.toml".into(), message: "a.toml:3:1: bad".into() };
+        assert_eq!(e.to_string(), "a.toml:3:1: bad");
+        let e = ViewError::Scene { path: "a.toml".into(), message: "bad".into() };
+        assert_eq!(e.to_string(), "cannot load scene a.toml: bad");
     }
 
     #[test]
