@@ -9,7 +9,9 @@ set -euo pipefail
 have_libs() {
     # minifb dlopens libX11 and libXcursor.
     command -v ldconfig >/dev/null 2>&1 || return 1
-    ldconfig -p | grep -q 'libX11\.so' && ldconfig -p | grep -q 'libXcursor\.so'
+    local libs
+    libs=$(ldconfig -p 2>/dev/null) || return 1
+    grep -q 'libX11\.so' <<<"$libs" && grep -q 'libXcursor\.so' <<<"$libs"
 }
 
 if command -v Xvfb >/dev/null 2>&1 && command -v xdotool >/dev/null 2>&1 \
