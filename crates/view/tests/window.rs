@@ -10,7 +10,7 @@
 //! (`.ci/install-view-deps.sh` installs them). Also, always: without a
 //! display the viewer fails with a clear message.
 
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{self, Receiver};
@@ -186,13 +186,9 @@ struct Session {
 }
 
 impl Session {
-    /// `None` (with the reason printed) where Xvfb or xdotool is missing.
-    /// Waits for the first view to converge and focuses the window.
-    fn start(test: &str, scene: &Path, save_dir: &Path) -> Option<Self> {
-        let (Some(_), Some(_)) = (on_path("Xvfb"), on_path("xdotool")) else {
-            println!("SKIPPED {test}: Xvfb and xdotool are not on PATH (run .ci/install-view-deps.sh)");
-            return None;
-        };
+    /// Starts Xvfb and the viewer, waits for the first view to converge
+    /// and focuses the window.
+    fn start(test: &str, scene: &Path, save_dir: &Path) -> Self {
         let deadline = Instant::now() + BUDGET;
         let mut guard = Guard::default();
         // Xvfb picks a free display and writes its number to stdout.
@@ -250,7 +246,7 @@ impl Session {
             std::thread::sleep(Duration::from_millis(50));
         };
         xdotool(&display, &["windowfocus", "--sync", &wid]).expect("xdotool windowfocus");
-        Some(Self { guard, display, wid, out, err, deadline })
+        Self { guard, display, wid, out, err, deadline }
     }
 
     fn key(&self, key: &str) {
@@ -291,8 +287,25 @@ impl Session {
     }
 }
 
+/// True (with the reason printed) where Xvfb or xdotool is missing.
+fn skip(test: &str) -> bool {
+    let missing = on_path("Xvfb").is_none() || on_path("xdotool").is_none();
+    if missing {
+        // Straight to stderr, past the test harness's capture, so that the
+        // reason shows in a plain `cargo test`.
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED {test}: Xvfb and xdotool are not on PATH (run .ci/install-view-deps.sh)"
+        );
+    }
+    missing
+}
+
 #[test]
 fn fog_keys_in_a_real_window() {
+    if skip("fog_keys_in_a_real_window") {
+        return;
+    }
     let dir = temp_dir("fog");
     let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/seed.toml");
     let scene = if seed.is_file() {
@@ -303,7 +316,7 @@ fn fog_keys_in_a_real_window() {
         std::fs::write(&p, TEST_SCENE).unwrap();
         p
     };
-    let Some(session) = Session::start("fog_keys_in_a_real_window", &scene, &dir) else { return };
+    let session = Session::start("fog_keys_in_a_real_window", &scene, &dir);
 
     // c, wait for that view to converge, screenshot, save; then f.
     session.key("c");
@@ -361,13 +374,13 @@ fn fog_keys_in_a_real_window() {
 
 #[test]
 fn reload_in_a_real_window_keeps_the_last_good_scene() {
+    if skip("reload_in_a_real_window_keeps_the_last_good_scene") {
+        return;
+    }
     let dir = temp_dir("reload");
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, TEST_SCENE).unwrap();
-    let Some(session) = Session::start("reload_in_a_real_window_keeps_the_last_good_scene", &scene, &dir)
-    else {
-        return;
-    };
+    let session = Session::start("reload_in_a_real_window_keeps_the_last_good_scene", &scene, &dir);
     let before = rgb(&session.save());
 
     // A good edit: the red sphere turns green.
