@@ -1,7 +1,52 @@
-//! `cargo xtask render [SCENE]`: build the release `prism` and render a scene.
+//! `cargo xtask render [SCENE] [prism render flags…]`: build the release
+//! `prism`, render a scene (default `scenes/seed.toml`) and print the path
+//! of the image.
 
-use anyhow::{Result, bail};
+use crate::{cargo, run_checked};
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
-pub fn run(_args: &[String]) -> Result<()> {
-    bail!("`cargo xtask render` is being written")
+pub fn run(args: &[String]) -> Result<()> {
+    let (scene, rest) = match args.split_first() {
+        Some((first, rest)) if !first.starts_with('-') => (first.as_str(), rest),
+        _ => ("scenes/seed.toml", args),
+    };
+    run_checked(cargo().args(["build", "--release", "-p", "prism-cli"]))?;
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| PathBuf::from("target"), PathBuf::from);
+    let bin = target.join("release").join(format!("prism{}", std::env::consts::EXE_SUFFIX));
+
+    let output = output_arg(rest).map(PathBuf::from);
+    let mut cmd = Command::new(&bin);
+    cmd.arg("render").arg(scene).args(rest);
+    let output = match output {
+        Some(o) => o,
+        None => {
+            let stem = Path::new(scene).file_stem().context("the scene path has no file name")?;
+            let o = Path::new("out").join(stem).with_extension("png");
+            cmd.arg("-o").arg(&o);
+            o
+        }
+    };
+    run_checked(&mut cmd)?;
+    let shown = std::fs::canonicalize(&output).unwrap_or(output);
+    println!("image: {}", shown.display());
+    Ok(())
+}
+
+/// The value of `-o`/`--output` among prism's flags, if given.
+fn output_arg(args: &[String]) -> Option<String> {
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        if a == "-o" || a == "--output" {
+            return it.next().cloned();
+        }
+        if let Some(v) = a.strip_prefix("--output=") {
+            return Some(v.to_string());
+        }
+        if let Some(v) = a.strip_prefix("-o").filter(|v| !v.is_empty() && !a.starts_with("--")) {
+            return Some(v.trim_start_matches('=').to_string());
+        }
+    }
+    None
 }

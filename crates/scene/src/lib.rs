@@ -62,7 +62,8 @@ pub struct Limits {
     pub max_side: u32,
     /// Largest number of pixels (default 100 000 000).
     pub max_pixels: u64,
-    /// Largest recursion depth (default 64).
+    /// Largest recursion depth (default [`prism_shade::MAX_DEPTH_LIMIT`], 64;
+    /// the renderer never goes deeper).
     pub max_depth: u32,
     /// Largest number of samples per pixel (default 65536).
     pub max_spp: u32,
@@ -70,7 +71,12 @@ pub struct Limits {
 
 impl Default for Limits {
     fn default() -> Self {
-        Self { max_side: 16_384, max_pixels: 100_000_000, max_depth: 64, max_spp: 65_536 }
+        Self {
+            max_side: 16_384,
+            max_pixels: 100_000_000,
+            max_depth: prism_shade::MAX_DEPTH_LIMIT,
+            max_spp: 65_536,
+        }
     }
 }
 

@@ -1,0 +1,208 @@
+//! `prism`: render scene files to PNG or EXR, and describe them.
+//!
+//! ```text
+//! prism render SCENE [-o OUT] [--width W] [--height H] [--spp N] [--fog | --no-fog]
+//!                    [--threads N] [--max-depth N] [--quiet]
+//! prism info SCENE
+//! ```
+//!
+//! Errors are printed as `error: FILE:LINE:COLUMN: what` with a non-zero
+//! exit status; no output file is created or changed then.
+
+#![forbid(unsafe_code)]
+
+mod info;
+mod write;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use prism_scene::{Limits, LoadOptions, Overrides, load_scene_with};
+use prism_shade::{RenderHooks, render};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// prism: a fast, exact, Whitted-style CPU ray tracer.
+#[derive(Parser)]
+#[command(name = "prism", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file to a PNG (8-bit sRGB) or EXR (linear float) image.
+    Render(RenderArgs),
+    /// Describe a scene: objects, triangles, materials, lights, bounds.
+    Info(InfoArgs),
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// The scene file (TOML, see docs/scene-format.md).
+    scene: PathBuf,
+    /// Output image, .png or .exr [default: out/<scene name>.png].
+    #[arg(short, long, value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Image width in pixels (alone: the height keeps the scene's aspect ratio).
+    #[arg(long, value_name = "W")]
+    width: Option<u32>,
+    /// Image height in pixels (alone: the width keeps the scene's aspect ratio).
+    #[arg(long, value_name = "H")]
+    height: Option<u32>,
+    /// Samples per pixel.
+    #[arg(long, value_name = "N")]
+    spp: Option<u32>,
+    /// Turn fog on (adds a default linear fog if the scene has none).
+    #[arg(long, conflicts_with = "no_fog")]
+    fog: bool,
+    /// Turn the scene's fog off.
+    #[arg(long)]
+    no_fog: bool,
+    /// Worker threads [default: every core].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    threads: Option<u32>,
+    /// Maximum recursion depth of reflection and refraction rays.
+    #[arg(long, value_name = "N")]
+    max_depth: Option<u32>,
+    /// No progress bar and no closing statistics line.
+    #[arg(short, long)]
+    quiet: bool,
+    #[command(flatten)]
+    limits: LimitArgs,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// The scene file.
+    scene: PathBuf,
+    #[command(flatten)]
+    limits: LimitArgs,
+}
+
+#[derive(Args)]
+struct LimitArgs {
+    /// Largest image width or height accepted.
+    #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_side)]
+    max_side: u32,
+    /// Largest number of pixels accepted.
+    #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_pixels)]
+    max_pixels: u64,
+}
+
+impl LimitArgs {
+    fn limits(&self) -> Limits {
+        Limits { max_side: self.max_side, max_pixels: self.max_pixels, ..Limits::default() }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render_command(&args),
+        Command::Info(args) => info_command(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn info_command(args: &InfoArgs) -> Result<()> {
+    let opts = LoadOptions { limits: args.limits.limits(), overrides: Overrides::default() };
+    let loaded = load_scene_with(&args.scene, &opts)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
+    print!("{}", info::describe(&loaded, &args.scene));
+    Ok(())
+}
+
+fn render_command(args: &RenderArgs) -> Result<()> {
+    let output = match &args.output {
+        Some(o) => o.clone(),
+        None => default_output(&args.scene)?,
+    };
+    let format = write::Format::from_path(&output)?;
+
+    let fog = match (args.fog, args.no_fog) {
+        (true, _) => Some(true),
+        (_, true) => Some(false),
+        _ => None,
+    };
+    let opts = LoadOptions {
+        limits: args.limits.limits(),
+        overrides: Overrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            max_depth: args.max_depth,
+            fog,
+        },
+    };
+    let loaded = load_scene_with(&args.scene, &opts)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
+    write::check_not_an_input(&output, &loaded.inputs)?;
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+    }
+
+    let mut settings = loaded.settings.clone();
+    settings.threads = args.threads.map(|t| t as usize);
+    let (w, h) = (loaded.info.width, loaded.info.height);
+
+    let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
+        let bar = ProgressBar::new(u64::from(h));
+        if let Ok(style) = ProgressStyle::with_template(
+            "{spinner} rendering [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar
+    });
+    let progress = |done: u32, _total: u32| {
+        if let Some(b) = &bar {
+            b.set_position(u64::from(done));
+        }
+    };
+    let hooks = RenderHooks { progress: Some(&progress), cancel: None };
+    let start = Instant::now();
+    let (image, stats) = render(&loaded.scene, &settings, hooks);
+    let wall = start.elapsed().as_secs_f64();
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if stats.cancelled {
+        bail!("the render was cancelled; nothing was written");
+    }
+    write::write_image(&image, &output, format)?;
+    if !args.quiet {
+        let mrays = stats.rays as f64 / 1e6;
+        println!(
+            "{}: {w}×{h}, {} spp, {wall:.2} s, {mrays:.2} M rays, {:.2} M rays/s",
+            output.display(),
+            settings.spp,
+            if wall > 0.0 { mrays / wall } else { 0.0 }
+        );
+    }
+    Ok(())
+}
+
+/// `out/<scene stem>.png`, relative to the working directory.
+fn default_output(scene: &Path) -> Result<PathBuf> {
+    let stem = scene.file_stem().filter(|s| !s.is_empty()).with_context(|| {
+        format!("cannot name an output image after {}; give one with -o", scene.display())
+    })?;
+    let mut name = stem.to_os_string();
+    name.push(".png");
+    Ok(Path::new("out").join(name))
+}
