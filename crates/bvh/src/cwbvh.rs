@@ -27,12 +27,16 @@ use prism_geometry::glam::{Vec3, Vec3A, Vec4};
 /// heap stack.
 pub(crate) const INLINE_STACK: usize = 32;
 
+/// Stack entries for shallow trees (most meshes): a stack this small is
+/// zeroed with a few vector stores instead of a call to `memset`, which
+/// showed up at several per cent of a query's time.
+const SMALL_STACK: usize = 16;
+
 /// A ray prepared for box tests.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxRay {
     pub origin: Vec3A,
     pub inv: Vec3A,
-    pub neg: [bool; 3],
     pub oct_inv4: u32,
     pub t_min: f32,
     pub t_max: f32,
@@ -56,7 +60,6 @@ impl BoxRay {
         Self {
             origin: Vec3A::from(ray.origin),
             inv: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
-            neg,
             oct_inv4,
             t_min: ray.t_min,
             t_max: ray.t_max,
@@ -68,6 +71,26 @@ impl BoxRay {
 fn q4(v: &[u8; 8], i: usize) -> Vec4 {
     let b = i * 4;
     Vec4::new(v[b] as f32, v[b + 1] as f32, v[b + 2] as f32, v[b + 3] as f32)
+}
+
+/// Near and far distances to four children's slabs along one axis, from
+/// their quantised planes `lo` and `hi`, the node's scale `e`, the offset
+/// `o` (node origin minus ray origin) and the ray's reciprocal `inv`.
+///
+/// Ordered by `min`/`max` rather than by the sign of the direction, which
+/// for incoherent rays is an unpredictable branch. The values are the
+/// same as choosing by sign: both distances are computed as before, and
+/// for finite ones `min`/`max` pick what the sign would. With `inv = +inf`
+/// (zero direction) a plane through the origin gives `NaN`, and the
+/// operand order keeps it exactly where the sign choice put it: SSE
+/// `minps`/`maxps` return the second operand when either is `NaN`, so
+/// `NaN` at `lo` (then `hi` gives `+inf`) stays the near value and `NaN`
+/// at `hi` (then `lo` gives `-inf`) stays the far value, which the callers
+/// then ignore.
+#[inline(always)]
+fn slab(lo: Vec4, hi: Vec4, e: Vec4, o: Vec4, inv: Vec4) -> (Vec4, Vec4) {
+    let (t_lo, t_hi) = ((lo * e + o) * inv, (hi * e + o) * inv);
+    (t_hi.min(t_lo), t_lo.max(t_hi))
 }
 
 /// Which children of `node` the ray's interval meets: obvhs's hit mask
@@ -88,15 +111,9 @@ pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay) -> u32 {
     let t_hi = Vec4::splat(ray.t_max);
     let mut hit_mask = 0u32;
     for i in 0..2 {
-        let (lo, hi) = (q4(&node.child_min_x, i), q4(&node.child_max_x, i));
-        let (near, far) = if ray.neg[0] { (hi, lo) } else { (lo, hi) };
-        let (nx, fx) = ((near * ex + ox) * ix, (far * ex + ox) * ix);
-        let (lo, hi) = (q4(&node.child_min_y, i), q4(&node.child_max_y, i));
-        let (near, far) = if ray.neg[1] { (hi, lo) } else { (lo, hi) };
-        let (ny, fy) = ((near * ey + oy) * iy, (far * ey + oy) * iy);
-        let (lo, hi) = (q4(&node.child_min_z, i), q4(&node.child_max_z, i));
-        let (near, far) = if ray.neg[2] { (hi, lo) } else { (lo, hi) };
-        let (nz, fz) = ((near * ez + oz) * iz, (far * ez + oz) * iz);
+        let (nx, fx) = slab(q4(&node.child_min_x, i), q4(&node.child_max_x, i), ex, ox, ix);
+        let (ny, fy) = slab(q4(&node.child_min_y, i), q4(&node.child_max_y, i), ey, oy, iy);
+        let (nz, fz) = slab(q4(&node.child_min_z, i), q4(&node.child_max_z, i), ez, oz, iz);
         let tmin = nx.max(ny.max(nz.max(t_lo)));
         let tmax = fx.min(fy.min(fz.min(t_hi)));
         let mut mask = tmin.cmple(tmax).bitmask();
@@ -247,7 +264,9 @@ pub(crate) fn walk_any(
     ray: &mut BoxRay,
     prim: impl FnMut(u32, &mut BoxRay) -> bool,
 ) {
-    if depth <= INLINE_STACK {
+    if depth <= SMALL_STACK {
+        walk(bvh, &mut GroupStack::<SMALL_STACK>::new(), ray, prim);
+    } else if depth <= INLINE_STACK {
         walk(bvh, &mut GroupStack::<INLINE_STACK>::new(), ray, prim);
     } else {
         walk(bvh, &mut Vec::with_capacity(depth), ray, prim);
