@@ -125,11 +125,10 @@ fn info_command(args: &InfoArgs) -> Result<()> {
 }
 
 fn render_command(args: &RenderArgs) -> Result<()> {
-    let output = match &args.output {
-        Some(o) => o.clone(),
-        None => default_output(&args.scene)?,
-    };
-    let format = write::Format::from_path(&output)?;
+    // An explicit output name is checked before the (possibly long) load.
+    if let Some(o) = &args.output {
+        write::Format::from_path(o)?;
+    }
 
     let fog = match (args.fog, args.no_fog) {
         (true, _) => Some(true),
@@ -150,6 +149,11 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
+    let output = match &args.output {
+        Some(o) => o.clone(),
+        None => default_output(&args.scene)?,
+    };
+    let format = write::Format::from_path(&output)?;
     write::check_not_an_input(&output, &loaded.inputs)?;
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)

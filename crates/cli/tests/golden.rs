@@ -1,0 +1,174 @@
+//! Golden images: every scene in `scenes/` rendered small (160×90, 2
+//! samples per pixel) and compared with its committed reference in
+//! `tests/golden/<scene>.png`.
+//!
+//! The metric, over 8-bit sRGB channels: the mean absolute error must be
+//! at most [`MAX_MEAN`] and the 99.5th percentile of the per-pixel error
+//! (the largest channel difference) at most [`MAX_P995`], so that a few
+//! pixels may move (an edge, a floating-point difference) but nothing
+//! visible may change. On failure the render and an amplified difference
+//! image are written under `target/tmp/golden/`.
+//!
+//! After an intended change: `cargo xtask bless` (which sets
+//! `PRISM_BLESS=1`) rewrites the references; review them before committing.
+
+use prism_scene::{LoadOptions, Overrides, load_scene_with};
+use prism_shade::{RenderHooks, render};
+use std::path::{Path, PathBuf};
+
+const WIDTH: u32 = 160;
+const HEIGHT: u32 = 90;
+const SPP: u32 = 2;
+/// Mean absolute error, in 8-bit levels.
+const MAX_MEAN: f64 = 1.5;
+/// 99.5th percentile of the per-pixel maximum channel error, in levels.
+const MAX_P995: u8 = 32;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn golden_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden")
+}
+
+fn scenes() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join("scenes"))
+        .expect("scenes/ exists")
+        .map(|e| e.expect("readable entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn render_small(scene: &Path) -> (u32, u32, Vec<u8>) {
+    let opts = LoadOptions {
+        overrides: Overrides {
+            width: Some(WIDTH),
+            height: Some(HEIGHT),
+            spp: Some(SPP),
+            ..Overrides::default()
+        },
+        ..LoadOptions::default()
+    };
+    let loaded = load_scene_with(scene, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let mut settings = loaded.settings.clone();
+    settings.threads = Some(2);
+    let (image, _) = render(&loaded.scene, &settings, RenderHooks::default());
+    (image.width, image.height, image.to_srgb8())
+}
+
+struct Diff {
+    mean: f64,
+    p995: u8,
+    max: u8,
+    per_pixel: Vec<u8>,
+}
+
+fn compare(a: &[u8], b: &[u8]) -> Diff {
+    let per_pixel: Vec<u8> = a
+        .chunks_exact(3)
+        .zip(b.chunks_exact(3))
+        .map(|(p, q)| (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0))
+        .collect();
+    let sum: u64 = a.iter().zip(b).map(|(x, y)| u64::from(x.abs_diff(*y))).sum();
+    let mean = sum as f64 / a.len().max(1) as f64;
+    let mut sorted = per_pixel.clone();
+    sorted.sort_unstable();
+    let idx =
+        ((sorted.len() as f64 * 0.995).ceil() as usize).saturating_sub(1).min(sorted.len().saturating_sub(1));
+    let p995 = sorted.get(idx).copied().unwrap_or(0);
+    let max = sorted.last().copied().unwrap_or(0);
+    Diff { mean, p995, max, per_pixel }
+}
+
+#[test]
+fn every_scene_matches_its_golden_image() {
+    let bless = std::env::var_os("PRISM_BLESS").is_some();
+    let only: Option<Vec<String>> =
+        std::env::var("PRISM_BLESS_ONLY").ok().map(|s| s.split(',').map(str::to_string).collect());
+    let scenes = scenes();
+    assert!(scenes.len() >= 10, "expected the seed, mesh and feature scenes, found {}", scenes.len());
+    let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("golden");
+    let mut failures = Vec::new();
+    for scene in &scenes {
+        let stem = scene.file_stem().and_then(|s| s.to_str()).expect("utf-8 scene names").to_string();
+        if only.as_ref().is_some_and(|o| !o.contains(&stem)) {
+            continue;
+        }
+        let (w, h, actual) = render_small(scene);
+        let reference = golden_dir().join(format!("{stem}.png"));
+        if bless {
+            std::fs::create_dir_all(golden_dir()).expect("create tests/golden");
+            image::RgbImage::from_raw(w, h, actual).expect("size").save(&reference).expect("write golden");
+            eprintln!("blessed {}", reference.display());
+            continue;
+        }
+        let expected = match image::open(&reference) {
+            Ok(img) => img.to_rgb8(),
+            Err(e) => {
+                failures.push(format!(
+                    "{stem}: no usable golden image at {} ({e}); run `cargo xtask bless`",
+                    reference.display()
+                ));
+                continue;
+            }
+        };
+        if (expected.width(), expected.height()) != (w, h) {
+            failures.push(format!(
+                "{stem}: golden image is {}×{}, render is {w}×{h}",
+                expected.width(),
+                expected.height()
+            ));
+            continue;
+        }
+        let d = compare(&actual, expected.as_raw());
+        if d.mean > MAX_MEAN || d.p995 > MAX_P995 {
+            std::fs::create_dir_all(&out_dir).expect("create the diff directory");
+            let actual_path = out_dir.join(format!("{stem}.actual.png"));
+            let diff_path = out_dir.join(format!("{stem}.diff.png"));
+            image::RgbImage::from_raw(w, h, actual).expect("size").save(&actual_path).expect("write");
+            let amplified: Vec<u8> = d.per_pixel.iter().flat_map(|&e| [e.saturating_mul(4), 0, 0]).collect();
+            image::RgbImage::from_raw(w, h, amplified).expect("size").save(&diff_path).expect("write");
+            failures.push(format!(
+                "{stem}: differs from {}: mean abs error {:.3} (limit {MAX_MEAN}), 99.5th percentile {} (limit {MAX_P995}), max {}; \
+                 render at {}, difference (×4) at {}. If the change is intended: cargo xtask bless",
+                reference.display(),
+                d.mean,
+                d.p995,
+                d.max,
+                actual_path.display(),
+                diff_path.display()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "golden image mismatches:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn every_golden_image_has_a_scene() {
+    let names: Vec<String> =
+        scenes().iter().filter_map(|p| p.file_stem().and_then(|s| s.to_str()).map(str::to_string)).collect();
+    let Ok(entries) = std::fs::read_dir(golden_dir()) else { return };
+    for e in entries {
+        let p = e.expect("entry").path();
+        let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
+        assert!(names.contains(&stem), "{} has no scene in scenes/; delete it", p.display());
+    }
+}
+
+#[test]
+fn the_metric_tolerates_a_few_pixels_but_not_a_change() {
+    let a = vec![100u8; 3 * 1000];
+    let mut b = a.clone();
+    // Four pixels (0.4 %) changed a lot: within the percentile bound.
+    for px in 0..4 {
+        b[3 * px] = 250;
+    }
+    let d = compare(&a, &b);
+    assert!(d.p995 <= MAX_P995 && d.mean <= MAX_MEAN && d.max == 150);
+    // A visible change everywhere fails.
+    let c: Vec<u8> = a.iter().map(|x| x + 6).collect();
+    assert!(compare(&a, &c).mean > MAX_MEAN);
+}
