@@ -67,64 +67,69 @@ impl BoxRay {
     }
 }
 
+/// `_mm_min_ps(a, b)` on one lane: `b` when either is `NaN`.
 #[inline(always)]
-fn q4(v: &[u8; 8], i: usize) -> Vec4 {
-    let b = i * 4;
-    Vec4::new(v[b] as f32, v[b + 1] as f32, v[b + 2] as f32, v[b + 3] as f32)
+fn min_ps(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
 }
 
-/// Near and far distances to four children's slabs along one axis, from
-/// their quantised planes `lo` and `hi`, the node's scale `e`, the offset
-/// `o` (node origin minus ray origin) and the ray's reciprocal `inv`.
+/// `_mm_max_ps(a, b)` on one lane: `b` when either is `NaN`.
+#[inline(always)]
+fn max_ps(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// Near and far distances to one child's slab along one axis, from its
+/// quantised planes `lo` and `hi`, the node's scale `e`, the offset `o`
+/// (node origin minus ray origin) and the ray's reciprocal `inv`.
 ///
 /// Ordered by `min`/`max` rather than by the sign of the direction, which
 /// for incoherent rays is an unpredictable branch. The values are the
 /// same as choosing by sign: both distances are computed as before, and
 /// for finite ones `min`/`max` pick what the sign would. With `inv = +inf`
 /// (zero direction) a plane through the origin gives `NaN`, and the
-/// operand order keeps it exactly where the sign choice put it: SSE
-/// `minps`/`maxps` return the second operand when either is `NaN`, so
-/// `NaN` at `lo` (then `hi` gives `+inf`) stays the near value and `NaN`
-/// at `hi` (then `lo` gives `-inf`) stays the far value, which the callers
-/// then ignore.
+/// operand order keeps it exactly where the sign choice put it: [`min_ps`]
+/// and [`max_ps`] return the second operand when either is `NaN`, so `NaN`
+/// at `lo` (then `hi` gives `+inf`) stays the near value and `NaN` at `hi`
+/// (then `lo` gives `-inf`) stays the far value, which the caller then
+/// ignores.
 #[inline(always)]
-fn slab(lo: Vec4, hi: Vec4, e: Vec4, o: Vec4, inv: Vec4) -> (Vec4, Vec4) {
-    let (t_lo, t_hi) = ((lo * e + o) * inv, (hi * e + o) * inv);
-    (t_hi.min(t_lo), t_lo.max(t_hi))
+fn slab(lo: u8, hi: u8, e: f32, o: f32, inv: f32) -> (f32, f32) {
+    let (t_lo, t_hi) = ((f32::from(lo) * e + o) * inv, (f32::from(hi) * e + o) * inv);
+    (min_ps(t_hi, t_lo), max_ps(t_lo, t_hi))
 }
 
 /// Which children of `node` the ray's interval meets: obvhs's hit mask
 /// (leaf primitive bits in the low 24 bits, inner-node bits above).
 ///
-/// Every `max`/`min` keeps a possible `NaN` in its first operand: both
-/// SSE (`maxps`) and scalar `f32::max` then return the second, so a `NaN`
-/// slab (ray in the face plane) is ignored.
+/// Written per child over fixed arrays of eight, which the compiler turns
+/// into SIMD (two SSE halves, or one AVX register where the target has
+/// it). Every `max_ps`/`min_ps` keeps a possible `NaN` in its first
+/// operand, so a `NaN` slab (ray in the face plane) is ignored.
 #[inline(always)]
 pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay) -> u32 {
     let ext = node.compute_extent();
     let po = Vec3A::from(node.p) - ray.origin;
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(ray.oct_inv4);
-    let (ex, ey, ez) = (Vec4::splat(ext.x), Vec4::splat(ext.y), Vec4::splat(ext.z));
-    let (ox, oy, oz) = (Vec4::splat(po.x), Vec4::splat(po.y), Vec4::splat(po.z));
-    let (ix, iy, iz) = (Vec4::splat(ray.inv.x), Vec4::splat(ray.inv.y), Vec4::splat(ray.inv.z));
-    let t_lo = Vec4::splat(ray.t_min);
-    let t_hi = Vec4::splat(ray.t_max);
+    let mut near = [0.0f32; 8];
+    let mut far = [0.0f32; 8];
+    for k in 0..8 {
+        let (nx, fx) = slab(node.child_min_x[k], node.child_max_x[k], ext.x, po.x, ray.inv.x);
+        let (ny, fy) = slab(node.child_min_y[k], node.child_max_y[k], ext.y, po.y, ray.inv.y);
+        let (nz, fz) = slab(node.child_min_z[k], node.child_max_z[k], ext.z, po.z, ray.inv.z);
+        near[k] = max_ps(nx, max_ps(ny, max_ps(nz, ray.t_min)));
+        far[k] = min_ps(fx, min_ps(fy, min_ps(fz, ray.t_max)));
+    }
+    let half = |v: &[f32; 8], i: usize| Vec4::new(v[i], v[i + 1], v[i + 2], v[i + 3]);
+    let mut mask =
+        half(&near, 0).cmple(half(&far, 0)).bitmask() | (half(&near, 4).cmple(half(&far, 4)).bitmask() << 4);
     let mut hit_mask = 0u32;
-    for i in 0..2 {
-        let (nx, fx) = slab(q4(&node.child_min_x, i), q4(&node.child_max_x, i), ex, ox, ix);
-        let (ny, fy) = slab(q4(&node.child_min_y, i), q4(&node.child_max_y, i), ey, oy, iy);
-        let (nz, fz) = slab(q4(&node.child_min_z, i), q4(&node.child_max_z, i), ez, oz, iz);
-        let tmin = nx.max(ny.max(nz.max(t_lo)));
-        let tmax = fx.min(fy.min(fz.min(t_hi)));
-        let mut mask = tmin.cmple(tmax).bitmask();
-        while mask != 0 {
-            let j = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            let offset = i * 4 + j;
-            let child_bits = ((child_bits8 >> (offset * 8)) as u32) & 0xff;
-            let bit_index = ((bit_index8 >> (offset * 8)) as u32) & 0xff;
-            hit_mask |= child_bits << bit_index;
-        }
+    while mask != 0 {
+        let k = mask.trailing_zeros();
+        mask &= mask - 1;
+        let child_bits = ((child_bits8 >> (k * 8)) as u32) & 0xff;
+        let bit_index = ((bit_index8 >> (k * 8)) as u32) & 0xff;
+        hit_mask |= child_bits << bit_index;
     }
     hit_mask
 }
@@ -277,4 +282,44 @@ pub(crate) fn walk_any(
 #[inline]
 pub(crate) fn to_obvhs(min: Vec3, max: Vec3) -> obvhs::aabb::Aabb {
     obvhs::aabb::Aabb::new(Vec3A::from(min), Vec3A::from(max))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The old choice by direction sign, which `slab` replaces.
+    fn slab_by_sign(lo: u8, hi: u8, e: f32, o: f32, inv: f32, neg: bool) -> (f32, f32) {
+        let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
+        ((f32::from(near) * e + o) * inv, (f32::from(far) * e + o) * inv)
+    }
+
+    /// `slab` gives bit-for-bit the values the sign choice gave, `NaN`s
+    /// (planes through the origin of a ray with a zero component) included.
+    #[test]
+    fn slab_matches_choice_by_sign() {
+        let dirs = [1.0f32, -1.0, 0.0, -0.0, 3e-7, -3e-7, 1e30, -1e30, 0.37, -2.5];
+        let qs = [0u8, 1, 7, 128, 254, 255];
+        let e = 0.125f32;
+        let mut checked = 0;
+        for &d in &dirs {
+            let inv = if d == 0.0 { f32::INFINITY } else { 1.0 / d };
+            for &lo in &qs {
+                for &hi in qs.iter().filter(|&&h| h >= lo) {
+                    // Offsets putting the origin on either plane, between, or outside.
+                    for o in [-f32::from(lo) * e, -f32::from(hi) * e, -0.5 * f32::from(hi) * e, 1.0, -40.0] {
+                        let got = slab(lo, hi, e, o, inv);
+                        let want = slab_by_sign(lo, hi, e, o, inv, d < 0.0);
+                        assert_eq!(
+                            (got.0.to_bits(), got.1.to_bits()),
+                            (want.0.to_bits(), want.1.to_bits()),
+                            "d {d} lo {lo} hi {hi} o {o}: {got:?} vs {want:?}"
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 500);
+    }
 }
