@@ -1122,7 +1122,9 @@ impl<'a> Builder<'a> {
             m.reflectivity =
                 raw.specular.map_or(0.5, |ks| Vec3::from_array(ks).max_element()).clamp(0.0, 1.0);
         }
-        if let Some(d) = raw.dissolve {
+        // `Tr` (transparency) is the complement of `d`; tobj keeps it as an unknown key.
+        let tr = raw.unknown_param.get("Tr").and_then(|t| t.trim().parse::<f32>().ok()).map(|t| 1.0 - t);
+        if let Some(d) = raw.dissolve.or(tr) {
             let d = scalar(d, "d")?.min(1.0);
             if d < 1.0 {
                 if matches!(illum, 4 | 6 | 7 | 9) {

@@ -589,3 +589,23 @@ fn image_textures_load_and_are_shared() {
     assert_eq!(scale.x, 2.0);
     assert_eq!(loaded.inputs.len(), 1);
 }
+
+#[test]
+fn the_documented_example_and_every_shipped_scene_load() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let doc = fs::read_to_string(root.join("docs/scene-format.md")).unwrap();
+    let example = doc.split("## A complete example").nth(1).unwrap();
+    let toml_block = example.split("```toml").nth(1).unwrap().split("```").next().unwrap();
+    let loaded = parse_scene_str(toml_block, &root, Path::new("docs/scene-format.md")).unwrap();
+    assert_eq!(loaded.info.objects, 3);
+    let mut n = 0;
+    for e in fs::read_dir(root.join("scenes")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            let loaded = load_scene(&p).unwrap_or_else(|e| panic!("{e}"));
+            assert!(loaded.warnings.is_empty(), "{}: {:?}", p.display(), loaded.warnings);
+            n += 1;
+        }
+    }
+    assert!(n >= 10, "{n} scenes");
+}
