@@ -44,7 +44,7 @@ enum Command {
 struct RenderArgs {
     /// The scene file (TOML, see docs/scene-format.md).
     scene: PathBuf,
-    /// Output image, .png or .exr [default: out/<scene name>.png].
+    /// Output image, .png or .exr [default: out/NAME.png for a scene NAME.toml].
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
     /// Image width in pixels (alone: the height keeps the scene's aspect ratio).
