@@ -189,17 +189,36 @@ impl Stack for Vec<(u32, u32)> {
     }
 }
 
+/// What a walk calls for each primitive slot it reaches: `visit(slot,
+/// ray)` may shrink `ray.t_max` and returns `false` to stop the walk.
+///
+/// Closures implement it; the hot queries use named types instead, whose
+/// `#[inline(always)]` method is sure to be compiled into its caller (a
+/// closure big enough is left out of line, and then misses the features a
+/// `#[target_feature]` caller is compiled with).
+pub(crate) trait Visit {
+    fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool;
+}
+
+impl<F: FnMut(u32, &mut BoxRay) -> bool> Visit for F {
+    #[inline(always)]
+    fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool {
+        self(slot, ray)
+    }
+}
+
+/// `f` as a [`Visit`] (pins down the closure's signature for inference).
+#[inline(always)]
+pub(crate) fn visitor<F: FnMut(u32, &mut BoxRay) -> bool>(f: F) -> F {
+    f
+}
+
 /// Walks `bvh` front to back (approximately) for `ray`, calling
 /// `prim(slot, ray)` for each primitive slot (an index into
 /// `bvh.primitive_indices`) whose leaf box the ray's interval meets. The
 /// callback may shrink `ray.t_max`; it returns `false` to stop the walk.
 #[inline(always)]
-pub(crate) fn walk<S: Stack>(
-    bvh: &CwBvh,
-    stack: &mut S,
-    ray: &mut BoxRay,
-    mut prim: impl FnMut(u32, &mut BoxRay) -> bool,
-) {
+pub(crate) fn walk<S: Stack>(bvh: &CwBvh, stack: &mut S, ray: &mut BoxRay, mut prim: impl Visit) {
     if bvh.nodes.is_empty() {
         return;
     }
@@ -210,7 +229,7 @@ pub(crate) fn walk<S: Stack>(
         while prims.1 != 0 {
             let local = firstbithigh(prims.1);
             prims.1 &= !(1u32 << local);
-            if !prim(prims.0 + local, ray) {
+            if !prim.visit(prims.0 + local, ray) {
                 return;
             }
         }
@@ -263,12 +282,7 @@ pub(crate) fn depth(bvh: &CwBvh) -> usize {
 
 /// [`walk`] with a stack that fits a tree of depth `depth`.
 #[inline(always)]
-pub(crate) fn walk_any(
-    bvh: &CwBvh,
-    depth: usize,
-    ray: &mut BoxRay,
-    prim: impl FnMut(u32, &mut BoxRay) -> bool,
-) {
+pub(crate) fn walk_any(bvh: &CwBvh, depth: usize, ray: &mut BoxRay, prim: impl Visit) {
     if depth <= SMALL_STACK {
         walk(bvh, &mut GroupStack::<SMALL_STACK>::new(), ray, prim);
     } else if depth <= INLINE_STACK {
