@@ -4,6 +4,7 @@
 //! prism render SCENE [-o OUT] [--width W] [--height H] [--spp N] [--fog | --no-fog]
 //!                    [--threads N] [--max-depth N] [--quiet]
 //! prism info SCENE
+//! prism view SCENE [--width W] [--height H] [--spp N] [--fog | --no-fog] [--threads N]
 //! ```
 //!
 //! Errors are printed as `error: FILE:LINE:COLUMN: what` with a non-zero
@@ -38,6 +39,42 @@ enum Command {
     Render(RenderArgs),
     /// Describe a scene: objects, triangles, materials, lights, bounds.
     Info(InfoArgs),
+    /// Open a window that renders a scene progressively: f/c fog on/off, s save PNG,
+    /// r reload, arrows or drag orbit, w/a/d/x move, Home reset, Esc/q quit.
+    View(ViewArgs),
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Window width in pixels.
+    #[arg(long, value_name = "W")]
+    width: Option<u32>,
+    /// Window height in pixels.
+    #[arg(long, value_name = "H")]
+    height: Option<u32>,
+    /// Samples per pixel to refine toward.
+    #[arg(long, value_name = "N")]
+    spp: Option<u32>,
+    /// Start with fog on.
+    #[arg(long, conflicts_with = "no_fog")]
+    fog: bool,
+    /// Start with fog off.
+    #[arg(long)]
+    no_fog: bool,
+    /// Worker threads [default: every core].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    threads: Option<u32>,
+    /// Maximum recursion depth of reflection and refraction rays.
+    #[arg(long, value_name = "N")]
+    max_depth: Option<u32>,
+    /// Where `s` saves snapshots [default: the current directory].
+    #[arg(long, value_name = "DIR")]
+    save_dir: Option<PathBuf>,
+    /// Print frame timings and the key-to-frame latency to stderr.
+    #[arg(short, long)]
+    verbose: bool,
 }
 
 #[derive(Args)]
@@ -104,6 +141,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_command(&args),
         Command::Info(args) => info_command(&args),
+        Command::View(args) => view_command(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -112,6 +150,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn view_command(args: ViewArgs) -> Result<()> {
+    let fog = match (args.fog, args.no_fog) {
+        (true, _) => Some(true),
+        (_, true) => Some(false),
+        _ => None,
+    };
+    prism_view::run(prism_view::ViewOptions {
+        scene: args.scene,
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        threads: args.threads.map(|t| t as usize),
+        max_depth: args.max_depth,
+        fog,
+        save_dir: args.save_dir,
+        verbose: args.verbose,
+    })?;
+    Ok(())
 }
 
 fn info_command(args: &InfoArgs) -> Result<()> {
