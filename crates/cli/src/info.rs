@@ -89,6 +89,15 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
     } else {
         let _ = writeln!(s, "bounds     {} to {} (planes excluded)", v(i.bounds.min), v(i.bounds.max));
     }
+    if !loaded.aovs.is_empty() {
+        let names: Vec<&str> = loaded.aovs.iter().map(|a| a.name()).collect();
+        let _ = writeln!(
+            s,
+            "aov        {}{}",
+            names.join(", "),
+            if loaded.aov_preview { ", with PNG previews" } else { "" }
+        );
+    }
     let _ = writeln!(
         s,
         "inputs     {} file{}",

@@ -3,9 +3,15 @@
 //! ```text
 //! prism render SCENE [-o OUT] [--width W] [--height H] [--spp N] [--fog | --no-fog]
 //!                    [--threads N] [--max-depth N] [--quiet]
+//!                    [--aov LIST] [--aov-preview]
+//!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
 //! prism info SCENE
 //! prism view SCENE [--width W] [--height H] [--spp N] [--fog | --no-fog] [--threads N]
 //! ```
+//!
+//! A SCENE is a TOML scene file or an OBJ mesh (`.obj`), which becomes a
+//! scene of its own (`prism_scene::load_obj_scene`: a camera framing it,
+//! one light, its MTL materials).
 //!
 //! Errors are printed as `error: FILE:LINE:COLUMN: what` with a non-zero
 //! exit status; no output file is created or changed then.
@@ -15,11 +21,12 @@
 mod info;
 mod write;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use prism_scene::{Limits, LoadOptions, Overrides, load_scene_with};
-use prism_shade::{RenderHooks, render};
+use prism_geometry::glam::Vec3;
+use prism_scene::{Limits, LoadOptions, Overrides, load_path};
+use prism_shade::{Aov, RenderHooks, render, render_with_aovs};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -79,11 +86,20 @@ struct ViewArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// The scene file (TOML, see docs/scene-format.md).
+    /// The scene file (TOML, see docs/scene-format.md), or an OBJ mesh to look at.
     scene: PathBuf,
     /// Output image, .png or .exr [default: out/NAME.png for a scene NAME.toml].
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
+    /// AOV passes to write next to the image as OUT-stem.PASS.exr, comma-separated:
+    /// depth, normal, geo_normal, albedo, object_id, or all (replaces the scene's `aov`).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
+    /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
+    #[arg(long)]
+    aov_preview: bool,
+    #[command(flatten)]
+    camera: CameraArgs,
     /// Image width in pixels (alone: the height keeps the scene's aspect ratio).
     #[arg(long, value_name = "W")]
     width: Option<u32>,
@@ -110,6 +126,33 @@ struct RenderArgs {
     quiet: bool,
     #[command(flatten)]
     limits: LimitArgs,
+}
+
+/// Camera overrides (vertical field of view; row 0 at the top).
+#[derive(Args)]
+struct CameraArgs {
+    /// Camera position, replacing the scene's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    camera_pos: Option<Vec3>,
+    /// The point at the centre of the image, replacing the scene's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    look_at: Option<Vec3>,
+    /// The camera's up direction, replacing the scene's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    up: Option<Vec3>,
+    /// Vertical field of view in degrees, strictly between 0 and 180.
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true)]
+    fov: Option<f32>,
+}
+
+/// `X,Y,Z`: three comma-separated numbers (checked to be finite by the loader).
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [x, y, z] = parts.as_slice() else {
+        return Err(format!("expected three comma-separated numbers X,Y,Z, got {} values", parts.len()));
+    };
+    let num = |t: &str| t.parse::<f32>().map_err(|_| format!("`{t}` is not a number (expected X,Y,Z)"));
+    Ok(Vec3::new(num(x)?, num(y)?, num(z)?))
 }
 
 #[derive(Args)]
@@ -174,7 +217,7 @@ fn view_command(args: ViewArgs) -> Result<()> {
 
 fn info_command(args: &InfoArgs) -> Result<()> {
     let opts = LoadOptions { limits: args.limits.limits(), overrides: Overrides::default() };
-    let loaded = load_scene_with(&args.scene, &opts)?;
+    let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -187,6 +230,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     if let Some(o) = &args.output {
         write::Format::from_path(o)?;
     }
+    let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
     let fog = match (args.fog, args.no_fog) {
         (true, _) => Some(true),
@@ -201,9 +245,13 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             spp: args.spp,
             max_depth: args.max_depth,
             fog,
+            camera_pos: args.camera.camera_pos,
+            look_at: args.camera.look_at,
+            up: args.camera.up,
+            fov: args.camera.fov,
         },
     };
-    let loaded = load_scene_with(&args.scene, &opts)?;
+    let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -213,6 +261,18 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let format = write::Format::from_path(&output)?;
     write::check_not_an_input(&output, &loaded.inputs)?;
+    let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());
+    let previews = args.aov_preview || loaded.aov_preview;
+    if previews && aovs.is_empty() {
+        eprintln!(
+            "warning: --aov-preview without AOV passes (--aov or the scene's `aov`) writes no previews"
+        );
+    }
+    for &a in &aovs {
+        for ext in if previews { &["exr", "png"][..] } else { &["exr"][..] } {
+            write::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
+        }
+    }
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
@@ -238,7 +298,13 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let hooks = RenderHooks { progress: Some(&progress), cancel: None };
     let start = Instant::now();
-    let (image, stats) = render(&loaded.scene, &settings, hooks);
+    let (image, passes, stats) = if aovs.is_empty() {
+        let (image, stats) = render(&loaded.scene, &settings, hooks);
+        (image, None, stats)
+    } else {
+        let (image, passes, stats) = render_with_aovs(&loaded.scene, &settings, &aovs, hooks);
+        (image, Some(passes), stats)
+    };
     let wall = start.elapsed().as_secs_f64();
     if let Some(b) = &bar {
         b.finish_and_clear();
@@ -247,6 +313,10 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         bail!("the render was cancelled; nothing was written");
     }
     write::write_image(&image, &output, format)?;
+    let written = match &passes {
+        Some(p) => prism_shade::write_aov_files(&output, p, previews)?,
+        None => Vec::new(),
+    };
     if !args.quiet {
         let mrays = stats.rays as f64 / 1e6;
         println!(
@@ -255,6 +325,9 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             settings.spp,
             if wall > 0.0 { mrays / wall } else { 0.0 }
         );
+        for f in &written {
+            println!("wrote {}", f.display());
+        }
     }
     Ok(())
 }

@@ -39,6 +39,9 @@ pub struct RenderDef {
     pub min_contribution: Option<Num>,
     pub background: Option<Spanned<Color>>,
     pub ambient: Option<Spanned<Color>>,
+    /// AOV pass names (`"depth"`, ..., `"all"`), checked with spans.
+    pub aov: Option<Spanned<Vec<Spanned<String>>>>,
+    pub aov_preview: Option<bool>,
 }
 
 #[derive(Deserialize)]

@@ -50,7 +50,8 @@ mod obj;
 pub use error::{Location, SceneError, line_col};
 
 use prism_geometry::Aabb;
-use prism_shade::{Camera, Fog, PointLight, RenderSettings, Scene};
+use prism_geometry::glam::Vec3;
+use prism_shade::{Aov, Camera, Fog, PointLight, RenderSettings, Scene};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -81,8 +82,9 @@ impl Default for Limits {
 }
 
 /// Values given outside the scene file (on the command line) that replace
-/// the file's. Errors in them are reported as [`SceneError::Option`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// the file's. Errors in them are reported as [`SceneError::Option`],
+/// naming the flag (`--width`, `--camera-pos`, ...).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Overrides {
     /// Image width. If only one of width and height is given, the other
     /// follows the scene's aspect ratio.
@@ -97,10 +99,21 @@ pub struct Overrides {
     /// fog reaching total at 1.5 times the distance to the farthest corner
     /// of the scene's bounds (with a warning).
     pub fog: Option<bool>,
+    /// Camera position (`--camera-pos`); must be finite.
+    pub camera_pos: Option<Vec3>,
+    /// The point the camera looks at, at the centre of the image
+    /// (`--look-at`); must be finite and differ from the position.
+    pub look_at: Option<Vec3>,
+    /// The camera's up direction (`--up`); must be finite, non-zero and
+    /// not parallel to the view direction.
+    pub up: Option<Vec3>,
+    /// Vertical field of view in degrees (`--fov`), strictly between 0
+    /// and 180.
+    pub fov: Option<f32>,
 }
 
 /// How to load a scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// Size limits.
     pub limits: Limits,
@@ -174,6 +187,12 @@ pub struct LoadedScene {
     /// Problems that did not stop the load (no lights, degenerate
     /// triangles, ...), each starting with the file it is about.
     pub warnings: Vec<String>,
+    /// AOV passes the scene asks for (`aov` in `[render]`), in order,
+    /// repeats dropped; empty if none.
+    pub aovs: Vec<Aov>,
+    /// Whether the scene asks for PNG previews of its AOV passes
+    /// (`aov_preview` in `[render]`).
+    pub aov_preview: bool,
 }
 
 /// Loads the scene file `path` with default limits.
@@ -214,6 +233,68 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
         loaded.inputs.insert(0, c);
     }
     Ok(loaded)
+}
+
+/// Loads a scene from `path`, whatever its kind: an OBJ mesh (extension
+/// `.obj`, any case) becomes a scene of its own ([`load_obj_scene`]);
+/// any other file is read as a TOML scene ([`load_scene_with`]).
+///
+/// # Errors
+/// A [`SceneError`] naming the file, the place and the problem.
+pub fn load_path(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    if is_obj_path(path) { load_obj_scene(path, options) } else { load_scene_with(path, options) }
+}
+
+/// Whether [`load_path`] reads `path` as an OBJ mesh (its extension is
+/// `obj`, in any case).
+#[must_use]
+pub fn is_obj_path(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+}
+
+/// Makes a scene of the OBJ mesh `path` alone, so that a mesh can be
+/// looked at without writing a scene file (`docs/scene-format.md`, "An
+/// OBJ file as a scene"):
+///
+/// - the mesh, with its MTL materials (a neutral grey, diffuse 0.8 with a
+///   little specular, where a model has none or the material library
+///   cannot be used, with a warning then), vertex normals as `normals =
+///   "auto"`;
+/// - a camera that frames the mesh's bounding sphere: with `c` the centre
+///   of the bounding box and `r = |max − min| / 2`, the eye at
+///   `c + (0, 0, r / sin(θ/2))` looking at `c`, up +Y, where θ is the
+///   narrower of the vertical and horizontal fields of view (the vertical
+///   field of view is 40°, or `--fov`); camera overrides replace any of
+///   this;
+/// - one white point light of intensity 1 at `c + r · (1, 2, 1.5)`
+///   (above, right of and in front of the mesh), ambient `[1, 1, 1]`, a
+///   dark grey-blue background `[0.05, 0.05, 0.07]`;
+/// - 640×480 pixels, 4 samples per pixel, max depth 8 (overrides apply).
+///
+/// Errors in the OBJ name its line; errors in its material library or
+/// textures name that file and the OBJ.
+///
+/// # Errors
+/// A [`SceneError`] naming the file, the place and the problem.
+pub fn load_obj_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let read_err = |reason: String| SceneError::Read {
+        location: Location::file(path),
+        what: "mesh",
+        path: path.to_path_buf(),
+        reason,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| read_err(load::io_reason(&e)))?;
+    if meta.is_dir() {
+        return Err(read_err("it is a directory, expected an .obj file".into()));
+    }
+    let canonical = std::fs::canonicalize(path).map_err(|e| read_err(load::io_reason(&e)))?;
+    let base = canonical.parent().map(Path::to_path_buf).unwrap_or_default();
+    let name = canonical.file_name().and_then(|n| n.to_str()).map(str::to_owned).ok_or_else(|| {
+        read_err("the file name is not valid UTF-8; rename the file or name it from a scene file".into())
+    })?;
+    load::Builder::new(path, "", &base, options)
+        .build_obj_scene(&name)
+        .map_err(|e| load::obj_scene_error(e, path, &canonical))
 }
 
 /// Parses a scene from `text` as if read from `file_name` (used in

@@ -3,8 +3,8 @@
 
 use crate::error::{Location, SceneError};
 use crate::format::{
-    Color, FogModeDef, MappingDef, MaterialDef, NormalsDef, Num, ObjectDef, ObjectKind, SceneFile, SpaceDef,
-    Step, TextureDef, TextureKind, V3, WrapDef,
+    CameraDef, Color, FogModeDef, LightDef, MappingDef, MaterialDef, NormalsDef, Num, ObjectDef, ObjectKind,
+    RenderDef, SceneFile, SpaceDef, Step, TextureDef, TextureKind, V3, WrapDef,
 };
 use crate::obj::{self, NormalMode};
 use crate::{LoadOptions, LoadedScene, MeshInfo, SceneInfo};
@@ -15,7 +15,8 @@ use prism_geometry::{
     Triangle, TriangleMesh,
 };
 use prism_shade::{
-    Camera, Fog, FogMode, ImageTexture, Mapping, Material, PointLight, RenderSettings, Scene, Texture, Wrap,
+    Aov, Camera, Fog, FogMode, ImageTexture, Mapping, Material, PointLight, RenderSettings, Scene, Texture,
+    Wrap,
 };
 use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
@@ -31,6 +32,13 @@ pub(crate) const DEFAULT_HEIGHT: u64 = 720;
 pub(crate) const DEFAULT_SPP: u64 = 4;
 pub(crate) const DEFAULT_MAX_DEPTH: u64 = 8;
 pub(crate) const DEFAULT_MIN_CONTRIBUTION: f64 = 0.001;
+
+/// An OBJ file as a scene ([`crate::load_obj_scene`]): image size,
+/// vertical field of view (degrees) and background.
+const OBJ_WIDTH: u64 = 640;
+const OBJ_HEIGHT: u64 = 480;
+const OBJ_FOV: f32 = 40.0;
+const OBJ_BACKGROUND: [f64; 3] = [0.05, 0.05, 0.07];
 
 /// A mesh file loaded once and shared by every object that names it.
 struct CachedMesh {
@@ -64,6 +72,9 @@ pub(crate) struct Builder<'a> {
     objects: Vec<Object>,
     object_materials: Vec<u32>,
     kinds: BTreeMap<String, usize>,
+    /// Building a scene of one OBJ file ([`Builder::build_obj_scene`]): a
+    /// material library that cannot be used gives grey, with a warning.
+    obj_scene: bool,
 }
 
 impl<'a> Builder<'a> {
@@ -86,6 +97,7 @@ impl<'a> Builder<'a> {
             objects: Vec::new(),
             object_materials: Vec::new(),
             kinds: BTreeMap::new(),
+            obj_scene: false,
         }
     }
 
@@ -278,6 +290,27 @@ impl<'a> Builder<'a> {
             None => Vec3::ONE,
         };
 
+        let mut aovs = Vec::new();
+        if let Some(list) = render.and_then(|r| r.aov.as_ref()) {
+            for name in list.get_ref() {
+                let found = if name.get_ref() == "all" {
+                    Aov::ALL.to_vec()
+                } else {
+                    vec![
+                        name.get_ref()
+                            .parse::<Aov>()
+                            .map_err(|e| self.invalid(&name.span(), e.to_string()))?,
+                    ]
+                };
+                for a in found {
+                    if !aovs.contains(&a) {
+                        aovs.push(a);
+                    }
+                }
+            }
+        }
+        let aov_preview = render.and_then(|r| r.aov_preview).unwrap_or(false);
+
         let camera = self.camera(&file.camera, width, height)?;
 
         let mut lights = Vec::with_capacity(file.lights.len());
@@ -369,19 +402,131 @@ impl<'a> Builder<'a> {
             camera,
         };
         let settings = RenderSettings { spp, max_depth, min_contribution, threads: None };
-        Ok(LoadedScene { scene, settings, info, inputs: self.inputs, warnings: self.warnings })
+        Ok(LoadedScene {
+            scene,
+            settings,
+            info,
+            inputs: self.inputs,
+            warnings: self.warnings,
+            aovs,
+            aov_preview,
+        })
+    }
+
+    /// A scene of the OBJ file `name` (in the base directory) alone: the
+    /// mesh, a camera framing its bounds, one light; see
+    /// [`crate::load_obj_scene`] for the exact placement.
+    pub(crate) fn build_obj_scene(mut self, name: &str) -> Result<LoadedScene> {
+        fn at<T>(value: T) -> Spanned<T> {
+            Spanned::new(0..0, value)
+        }
+        let v3 = |v: Vec3| at([f64::from(v.x), f64::from(v.y), f64::from(v.z)]);
+        self.obj_scene = true;
+        let mesh = ObjectDef {
+            kind: at(ObjectKind::Mesh),
+            material: None,
+            transform: None,
+            name: None,
+            center: None,
+            radius: None,
+            point: None,
+            normal: None,
+            min: None,
+            max: None,
+            size: None,
+            base: None,
+            height: None,
+            vertices: None,
+            path: Some(at(name.to_owned())),
+            normals: None,
+        };
+        self.object(&at(mesh))?;
+
+        let bounds = self.meshes.iter().fold(Aabb::EMPTY, |b, m| b.union(Aabb::from_points(m.positions())));
+        let (c, r) = if bounds.is_empty() {
+            (Vec3::ZERO, 1.0)
+        } else {
+            (bounds.center(), bounds.extent().length() / 2.0)
+        };
+        let r = if r > 0.0 { r } else { 1.0 };
+        let ov = self.opts.overrides;
+        let (w, h) = match (ov.width, ov.height) {
+            (Some(w), Some(h)) => (u64::from(w), u64::from(h)),
+            (Some(w), None) => (u64::from(w), scaled(OBJ_HEIGHT, OBJ_WIDTH, u64::from(w))),
+            (None, Some(h)) => (scaled(OBJ_WIDTH, OBJ_HEIGHT, u64::from(h)), u64::from(h)),
+            (None, None) => (OBJ_WIDTH, OBJ_HEIGHT),
+        };
+        let vfov = ov.fov.filter(|f| f.is_finite() && *f > 0.0 && *f < 180.0).unwrap_or(OBJ_FOV);
+        let half_v = (vfov / 2.0).to_radians();
+        let half_h = (half_v.tan() * w.max(1) as f32 / h.max(1) as f32).atan();
+        let eye = c + Vec3::new(0.0, 0.0, r / half_v.min(half_h).sin());
+        let light = c + r * Vec3::new(1.0, 2.0, 1.5);
+        if !(c.is_finite() && r.is_finite() && eye.is_finite() && light.is_finite() && eye != c) {
+            return Err(SceneError::Invalid {
+                location: Location::file(self.file),
+                message: format!(
+                    "cannot frame the mesh, its bounds {} to {} are too large (or too small for their distance from the origin)",
+                    bounds.min, bounds.max
+                ),
+            });
+        }
+        let file = SceneFile {
+            render: Some(at(RenderDef {
+                width: Some(at(OBJ_WIDTH)),
+                height: Some(at(OBJ_HEIGHT)),
+                background: Some(at(Color(OBJ_BACKGROUND))),
+                ..RenderDef::default()
+            })),
+            camera: at(CameraDef {
+                position: v3(eye),
+                look_at: v3(c),
+                up: None,
+                fov: Some(at(f64::from(OBJ_FOV))),
+            }),
+            lights: vec![at(LightDef { position: v3(light), color: None, intensity: None })],
+            fog: None,
+            materials: BTreeMap::new(),
+            objects: Vec::new(),
+        };
+        self.build(file)
     }
 
     fn camera(&self, c: &Spanned<crate::format::CameraDef>, width: u32, height: u32) -> Result<Camera> {
         let d = c.get_ref();
-        let position = self.vec3(&d.position, "camera position")?;
-        let look_at = self.vec3(&d.look_at, "camera look_at")?;
-        let up = match &d.up {
-            Some(u) => self.vec3(u, "camera up")?,
-            None => Vec3::Y,
+        let ov = self.opts.overrides;
+        let flag_vec3 = |v: Vec3, flag: &'static str| {
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(SceneError::Option { flag, message: format!("X,Y,Z must be finite numbers, got {v}") })
+            }
         };
-        let fov = match &d.fov {
-            Some(n) => {
+        let position = match ov.camera_pos {
+            Some(p) => flag_vec3(p, "--camera-pos")?,
+            None => self.vec3(&d.position, "camera position")?,
+        };
+        let look_at = match ov.look_at {
+            Some(p) => flag_vec3(p, "--look-at")?,
+            None => self.vec3(&d.look_at, "camera look_at")?,
+        };
+        let up = match (ov.up, &d.up) {
+            (Some(u), _) => flag_vec3(u, "--up")?,
+            (None, Some(u)) => self.vec3(u, "camera up")?,
+            (None, None) => Vec3::Y,
+        };
+        let fov = match (ov.fov, &d.fov) {
+            (Some(f), _) => {
+                if !(f.is_finite() && f > 0.0 && f < 180.0) {
+                    return Err(SceneError::Option {
+                        flag: "--fov",
+                        message: format!(
+                            "the vertical field of view in degrees must be between 0 and 180 (exclusive), got {f}"
+                        ),
+                    });
+                }
+                f
+            }
+            (None, Some(n)) => {
                 let f = self.finite(n, "camera fov")?;
                 if !(f > 0.0 && f < 180.0) {
                     return Err(self.invalid(
@@ -391,24 +536,52 @@ impl<'a> Builder<'a> {
                 }
                 f
             }
-            None => 45.0,
+            (None, None) => 45.0,
+        };
+        // The flag to blame when the direction or up is unusable: the one
+        // given, if any.
+        let moved = if ov.camera_pos.is_some() {
+            Some("--camera-pos")
+        } else if ov.look_at.is_some() {
+            Some("--look-at")
+        } else {
+            None
         };
         let forward = look_at - position;
         if forward.length_squared() == 0.0 || !forward.is_finite() {
-            return Err(
-                self.invalid(&d.look_at.span(), "camera look_at must differ from the camera position")
-            );
+            return Err(match moved {
+                Some(flag) => SceneError::Option {
+                    flag,
+                    message: format!(
+                        "the camera position {position} and the look-at point {look_at} must differ (and be less than 1e38 apart)"
+                    ),
+                },
+                None => {
+                    self.invalid(&d.look_at.span(), "camera look_at must differ from the camera position")
+                }
+            });
         }
         let f = forward.normalize();
-        let up_span = d.up.as_ref().map_or_else(|| c.span(), Spanned::span);
         if up.length_squared() == 0.0 || f.cross(up.normalize()).length() < 1e-6 {
-            return Err(self.invalid(
-                &up_span,
-                format!("camera up {up} is zero or parallel to the view direction {f}; choose an up vector across it"),
-            ));
+            let message = format!(
+                "camera up {up} is zero or parallel to the view direction {f}; choose an up vector across it"
+            );
+            return Err(match (ov.up.map(|_| "--up").or(moved), &d.up) {
+                (Some(flag), _) => SceneError::Option {
+                    flag,
+                    message: if flag == "--up" { message } else { format!("{message} (with --up)") },
+                },
+                (None, Some(u)) => self.invalid(&u.span(), message),
+                (None, None) => self.invalid(&c.span(), message),
+            });
         }
-        Camera::new(position, look_at, up, fov, width, height)
-            .map_err(|e| self.invalid(&c.span(), e.to_string()))
+        Camera::new(position, look_at, up, fov, width, height).map_err(|e| {
+            if ov.camera_pos.is_some() || ov.look_at.is_some() || ov.up.is_some() || ov.fov.is_some() {
+                SceneError::Option { flag: "--camera-pos/--look-at/--up/--fov", message: e.to_string() }
+            } else {
+                self.invalid(&c.span(), e.to_string())
+            }
+        })
     }
 
     fn fog(&self, f: &Spanned<crate::format::FogDef>) -> Result<Fog> {
@@ -947,7 +1120,7 @@ impl<'a> Builder<'a> {
         d: &ObjectDef,
         ospan: &Range<usize>,
         transform: Transform,
-        material: Option<u32>,
+        mut material: Option<u32>,
     ) -> Result<()> {
         let Some(p) = &d.path else {
             return Err(self.invalid(ospan, "a mesh needs `path`, an OBJ file (relative to the scene file)"));
@@ -1018,6 +1191,13 @@ impl<'a> Builder<'a> {
                     info,
                 },
             );
+        }
+        if self.obj_scene
+            && material.is_none()
+            && let Some(e) = self.mesh_cache.get(&key).and_then(|c| c.material_error.clone())
+        {
+            self.warnings.push(format!("{}: {e}; rendering the mesh in neutral grey", path.display()));
+            material = Some(self.default_material());
         }
         let Some(cached) = self.mesh_cache.get(&key) else {
             return Err(self.invalid(ospan, "internal error: mesh cache"));
@@ -1210,5 +1390,28 @@ pub(crate) fn io_reason(e: &std::io::Error) -> String {
         std::io::ErrorKind::NotFound => "no such file".into(),
         std::io::ErrorKind::PermissionDenied => "permission denied".into(),
         _ => e.to_string(),
+    }
+}
+
+/// An error from [`Builder::build_obj_scene`], made to point at the OBJ
+/// file `path` (as the user named it; `canonical` is its resolved path):
+/// the builder's positions in its (empty) scene text are dropped, and a
+/// problem in the OBJ itself is reported at its line, not as an asset
+/// "used at" itself.
+pub(crate) fn obj_scene_error(e: SceneError, path: &Path, canonical: &Path) -> SceneError {
+    let own = |l: Location| if l.file == path { Location::file(path) } else { l };
+    match e {
+        SceneError::Asset { location, message, .. } if location.file == canonical => {
+            SceneError::Invalid { location: Location { file: path.to_path_buf(), ..location }, message }
+        }
+        SceneError::Asset { location, message, .. } => {
+            SceneError::Asset { location, message, referenced_at: Box::new(Location::file(path)) }
+        }
+        SceneError::Read { location, what, path: p, reason } => {
+            SceneError::Read { location: own(location), what, path: p, reason }
+        }
+        SceneError::Syntax { location, message } => SceneError::Syntax { location: own(location), message },
+        SceneError::Invalid { location, message } => SceneError::Invalid { location: own(location), message },
+        e @ SceneError::Option { .. } => e,
     }
 }

@@ -133,7 +133,8 @@ pub struct SceneSetup {
 /// line and column where known). Called again on every `r`.
 pub type SceneLoader = dyn Fn(&Path) -> Result<SceneSetup, String> + Send + Sync;
 
-/// Loads a scene file with the prism scene loader, with the size, sample
+/// Loads a scene file (TOML, or an OBJ mesh as a scene of its own:
+/// [`prism_scene::load_path`]) with the prism scene loader, with the size, sample
 /// and fog overrides of `opts` (checked against the loader's limits, as
 /// `prism render` does; `--fog` on a scene without fog adds the loader's
 /// default fog). Warnings go to stderr.
@@ -147,9 +148,11 @@ pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, St
         spp: opts.spp,
         max_depth: opts.max_depth,
         fog: opts.fog,
+        ..prism_scene::Overrides::default()
     };
     let options = prism_scene::LoadOptions { overrides, ..prism_scene::LoadOptions::default() };
-    let loaded = prism_scene::load_scene_with(path, &options).map_err(|e| e.to_string())?;
+    // A TOML scene, or an OBJ mesh as a scene of its own.
+    let loaded = prism_scene::load_path(path, &options).map_err(|e| e.to_string())?;
     for w in &loaded.warnings {
         eprintln!("prism view: warning: {w}");
     }
