@@ -1,4 +1,4 @@
-//! The viewer in a real window, under Xvfb, driven by xdotool.
+//! `prism view` in a real window, under Xvfb, driven by xdotool.
 //!
 //! - `scenes/seed.toml` (or, until it exists, a small scene written here):
 //!   `c`, save, `f`, save, `q`; the two images must differ where fog is,
@@ -16,7 +16,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{self, Receiver};
 use std::time::{Duration, Instant};
 
-const BIN: &str = env!("CARGO_BIN_EXE_prism-view");
+const BIN: &str = env!("CARGO_BIN_EXE_prism");
 /// The whole smoke test gives up after this long (it takes a few seconds).
 const BUDGET: Duration = Duration::from_secs(45);
 
@@ -103,7 +103,12 @@ fn screenshot(display: &str, wid: &str, to: &Path) -> Option<image::RgbImage> {
 
 #[test]
 fn no_display_fails_clearly() {
-    let out = Command::new(BIN).arg("--demo").env_remove("DISPLAY").output().unwrap();
+    let out = Command::new(BIN)
+        .args(["view", "scenes/seed.toml"])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("no display: set DISPLAY or use `prism render`"), "{err}");
@@ -112,9 +117,9 @@ fn no_display_fails_clearly() {
 
 #[test]
 fn bad_arguments_are_usage_errors() {
-    let out = Command::new(BIN).args(["--width", "zero"]).output().unwrap();
+    let out = Command::new(BIN).args(["view", "x.toml", "--width", "zero"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("usage: prism-view"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("invalid value 'zero' for '--width <W>'"));
 }
 
 /// A small foggy scene: chequered floor, a mirror sphere, two matte ones.
@@ -205,7 +210,7 @@ impl Session {
             l.trim().parse::<u32>().is_ok()
         });
         let display = format!(":{}", number.trim());
-        let mut args = vec![scene.to_string_lossy().into_owned()];
+        let mut args = vec!["view".to_string(), scene.to_string_lossy().into_owned()];
         args.extend(
             [
                 "--width",
@@ -223,7 +228,7 @@ impl Session {
             .map(String::from),
         );
         args.push(save_dir.to_string_lossy().into_owned());
-        eprintln!("{test}: DISPLAY={display} prism-view {}", args.join(" "));
+        eprintln!("{test}: DISPLAY={display} prism {}", args.join(" "));
         let mut viewer = Command::new(BIN)
             .args(&args)
             .env("DISPLAY", &display)
