@@ -53,7 +53,7 @@ enum Command {
 
 #[derive(Args)]
 struct ViewArgs {
-    /// The scene file.
+    /// The scene file, or an OBJ mesh to look at.
     scene: PathBuf,
     /// Window width in pixels.
     #[arg(long, value_name = "W")]
@@ -91,15 +91,6 @@ struct RenderArgs {
     /// Output image, .png or .exr [default: out/NAME.png for a scene NAME.toml].
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
-    /// AOV passes to write next to the image as OUT-stem.PASS.exr, comma-separated:
-    /// depth, normal, geo_normal, albedo, object_id, or all (replaces the scene's `aov`).
-    #[arg(long, value_name = "LIST")]
-    aov: Option<String>,
-    /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
-    #[arg(long)]
-    aov_preview: bool,
-    #[command(flatten)]
-    camera: CameraArgs,
     /// Image width in pixels (alone: the height keeps the scene's aspect ratio).
     #[arg(long, value_name = "W")]
     width: Option<u32>,
@@ -124,6 +115,15 @@ struct RenderArgs {
     /// No progress bar and no closing statistics line.
     #[arg(short, long)]
     quiet: bool,
+    /// AOV passes to write next to the image as OUT-stem.PASS.exr, comma-separated:
+    /// depth, normal, geo_normal, albedo, object_id, or all (replaces the scene's `aov`).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
+    /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
+    #[arg(long)]
+    aov_preview: bool,
+    #[command(flatten)]
+    camera: CameraArgs,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -157,7 +157,7 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// The scene file.
+    /// The scene file, or an OBJ mesh.
     scene: PathBuf,
     #[command(flatten)]
     limits: LimitArgs,
