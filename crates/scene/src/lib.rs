@@ -218,7 +218,7 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
     if meta.is_dir() {
         return Err(read_err("it is a directory, expected a .toml file".into()));
     }
-    let bytes = std::fs::read(path).map_err(|e| read_err(load::io_reason(&e)))?;
+    let bytes = read_capped(path, MAX_SCENE_BYTES).map_err(read_err)?;
     let text = decode_scene_text(&bytes).map_err(|(offset, message)| {
         let location = match offset {
             Some(o) => Location::at_offset(path, std::str::from_utf8(&bytes[..o]).unwrap_or(""), o),
@@ -233,6 +233,27 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
         loaded.inputs.insert(0, c);
     }
     Ok(loaded)
+}
+
+/// The largest scene file read (256 MiB): a device such as `/dev/zero`
+/// would otherwise be read until memory runs out. (A pipe, as in
+/// `prism render <(generate-scene)`, is read like a file.)
+pub const MAX_SCENE_BYTES: u64 = 256 << 20;
+
+/// The bytes of `path`, or why not, if it cannot be read or holds more
+/// than `max` bytes.
+fn read_capped(path: &Path, max: u64) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| load::io_reason(&e))?;
+    let mut bytes = Vec::new();
+    file.take(max + 1).read_to_end(&mut bytes).map_err(|e| load::io_reason(&e))?;
+    if bytes.len() as u64 > max {
+        return Err(format!(
+            "it holds more than {} MiB; a scene file is text (is this the right file?)",
+            max >> 20
+        ));
+    }
+    Ok(bytes)
 }
 
 /// Loads a scene from `path`, whatever its kind: an OBJ mesh (extension

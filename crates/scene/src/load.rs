@@ -182,8 +182,8 @@ impl<'a> Builder<'a> {
             reason,
         };
         let meta = std::fs::metadata(&path).map_err(|e| read_err(io_reason(&e)))?;
-        if meta.is_dir() {
-            return Err(read_err("it is a directory, expected a file".into()));
+        if !meta.is_file() {
+            return Err(read_err(not_a_file_reason(&meta)));
         }
         std::fs::canonicalize(&path).map_err(|e| read_err(io_reason(&e)))
     }
@@ -815,12 +815,17 @@ impl<'a> Builder<'a> {
             None => self.resolve(p, "texture")?,
             Some((dir, name)) => {
                 let path = dir.join(name);
-                std::fs::canonicalize(&path).map_err(|e| SceneError::Read {
+                let read_err = |reason: String| SceneError::Read {
                     location: self.loc(&p.span()),
                     what: "texture named in a material library",
                     path: path.clone(),
-                    reason: io_reason(&e),
-                })?
+                    reason,
+                };
+                let meta = std::fs::metadata(&path).map_err(|e| read_err(io_reason(&e)))?;
+                if !meta.is_file() {
+                    return Err(read_err(not_a_file_reason(&meta)));
+                }
+                std::fs::canonicalize(&path).map_err(|e| read_err(io_reason(&e)))?
             }
         };
         let key = (path.clone(), wrap == Wrap::Repeat);
@@ -1363,7 +1368,7 @@ fn check_spp(spp: u64, max: u32) -> std::result::Result<u32, String> {
     if spp == 0 {
         Err("spp (samples per pixel) must be at least 1".into())
     } else if spp > u64::from(max) {
-        Err(format!("spp {spp} is over the limit of {max} samples per pixel"))
+        Err(format!("spp {spp} is over the limit of {max} samples per pixel (raise it with --max-spp)"))
     } else {
         Ok(spp as u32)
     }
@@ -1371,7 +1376,10 @@ fn check_spp(spp: u64, max: u32) -> std::result::Result<u32, String> {
 
 fn check_depth(depth: u64, max: u32) -> std::result::Result<u32, String> {
     if depth > u64::from(max) {
-        Err(format!("max_depth {depth} is over the limit of {max} bounces"))
+        Err(format!(
+            "max_depth {depth} is over the limit of {max} bounces (the renderer never goes deeper than {})",
+            prism_shade::MAX_DEPTH_LIMIT
+        ))
     } else {
         Ok(depth as u32)
     }
@@ -1383,6 +1391,17 @@ fn default_fog_end(eye: Vec3, bounds: Aabb) -> f32 {
     }
     let far = bounds.corners().iter().map(|c| c.distance(eye)).fold(0.0_f32, f32::max);
     if far.is_finite() && far > 0.0 { 1.5 * far } else { 100.0 }
+}
+
+/// Why a path that is not a regular file cannot be read as one: a
+/// directory, or a device (such as `/dev/zero`) or FIFO that could be read
+/// forever.
+pub(crate) fn not_a_file_reason(meta: &std::fs::Metadata) -> String {
+    if meta.is_dir() {
+        "it is a directory, expected a file".into()
+    } else {
+        "it is not a regular file (a device, FIFO or socket?)".into()
+    }
 }
 
 pub(crate) fn io_reason(e: &std::io::Error) -> String {

@@ -65,7 +65,14 @@ pub fn load_obj(
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_files: Vec<PathBuf> = mtllibs.iter().map(|m| dir.join(m)).collect();
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let loader = |p: &Path| tobj::load_mtl(dir.join(p));
+    let loader = |p: &Path| {
+        // Only regular files: a device such as /dev/zero would be read forever.
+        let path = dir.join(p);
+        if !std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
+        tobj::load_mtl(path)
+    };
     let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
         .map_err(|e| asset(Location::file(path), format!("malformed OBJ: {e}")))?;
     let (materials, material_error) = match materials {
