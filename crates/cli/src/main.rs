@@ -19,9 +19,10 @@
 #![forbid(unsafe_code)]
 
 mod info;
+mod interrupt;
 mod write;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use prism_geometry::glam::Vec3;
@@ -115,6 +116,9 @@ struct RenderArgs {
     /// No progress bar and no closing statistics line.
     #[arg(short, long)]
     quiet: bool,
+    /// On Ctrl-C, write the rows rendered so far (the rest black) instead of nothing.
+    #[arg(long)]
+    partial: bool,
     /// AOV passes to write next to the image as OUT-stem.PASS.exr, comma-separated:
     /// depth, normal, geo_normal, albedo, object_id, or all (replaces the scene's `aov`).
     #[arg(long, value_name = "LIST")]
@@ -171,11 +175,19 @@ struct LimitArgs {
     /// Largest number of pixels accepted.
     #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_pixels)]
     max_pixels: u64,
+    /// Largest number of samples per pixel accepted.
+    #[arg(long, value_name = "N", default_value_t = Limits::default().max_spp)]
+    max_spp: u32,
 }
 
 impl LimitArgs {
     fn limits(&self) -> Limits {
-        Limits { max_side: self.max_side, max_pixels: self.max_pixels, ..Limits::default() }
+        Limits {
+            max_side: self.max_side,
+            max_pixels: self.max_pixels,
+            max_spp: self.max_spp,
+            ..Limits::default()
+        }
     }
 }
 
@@ -190,7 +202,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            interrupt::exit_code(&e)
         }
     }
 }
@@ -291,12 +303,17 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         }
         bar
     });
+    let interrupt = interrupt::Interrupt::install()?;
+    if bar.is_none() && !args.quiet {
+        eprintln!("rendering {w}×{h} at {} spp (Ctrl-C stops)", settings.spp);
+    }
     let progress = |done: u32, _total: u32| {
+        interrupt.note_rows(done);
         if let Some(b) = &bar {
             b.set_position(u64::from(done));
         }
     };
-    let hooks = RenderHooks { progress: Some(&progress), cancel: None };
+    let hooks = RenderHooks { progress: Some(&progress), cancel: Some(interrupt.flag()) };
     let start = Instant::now();
     let (image, passes, stats) = if aovs.is_empty() {
         let (image, stats) = render(&loaded.scene, &settings, hooks);
@@ -310,7 +327,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         b.finish_and_clear();
     }
     if stats.cancelled {
-        bail!("the render was cancelled; nothing was written");
+        return Err(interrupt.finish(&image, &output, format, args.partial));
     }
     write::write_image(&image, &output, format)?;
     let written = match &passes {

@@ -1,0 +1,201 @@
+//! Output safety: Ctrl-C stops a render promptly and writes nothing (or,
+//! with `--partial`, a valid image of the rows done); SIGKILL mid-render
+//! leaves nothing at the output path and no temporary file; no input of
+//! any kind is overwritten; the same settings give the same image bit for
+//! bit, with 1 and 2 threads and from run to run.
+
+mod common;
+
+use common::{GOOD, assert_clean_failure, listing, png_bytes, prism, prism_cmd, text};
+use std::fs;
+use std::path::Path;
+
+/// A render that would take far longer than any test (8×16384 pixels at
+/// 65536 samples), in rows short enough that a cancel is seen at once.
+#[cfg(unix)]
+fn endless_scene() -> String {
+    GOOD.replace("width = 32\nheight = 18\nspp = 1", "width = 8\nheight = 16384\nspp = 65536")
+}
+
+#[cfg(unix)]
+mod signals {
+    use super::*;
+    use std::io::{BufRead, BufReader, Read};
+    use std::process::{Child, ChildStderr, ExitStatus, Stdio};
+    use std::time::{Duration, Instant};
+
+    /// Starts `prism render s.toml -o img.png ARGS` in `dir` and returns once
+    /// it has said that the render started (its SIGINT handler is in place).
+    fn start(dir: &Path, args: &[&str]) -> (Child, BufReader<ChildStderr>, String) {
+        fs::write(dir.join("s.toml"), endless_scene()).unwrap();
+        let mut child = prism_cmd(dir)
+            .args(["render", "s.toml", "-o", "img.png", "--threads", "1"])
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start prism");
+        let mut err = BufReader::new(child.stderr.take().expect("stderr"));
+        let mut seen = String::new();
+        if !read_until_started(&mut err, &mut seen) {
+            let status = child.wait();
+            panic!("prism ended ({status:?}) before rendering: {seen}");
+        }
+        (child, err, seen)
+    }
+
+    /// Reads stderr lines into `seen` until the `rendering …` line (true)
+    /// or the end (false).
+    fn read_until_started(err: &mut BufReader<ChildStderr>, seen: &mut String) -> bool {
+        loop {
+            let mut line = String::new();
+            match err.read_line(&mut line) {
+                Ok(0) | Err(_) => return false,
+                Ok(_) => {}
+            }
+            seen.push_str(&line);
+            if line.starts_with("rendering ") {
+                return true;
+            }
+        }
+    }
+
+    /// Waits for `child`, failing (and killing it) if it runs 30 s more: a
+    /// guard against a hang, not a timing requirement.
+    fn wait(child: &mut Child) -> ExitStatus {
+        let start = Instant::now();
+        loop {
+            if let Some(status) = child.try_wait().expect("wait") {
+                return status;
+            }
+            if start.elapsed() > Duration::from_secs(30) {
+                let _ = child.kill();
+                panic!("prism did not stop within 30 s of the signal");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    fn signal(child: &Child, sig: &str) {
+        let ok = std::process::Command::new("kill").args([sig, &child.id().to_string()]).status();
+        assert!(ok.expect("run kill").success(), "kill {sig}");
+    }
+
+    fn rest(mut err: BufReader<ChildStderr>, seen: String) -> String {
+        let mut s = seen;
+        err.read_to_string(&mut s).expect("read stderr");
+        s
+    }
+
+    #[test]
+    fn sigint_stops_the_render_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let (mut child, err, seen) = start(dir.path(), &[]);
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(err.contains("error: interrupted (Ctrl-C)") && err.contains("nothing was written"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert_eq!(listing(dir.path()), ["s.toml"], "no image and no temporary file");
+    }
+
+    #[test]
+    fn sigint_with_partial_writes_a_valid_image() {
+        let dir = tempfile::tempdir().unwrap();
+        let (mut child, err, seen) = start(dir.path(), &["--partial"]);
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(err.contains("wrote the partial image to img.png"), "{err}");
+        let img = image::open(dir.path().join("img.png")).expect("a valid PNG").to_rgb8();
+        assert_eq!((img.width(), img.height()), (8, 16384));
+        assert_eq!(listing(dir.path()), ["img.png", "s.toml"], "no temporary file is left");
+    }
+
+    #[test]
+    fn sigkill_mid_render_leaves_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let (mut child, _err, _) = start(dir.path(), &["--partial"]);
+        child.kill().expect("SIGKILL");
+        let status = wait(&mut child);
+        assert!(!status.success());
+        // Nothing at the output path, and no `.prism-*.tmp` beside it.
+        assert_eq!(listing(dir.path()), ["s.toml"]);
+    }
+}
+
+/// Every kind of input, each named `*.png` so that the output name is a
+/// valid one: the scene, an OBJ mesh, its MTL library and its texture
+/// (also reached through a symbolic link and a `./` path). prism refuses
+/// each and leaves every file as it was.
+#[test]
+fn no_kind_of_input_is_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let obj = "mtllib lib.png\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n";
+    fs::write(d.join("mesh.png"), obj).unwrap();
+    fs::write(d.join("lib.png"), "newmtl m\nKd 1 1 1\nmap_Kd tex.png\n").unwrap();
+    fs::write(d.join("tex.png"), png_bytes()).unwrap();
+    let scene = format!("{GOOD}[[objects]]\ntype = \"mesh\"\npath = \"mesh.png\"\n");
+    fs::write(d.join("scene.png"), &scene).unwrap();
+    let mut targets = vec!["scene.png", "mesh.png", "lib.png", "tex.png", "./tex.png"];
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("tex.png", d.join("link.png")).unwrap();
+        targets.push("link.png");
+    }
+    let before: Vec<(String, Vec<u8>)> =
+        listing(d).into_iter().map(|n| (n.clone(), fs::read(d.join(&n)).unwrap())).collect();
+    // The scene renders (every input is in use).
+    let ok = prism(d, &["render", "scene.png", "-o", "out/ok.png", "--quiet"]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    fs::remove_dir_all(d.join("out")).unwrap();
+    for target in targets {
+        let out = prism(d, &["render", "scene.png", "-o", target]);
+        assert_clean_failure(target, &out);
+        let err = text(&out.stderr);
+        assert!(err.contains("refusing to write the image over an input"), "{target}: {err}");
+        let after: Vec<(String, Vec<u8>)> =
+            listing(d).into_iter().map(|n| (n.clone(), fs::read(d.join(&n)).unwrap())).collect();
+        assert!(after == before, "{target}: the files changed");
+    }
+}
+
+/// A scene with reflection, refraction, texture-free shading and several
+/// samples per pixel: every path the threads could disagree on.
+fn busy_scene() -> String {
+    GOOD.replace("width = 32\nheight = 18\nspp = 1", "width = 40\nheight = 24\nspp = 5\nmax_depth = 6")
+        .replace(
+            "color = [0.8, 0.1, 0.1]",
+            "color = [0.8, 0.1, 0.1]\nreflectivity = 0.3\ntransmission = 0.5\nior = 1.5",
+        )
+}
+
+#[test]
+fn images_are_bit_identical_across_threads_and_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("s.toml"), busy_scene()).unwrap();
+    let mut pngs = Vec::new();
+    let mut exrs = Vec::new();
+    for (i, threads) in ["1", "2", "1", "2"].into_iter().enumerate() {
+        for ext in ["png", "exr"] {
+            let name = format!("r{i}.{ext}");
+            let out = prism(d, &["render", "s.toml", "-o", &name, "--threads", threads, "--quiet"]);
+            assert!(out.status.success(), "{}", text(&out.stderr));
+            let bytes = fs::read(d.join(&name)).unwrap();
+            if ext == "png" {
+                pngs.push(bytes);
+            } else {
+                let px = image::open(d.join(&name)).unwrap().to_rgb32f();
+                exrs.push(px.as_raw().iter().map(|f| f.to_bits()).collect::<Vec<u32>>());
+            }
+        }
+    }
+    assert!(pngs.iter().all(|p| *p == pngs[0]), "PNG bytes differ between runs or thread counts");
+    assert!(exrs.iter().all(|p| *p == exrs[0]), "float pixels differ between runs or thread counts");
+    // The image is not trivially uniform.
+    assert!(exrs[0].iter().any(|&b| b != exrs[0][0]));
+}
