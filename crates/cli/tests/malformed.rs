@@ -244,6 +244,12 @@ fn cases() -> Vec<Case> {
         .file("m.obj", format!("mtllib m.mtl\nusemtl x\n{TRIANGLE}"))
         .file("m.mtl", "newmtl x\nmap_Kd none.png\n"),
     );
+    let s = mesh("");
+    v.push(
+        Case::new("material library colour of two numbers", s.clone(), "m.mtl:2", "`Kd` needs 3 numbers")
+            .file("m.obj", format!("mtllib m.mtl\nusemtl x\n{TRIANGLE}"))
+            .file("m.mtl", "newmtl x\nKd 0.75 0.975\n"),
+    );
     #[cfg(unix)]
     {
         let s = textured("/dev/zero");

@@ -65,19 +65,35 @@ pub fn load_obj(
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_files: Vec<PathBuf> = mtllibs.iter().map(|m| dir.join(m)).collect();
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    // A problem found in an MTL file before tobj sees it, with its place.
+    let mtl_problem: std::cell::RefCell<Option<String>> = std::cell::RefCell::new(None);
     let loader = |p: &Path| {
         // Only regular files: a device such as /dev/zero would be read forever.
         let path = dir.join(p);
         if !std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
             return Err(tobj::LoadError::OpenFileFailed);
         }
-        tobj::load_mtl(path)
+        let bytes = std::fs::read(&path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let text = match decode_text(&bytes) {
+            Ok(t) => t,
+            Err(m) => {
+                *mtl_problem.borrow_mut() = Some(format!("{}: {m}", path.display()));
+                return Err(tobj::LoadError::ReadError);
+            }
+        };
+        // tobj panics on some malformed lines (`Kd 1 1`); refuse them first.
+        if let Err((line, m)) = precheck_mtl(text) {
+            *mtl_problem.borrow_mut() = Some(format!("{}:{line}: {m}", path.display()));
+            return Err(tobj::LoadError::MaterialParseError);
+        }
+        tobj::load_mtl_buf(&mut BufReader::new(text.as_bytes()))
     };
     let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
         .map_err(|e| asset(Location::file(path), format!("malformed OBJ: {e}")))?;
-    let (materials, material_error) = match materials {
-        Ok(m) => (m, None),
-        Err(e) => {
+    let (materials, material_error) = match (materials, mtl_problem.into_inner()) {
+        (Ok(m), _) => (m, None),
+        (Err(_), Some(problem)) => (Vec::new(), Some(format!("cannot use material library {problem}"))),
+        (Err(e), None) => {
             let names: Vec<String> = mtl_files.iter().map(|p| p.display().to_string()).collect();
             (Vec::new(), Some(format!("cannot use material library {}: {e}", names.join(", "))))
         }
@@ -131,6 +147,21 @@ fn decode_text(bytes: &[u8]) -> Result<&str, String> {
             e.valid_up_to()
         )
     })
+}
+
+/// Checks the MTL lines that tobj would panic on: colours (`Ka`, `Kd`,
+/// `Ks`, `Ke`) need three values. Errors carry the 1-based line.
+fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
+    for (i, raw) in text.lines().enumerate() {
+        let mut words = raw.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() {
+            let found = words.count();
+            if found < 3 {
+                return Err((i + 1, format!("`{key}` needs 3 numbers (r g b), found {found}")));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Checks every line that tobj would read; returns the `mtllib` names.
@@ -265,6 +296,15 @@ mod tests {
             precheck("mtllib my lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
             Ok(vec!["my lib.mtl".into()])
         );
+    }
+
+    #[test]
+    fn short_mtl_colours_are_refused_with_their_line() {
+        assert_eq!(precheck_mtl("newmtl a\nKd 1 1 1\n"), Ok(()));
+        let e = precheck_mtl("newmtl a\n\nKd 0.75 0.975\n").unwrap_err();
+        assert_eq!(e.0, 3);
+        assert!(e.1.contains("`Kd` needs 3 numbers"), "{}", e.1);
+        assert!(precheck_mtl("Ke\n").is_err());
     }
 
     #[test]
