@@ -177,6 +177,10 @@ impl TriangleMesh {
 }
 
 impl Intersect for TriangleMesh {
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.intersect_brute_force(ray).map(|(_, t, _, _)| t)
+    }
+
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let (f, t, b1, b2) = self.intersect_brute_force(ray)?;
         Some(self.hit(f, t, b1, b2, ray.dir))

@@ -9,12 +9,24 @@ pub trait Intersect {
     /// The nearest hit with `t` in `[ray.t_min, ray.t_max]`, if any.
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
 
+    /// The `t` of [`Intersect::intersect`]'s hit, without building the
+    /// hit record (no normal, point or uv): the cheap query for candidates
+    /// that may lose to a nearer hit and for shadow tests. Every shape of
+    /// this crate returns exactly `self.intersect(ray).map(|h| h.t)`, bit
+    /// for bit, so the full hit of a winner at `t` is found again by
+    /// `intersect` on the ray with `t_max = t`.
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.intersect(ray).map(|h| h.t)
+    }
+
     /// Bounds of the shape ([`Aabb::INFINITE`] for unbounded shapes).
     fn bounds(&self) -> Aabb;
 
     /// Whether anything is hit within the ray's interval.
+    #[inline]
     fn occludes(&self, ray: &Ray) -> bool {
-        self.intersect(ray).is_some()
+        self.intersect_t(ray).is_some()
     }
 }
 
@@ -73,6 +85,19 @@ impl Intersect for Shape {
         }
     }
 
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        match self {
+            Shape::Sphere(s) => s.intersect_t(ray),
+            Shape::Plane(s) => s.intersect_t(ray),
+            Shape::Cuboid(s) => s.intersect_t(ray),
+            Shape::Cylinder(s) => s.intersect_t(ray),
+            Shape::Cone(s) => s.intersect_t(ray),
+            Shape::Disk(s) => s.intersect_t(ray),
+            Shape::Triangle(s) => s.intersect_t(ray),
+        }
+    }
+
     fn bounds(&self) -> Aabb {
         match self {
             Shape::Sphere(s) => s.bounds(),
@@ -121,6 +146,12 @@ impl<S: Intersect> Intersect for Instance<S> {
         let local = self.transform.ray_to_object(ray);
         let hit = self.shape.intersect(&local)?;
         Some(self.transform.hit_to_world(&hit))
+    }
+
+    /// The ray is mapped into object space; no hit is mapped back.
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.shape.intersect_t(&self.transform.ray_to_object(ray))
     }
 
     fn bounds(&self) -> Aabb {

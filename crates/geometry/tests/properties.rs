@@ -179,6 +179,39 @@ proptest! {
         }
     }
 
+    /// The cheap `t`-only query agrees with the full hit bit for bit, in
+    /// object space and placed (planes and meshes included), for any
+    /// interval; `occludes` says the same; the winner's full hit is found
+    /// again on the ray clamped to `t_max = t` (how prism-bvh builds it).
+    #[test]
+    fn intersect_t_is_the_hit_t(ray in ray(), xf in transform(), t_min in prop_oneof![Just(0.0f32), 0.0f32..8.0], t_max in prop_oneof![Just(f32::INFINITY), 0.0f32..12.0]) {
+        let ray = Ray::with_interval(ray.origin, ray.dir, t_min, t_max);
+        let mesh = prism_geometry::TriangleMesh::new(
+            vec![Vec3::new(-1.0, -1.0, 0.3), Vec3::new(1.0, -1.0, -0.2), Vec3::new(1.0, 1.0, 0.1), Vec3::new(-1.0, 1.0, 0.0)],
+            None,
+            None,
+            vec![[0, 1, 2], [0, 2, 3]],
+        ).unwrap();
+        let shapes: Vec<Shape> = cases().into_iter().map(|c| c.shape).chain([prism_geometry::Plane::new(Vec3::new(0.0, 0.2, 0.0), Vec3::new(0.1, 1.0, -0.3)).unwrap().into()]).collect();
+        fn agree<S: Intersect>(name: &str, s: &S, ray: &Ray) -> Result<(), TestCaseError> {
+            let full = s.intersect(ray);
+            let t = s.intersect_t(ray);
+            prop_assert_eq!(full.map(|h| h.t.to_bits()), t.map(f32::to_bits), "{}", name);
+            prop_assert_eq!(s.occludes(ray), t.is_some(), "{}", name);
+            if let (Some(h), Some(t)) = (full, t) {
+                let again = s.intersect(&Ray::with_interval(ray.origin, ray.dir, ray.t_min, t));
+                prop_assert_eq!(again, Some(h), "{}: clamped re-query", name);
+            }
+            Ok(())
+        }
+        for s in &shapes {
+            agree(s.kind(), s, &ray)?;
+            agree(s.kind(), &Instance::new(*s, xf), &ray)?;
+        }
+        agree("mesh", &mesh, &ray)?;
+        agree("mesh", &Instance::new(mesh.clone(), xf), &ray)?;
+    }
+
     /// Any finite ray, however large or small, gives either no hit or a
     /// finite one.
     #[test]

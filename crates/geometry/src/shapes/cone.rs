@@ -77,8 +77,10 @@ fn roots_from_disc(a: f32, hb: f32, c: f32, disc: f32) -> Option<(f32, f32)> {
     Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
-impl Intersect for Cone {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl Cone {
+    /// The nearest crossing in the interval: its `t` and the part hit.
+    #[inline]
+    fn solve(&self, ray: &Ray) -> Option<(f32, Part)> {
         let o = ray.origin - self.base;
         let d = ray.dir;
         let (r, h) = (self.radius, self.height);
@@ -118,7 +120,23 @@ impl Intersect for Cone {
         if let Some(t) = cap_t(ray, o, 0.0, r) {
             keep(&mut best, t, Part::Bottom);
         }
-        let (t, part) = best?;
+        best
+    }
+}
+
+impl Intersect for Cone {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.solve(ray).map(|(t, _)| t)
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let o = ray.origin - self.base;
+        let d = ray.dir;
+        let (r, h) = (self.radius, self.height);
+        let k = r / h;
+        let k2 = k * k;
+        let (t, part) = self.solve(ray)?;
         let rel = o + t * d;
         let (rel, n, uv) = match part {
             Part::Side => {

@@ -68,8 +68,11 @@ impl Cuboid {
     }
 }
 
-impl Intersect for Cuboid {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl Cuboid {
+    /// `(t, axis, positive)` of the nearest crossing in the interval: its
+    /// `t` and the face it lies on.
+    #[inline]
+    fn solve(&self, ray: &Ray) -> Option<(f32, usize, bool)> {
         // Slab test remembering which face bounds the interval on each side.
         let mut t_near = f32::NEG_INFINITY;
         let mut t_far = f32::INFINITY;
@@ -100,12 +103,24 @@ impl Intersect for Cuboid {
             return None;
         }
         if ray.contains(t_near) {
-            Some(self.face_hit(ray, t_near, near_face.0, near_face.1))
+            Some((t_near, near_face.0, near_face.1))
         } else if ray.contains(t_far) {
-            Some(self.face_hit(ray, t_far, far_face.0, far_face.1))
+            Some((t_far, far_face.0, far_face.1))
         } else {
             None
         }
+    }
+}
+
+impl Intersect for Cuboid {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.solve(ray).map(|(t, _, _)| t)
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let (t, axis, positive) = self.solve(ray)?;
+        Some(self.face_hit(ray, t, axis, positive))
     }
 
     fn bounds(&self) -> Aabb {

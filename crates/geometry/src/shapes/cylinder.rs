@@ -98,8 +98,10 @@ impl Cylinder {
     }
 }
 
-impl Intersect for Cylinder {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl Cylinder {
+    /// The nearest crossing in the interval: its `t` and the part hit.
+    #[inline]
+    fn solve(&self, ray: &Ray) -> Option<(f32, Part)> {
         let o = ray.origin - self.base;
         let d = ray.dir;
         let (r, h) = (self.radius, self.height);
@@ -131,7 +133,21 @@ impl Intersect for Cylinder {
         if let Some(t) = cap_t(ray, o, h, r) {
             keep(&mut best, t, Part::Top);
         }
-        let (t, part) = best?;
+        best
+    }
+}
+
+impl Intersect for Cylinder {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.solve(ray).map(|(t, _)| t)
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let o = ray.origin - self.base;
+        let d = ray.dir;
+        let (r, h) = (self.radius, self.height);
+        let (t, part) = self.solve(ray)?;
         let rel = o + t * d;
         let (rel, n, uv) = match part {
             Part::Side => {

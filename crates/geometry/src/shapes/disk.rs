@@ -52,8 +52,11 @@ impl Disk {
     }
 }
 
-impl Intersect for Disk {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl Disk {
+    /// `(t, rel, r2)`: the crossing's `t`, its offset from the centre in
+    /// the disk's plane and that offset's squared length.
+    #[inline]
+    fn solve(&self, ray: &Ray) -> Option<(f32, Vec3, f32)> {
         let denom = ray.dir.dot(self.normal);
         if denom == 0.0 {
             return None;
@@ -68,6 +71,18 @@ impl Intersect for Disk {
         if r2 > self.radius * self.radius {
             return None;
         }
+        Some((t, rel, r2))
+    }
+}
+
+impl Intersect for Disk {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.solve(ray).map(|(t, _, _)| t)
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let (t, rel, r2) = self.solve(ray)?;
         let bitangent = self.normal.cross(self.tangent);
         let angle = rel.dot(bitangent).atan2(rel.dot(self.tangent));
         let u = angle.rem_euclid(std::f32::consts::TAU) / std::f32::consts::TAU;

@@ -55,15 +55,18 @@ impl Plane {
 }
 
 impl Intersect for Plane {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
         let denom = ray.dir.dot(self.normal);
         if denom == 0.0 {
             return None;
         }
         let t = (self.point - ray.origin).dot(self.normal) / denom;
-        if !ray.contains(t) {
-            return None;
-        }
+        ray.contains(t).then_some(t)
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let t = self.intersect_t(ray)?;
         let rel = ray.at(t) - self.point;
         // Project exactly onto the plane.
         let rel = rel - self.normal * rel.dot(self.normal);

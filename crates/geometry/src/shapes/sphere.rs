@@ -50,8 +50,12 @@ impl Sphere {
     }
 }
 
-impl Intersect for Sphere {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl Sphere {
+    /// The `t` of the nearest crossing in the ray's interval (shared by
+    /// [`Intersect::intersect`] and [`Intersect::intersect_t`], so both
+    /// give the same `t` bit for bit).
+    #[inline]
+    fn solve(&self, ray: &Ray) -> Option<f32> {
         let f = ray.origin - self.center;
         let a = ray.dir.length_squared();
         let b = -f.dot(ray.dir);
@@ -66,7 +70,18 @@ impl Intersect for Sphere {
         let q = b + b.signum() * disc.sqrt();
         let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q / a) };
         let ts = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-        let t = super::first_in(ray, ts)?;
+        super::first_in(ray, ts)
+    }
+}
+
+impl Intersect for Sphere {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        self.solve(ray)
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let t = self.solve(ray)?;
         let n = (ray.at(t) - self.center) / self.radius;
         let n = n.normalize_or(Vec3::Y);
         // Re-project onto the surface to remove the error in t.

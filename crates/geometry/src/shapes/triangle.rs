@@ -39,6 +39,11 @@ impl Triangle {
 }
 
 impl Intersect for Triangle {
+    #[inline]
+    fn intersect_t(&self, ray: &Ray) -> Option<f32> {
+        TriangleRay::new(ray).intersect(self.v[0], self.v[1], self.v[2]).map(|(t, _, _)| t)
+    }
+
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let (t, b1, b2) = TriangleRay::new(ray).intersect(self.v[0], self.v[1], self.v[2])?;
         let b0 = 1.0 - b1 - b2;
