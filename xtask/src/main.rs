@@ -1,13 +1,14 @@
 //! Project automation: `cargo xtask <command>`.
 //!
 //! Commands: `render [SCENE] [prism flags…]`, `assets [--check]`,
-//! `bench […]`, `bless`, `ci`. Each lives in its own module with a
+//! `bench […]`, `bless`, `fuzz [TARGET] [--seconds N]`, `ci`. Each lives in its own module with a
 //! `run(args)` entry point; this file only dispatches.
 
 mod assets;
 mod bench;
 mod bless;
 mod ci;
+mod fuzz;
 mod render;
 
 use anyhow::{Result, bail};
@@ -25,6 +26,7 @@ fn main() -> Result<()> {
         Some("assets") => assets::run(&rest),
         Some("bench") => bench::run(&rest),
         Some("bless") => bless::run(&rest),
+        Some("fuzz") => fuzz::run(&rest),
         Some("help" | "-h" | "--help") | None => {
             print_help();
             Ok(())
@@ -44,6 +46,7 @@ fn print_help() {
          assets [--check]        regenerate (or check) the generated files under assets/\n  \
          bench [ARGS…]           BVH and render benchmarks (release); see docs/benchmarks.md\n  \
          bless                   re-render the golden reference images after an intended change\n  \
+         fuzz [TARGET] [--seconds N]  run the cargo-fuzz targets (scene, obj, texture); see docs/fuzzing.md\n  \
          ci                      fmt --check, clippy -D warnings, tests, docs (what CI should pass)\n"
     );
 }
