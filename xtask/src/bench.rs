@@ -1,9 +1,19 @@
 //! `cargo xtask bench`: release-built benchmarks.
 //!
 //! ```text
+//! cargo xtask bench                     both: BVH benchmark, then the seed render
 //! cargo xtask bench [BVH ARGS…]         acceleration-structure benchmark (prism-bench)
-//! cargo xtask bench --scene SCENE […]   render benchmark (not written yet)
+//! cargo xtask bench --scene SCENE [--threads 1,2] [--reps 5] [--width 1280] [--height 720] [--spp 4]
+//!                                       render benchmark (release `prism render`)
 //! ```
+//!
+//! The render part builds the `prism` binary in release mode and runs
+//! `prism render SCENE --threads N` (`--reps` times per thread count, output
+//! to a temporary directory), parsing its closing line (`…, 0.47 s, 7.87 M
+//! rays, 16.72 M rays/s`); it reports the medians of the render time and
+//! of the rays per second, and of the whole process's wall time (scene
+//! loading and PNG writing included). Defaults: `scenes/seed.toml` at
+//! 1280×720, 4 samples per pixel, 1 and 2 threads, 5 repetitions.
 //!
 //! The BVH part builds the `prism-bench` binary in release mode and runs it
 //! from the project root with `--data ../shared/data` unless `--data` is
@@ -12,9 +22,15 @@
 //! to stdout, the table to stderr. See docs/benchmarks.md.
 
 use crate::{cargo, project_root, run_checked};
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
+use std::path::Path;
+use std::time::Instant;
 
 pub fn run(args: &[String]) -> Result<()> {
+    if args.is_empty() {
+        bvh(args)?;
+        return render(&[]);
+    }
     if args.iter().any(|a| a == "--scene") { render(args) } else { bvh(args) }
 }
 
@@ -34,7 +50,127 @@ fn bvh(args: &[String]) -> Result<()> {
     run_checked(&mut cmd)
 }
 
-/// The render benchmark over a scene file (`--scene`): a later step.
-fn render(_args: &[String]) -> Result<()> {
-    bail!("the render benchmark (`cargo xtask bench --scene …`) is not written yet")
+/// The render benchmark over a scene file (`--scene`, default the seed).
+fn render(args: &[String]) -> Result<()> {
+    let root = project_root();
+    let mut scene = "scenes/seed.toml".to_string();
+    let (mut width, mut height, mut spp, mut reps) = (1280u32, 720u32, 4u32, 5usize);
+    let mut threads = vec![1usize, 2];
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = || it.next().with_context(|| format!("{a} needs a value"));
+        match a.as_str() {
+            "--scene" => scene = value()?.clone(),
+            "--width" => width = value()?.parse().context("--width")?,
+            "--height" => height = value()?.parse().context("--height")?,
+            "--spp" => spp = value()?.parse().context("--spp")?,
+            "--reps" => reps = value()?.parse::<usize>().context("--reps")?.max(1),
+            "--threads" => {
+                threads =
+                    value()?.split(',').map(str::parse).collect::<Result<_, _>>().context("--threads")?;
+            }
+            other => bail!("unknown render-benchmark argument {other:?}"),
+        }
+    }
+    run_checked(cargo().current_dir(&root).args(["build", "--release", "-p", "prism-cli"]))?;
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), Into::into);
+    let exe = target.join("release").join(format!("prism{}", std::env::consts::EXE_SUFFIX));
+    let out_dir = std::env::temp_dir().join(format!("prism-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&out_dir)?;
+    let out = out_dir.join("bench.png");
+    let mut rows = Vec::new();
+    for &n in &threads {
+        let mut runs = Vec::new();
+        for _ in 0..reps {
+            runs.push(render_once(&exe, &root, &scene, &out, [width, height, spp], n)?);
+        }
+        let median = |f: fn(&Run) -> f64| {
+            let mut v: Vec<f64> = runs.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let (render_s, mrays, process_s) =
+            (median(|r| r.seconds), median(|r| r.mrays_per_s), median(|r| r.process));
+        let rays = runs[0].mrays * 1e6;
+        println!(
+            "{{\"bench\":\"render\",\"scene\":{scene:?},\"width\":{width},\"height\":{height},\"spp\":{spp},\"threads\":{n},\"reps\":{reps},\"render_s\":{render_s},\"process_s\":{process_s:.3},\"rays\":{rays:.0},\"mrays_per_s\":{mrays}}}"
+        );
+        rows.push((n, render_s, process_s, rays, mrays));
+    }
+    let _ = std::fs::remove_dir_all(&out_dir);
+    eprintln!("\nrender {scene} {width}x{height}, {spp} spp, median of {reps}");
+    eprintln!("{:>7} {:>10} {:>11} {:>10} {:>9}", "threads", "render s", "process s", "M rays", "Mrays/s");
+    for (n, render_s, process_s, rays, mrays) in rows {
+        eprintln!("{n:>7} {render_s:>10.2} {process_s:>11.3} {:>10.2} {mrays:>9.2}", rays / 1e6);
+    }
+    Ok(())
+}
+
+/// One render's figures: its closing line and the process's wall time.
+struct Run {
+    seconds: f64,
+    mrays: f64,
+    mrays_per_s: f64,
+    process: f64,
+}
+
+fn render_once(
+    exe: &Path,
+    root: &Path,
+    scene: &str,
+    out: &Path,
+    size: [u32; 3],
+    threads: usize,
+) -> Result<Run> {
+    let start = Instant::now();
+    let output = std::process::Command::new(exe)
+        .current_dir(root)
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .args([
+            "--width",
+            &size[0].to_string(),
+            "--height",
+            &size[1].to_string(),
+            "--spp",
+            &size[2].to_string(),
+        ])
+        .args(["--threads", &threads.to_string()])
+        .output()
+        .with_context(|| format!("running {}", exe.display()))?;
+    let process = start.elapsed().as_secs_f64();
+    let text =
+        String::from_utf8_lossy(&output.stderr).into_owned() + &String::from_utf8_lossy(&output.stdout);
+    if !output.status.success() {
+        bail!("prism render failed ({}):\n{text}", output.status);
+    }
+    parse_closing_line(&text)
+        .map(|(seconds, mrays, mrays_per_s)| Run { seconds, mrays, mrays_per_s, process })
+        .with_context(|| format!("no closing line (`…, S s, R M rays, X M rays/s`) in:\n{text}"))
+}
+
+/// `(seconds, M rays, M rays/s)` from the last line of the form
+/// `OUT: W×H, N spp, 0.47 s, 7.87 M rays, 16.72 M rays/s`.
+fn parse_closing_line(text: &str) -> Option<(f64, f64, f64)> {
+    text.lines().rev().find_map(|line| {
+        let parts: Vec<&str> = line.trim().rsplitn(4, ", ").collect();
+        let [rate, rays, secs, _] = parts.as_slice() else { return None };
+        Some((
+            secs.strip_suffix(" s")?.parse().ok()?,
+            rays.strip_suffix(" M rays")?.parse().ok()?,
+            rate.strip_suffix(" M rays/s")?.parse().ok()?,
+        ))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn closing_line() {
+        let text = "progress\nout/seed.png: 1280×720, 4 spp, 0.47 s, 7.87 M rays, 16.72 M rays/s\n";
+        assert_eq!(super::parse_closing_line(text), Some((0.47, 7.87, 16.72)));
+        assert_eq!(super::parse_closing_line("nothing"), None);
+    }
 }
