@@ -253,7 +253,7 @@ fn every_build_quality_agrees() {
     let mut rng = Rng::new(99);
     let (meshes, objects) = common::random_scene(&mut rng, 60);
     for q in BuildQuality::ALL {
-        let options = BuildOptions { mesh_quality: q, top_quality: q };
+        let options = BuildOptions { mesh_quality: q, top_quality: q, ..BuildOptions::default() };
         let accel = Accel::build_with(meshes.clone(), objects.clone(), options).unwrap();
         let b = accel.bounds();
         for _ in 0..500 {

@@ -1,0 +1,157 @@
+//! The BVH2 and CWBVH mesh hierarchies (`BlasKind`) give the same answers:
+//! bit for bit between the two walks, and as brute force, on random rays
+//! including axis-parallel ones (`+0.0`/`-0.0` components), restricted
+//! intervals and rays spawned a few ULPs off a surface.
+
+mod common;
+
+use common::{Rng, compare_all, compare_closest, data_dir, load_obj, random_mesh, random_ray, random_scene};
+use prism_bvh::{Accel, BlasKind, BuildOptions, BuildQuality, Object, SceneHit};
+use prism_geometry::glam::Vec3;
+use prism_geometry::{Ray, Transform, TriangleMesh};
+use std::ops::ControlFlow;
+use std::sync::Arc;
+
+fn build(meshes: &[Arc<TriangleMesh>], objects: &[Object], q: BuildQuality, kind: BlasKind) -> Accel {
+    let options = BuildOptions { mesh_quality: q, mesh_layout: kind, ..BuildOptions::default() };
+    Accel::build_with(meshes.to_vec(), objects.to_vec(), options).unwrap()
+}
+
+/// Every crossing as sorted `(object, triangle, t bits)`.
+fn crossings(accel: &Accel, ray: &Ray) -> Vec<(u32, u32, u32)> {
+    let mut v = Vec::new();
+    accel.for_each_hit(ray, |h| {
+        v.push((h.object, h.triangle, h.hit.t.to_bits()));
+        ControlFlow::Continue(())
+    });
+    v.sort_unstable();
+    v
+}
+
+/// The two layouts agree on `ray`: the same `t` bit for bit, the same
+/// primitive unless another one is hit at exactly that `t`, the same
+/// occlusion answer and the same crossings.
+fn agree(a: &Accel, b: &Accel, ray: &Ray) -> Option<SceneHit> {
+    let (ha, hb) = (a.closest_hit(ray), b.closest_hit(ray));
+    match (&ha, &hb) {
+        (None, None) => {}
+        (Some(x), Some(y)) => {
+            assert_eq!(x.hit.t.to_bits(), y.hit.t.to_bits(), "t differs for {ray:?}:\n{x:?}\n{y:?}");
+            if (x.object, x.triangle) != (y.object, y.triangle) {
+                // An exact tie: both primitives are crossed at this t.
+                let all = crossings(a, ray);
+                for h in [x, y] {
+                    assert!(
+                        all.contains(&(h.object, h.triangle, h.hit.t.to_bits())),
+                        "different primitive, not a tie, for {ray:?}:\n{x:?}\n{y:?}"
+                    );
+                }
+            } else {
+                assert_eq!(x, y, "{ray:?}");
+            }
+        }
+        _ => panic!("hit/miss differs for {ray:?}:\n{ha:?}\n{hb:?}"),
+    }
+    assert_eq!(a.occluded(ray), b.occluded(ray), "occlusion differs for {ray:?}");
+    assert_eq!(crossings(a, ray), crossings(b, ray), "crossings differ for {ray:?}");
+    ha
+}
+
+/// Spawned rays off `h`: back along the normal's side, and a bounce.
+fn spawned(rng: &mut Rng, h: &SceneHit, toward: Vec3) -> [Ray; 2] {
+    [
+        Ray::spawn_to(h.hit.point, h.hit.geo_normal, toward),
+        Ray::spawn(h.hit.point, h.hit.geo_normal, rng.direction()),
+    ]
+}
+
+#[test]
+fn random_scenes_agree_across_layouts_and_with_brute_force() {
+    for (seed, q) in [(1u64, BuildQuality::Medium), (2, BuildQuality::Fastest), (3, BuildQuality::VerySlow)] {
+        let mut rng = Rng::new(seed * 977);
+        let (meshes, objects) = random_scene(&mut rng, 40);
+        let cw = build(&meshes, &objects, q, BlasKind::Cwbvh);
+        let b2 = build(&meshes, &objects, q, BlasKind::Bvh2);
+        let c = b2.bounds().center();
+        let size = b2.bounds().extent().max_element().max(1.0);
+        let mut hits = 0;
+        for _ in 0..4000 {
+            let ray = random_ray(&mut rng, c, size);
+            let hit = agree(&cw, &b2, &ray);
+            compare_closest(&b2, &ray).unwrap();
+            compare_all(&b2, &ray).unwrap();
+            if let Some(h) = hit {
+                hits += 1;
+                for r in spawned(&mut rng, &h, c + Vec3::new(1.0, 2.0, 1.5) * size) {
+                    agree(&cw, &b2, &r);
+                    compare_closest(&b2, &r).unwrap();
+                }
+            }
+        }
+        assert!(hits > 500, "{hits}");
+    }
+}
+
+/// Many instances of one dense mesh, rays of every kind, 100k of them.
+#[test]
+fn dense_mesh_agrees_across_layouts() {
+    let mut rng = Rng::new(42);
+    let mesh = Arc::new(random_mesh(&mut rng, 60));
+    let mut objects = Vec::new();
+    for k in 0..6 {
+        let t = Transform::translate(Vec3::new(k as f32 * 1.5, (k % 2) as f32 * 0.1, 0.0)).unwrap();
+        objects.push(Object::Mesh { mesh: 0, transform: t });
+    }
+    objects.push(Object::Mesh { mesh: 0, transform: Transform::rotate_y(0.6) });
+    let meshes = vec![mesh];
+    for q in [BuildQuality::Medium, BuildQuality::Slow] {
+        let cw = build(&meshes, &objects, q, BlasKind::Cwbvh);
+        let b2 = build(&meshes, &objects, q, BlasKind::Bvh2);
+        let c = b2.bounds().center();
+        let size = b2.bounds().extent().max_element();
+        let mut hits = 0;
+        for k in 0..50_000 {
+            let ray = random_ray(&mut rng, c, size);
+            if let Some(h) = agree(&cw, &b2, &ray) {
+                hits += 1;
+                for r in spawned(&mut rng, &h, c + Vec3::Y * size * 2.0) {
+                    agree(&cw, &b2, &r);
+                }
+                if k % 50 == 0 {
+                    compare_closest(&b2, &ray).unwrap();
+                }
+            }
+        }
+        assert!(hits > 2000, "{hits}");
+    }
+}
+
+#[test]
+fn bunny_agrees_across_layouts() {
+    let Some(path) = data_dir().map(|d| d.join("stanford-bunny.obj")).filter(|p| p.is_file()) else {
+        eprintln!("skipped: ../shared/data/stanford-bunny.obj is absent");
+        return;
+    };
+    let meshes = vec![Arc::new(load_obj(&path))];
+    let objects = vec![Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
+    let cw = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Cwbvh);
+    let b2 = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Bvh2);
+    let mut rng = Rng::new(7);
+    let c = b2.bounds().center();
+    let size = b2.bounds().extent().max_element();
+    let mut hits = 0;
+    for k in 0..20_000 {
+        let ray = random_ray(&mut rng, c, size);
+        if let Some(h) = agree(&cw, &b2, &ray) {
+            hits += 1;
+            for r in spawned(&mut rng, &h, c + Vec3::new(1.0, 2.0, 1.5) * size) {
+                agree(&cw, &b2, &r);
+            }
+            if k % 200 == 0 {
+                compare_closest(&b2, &ray).unwrap();
+            }
+        }
+    }
+    eprintln!("bunny: {hits} hits agree");
+    assert!(hits > 2000, "{hits}");
+}
