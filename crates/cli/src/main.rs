@@ -52,46 +52,9 @@ enum Command {
     View(ViewArgs),
 }
 
+/// Options shared by `render` and `view`.
 #[derive(Args)]
-struct ViewArgs {
-    /// The scene file, or an OBJ mesh to look at.
-    scene: PathBuf,
-    /// Window width in pixels.
-    #[arg(long, value_name = "W")]
-    width: Option<u32>,
-    /// Window height in pixels.
-    #[arg(long, value_name = "H")]
-    height: Option<u32>,
-    /// Samples per pixel to refine toward.
-    #[arg(long, value_name = "N")]
-    spp: Option<u32>,
-    /// Start with fog on.
-    #[arg(long, conflicts_with = "no_fog")]
-    fog: bool,
-    /// Start with fog off.
-    #[arg(long)]
-    no_fog: bool,
-    /// Worker threads [default: every core].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
-    threads: Option<u32>,
-    /// Maximum recursion depth of reflection and refraction rays.
-    #[arg(long, value_name = "N")]
-    max_depth: Option<u32>,
-    /// Where `s` saves snapshots [default: the current directory].
-    #[arg(long, value_name = "DIR")]
-    save_dir: Option<PathBuf>,
-    /// Print frame timings and the key-to-frame latency to stderr.
-    #[arg(short, long)]
-    verbose: bool,
-}
-
-#[derive(Args)]
-struct RenderArgs {
-    /// The scene file (TOML, see docs/scene-format.md), or an OBJ mesh to look at.
-    scene: PathBuf,
-    /// Output image, .png or .exr [default: out/NAME.png for a scene NAME.toml].
-    #[arg(short, long, value_name = "OUT")]
-    output: Option<PathBuf>,
+struct CommonArgs {
     /// Image width in pixels (alone: the height keeps the scene's aspect ratio).
     #[arg(long, value_name = "W")]
     width: Option<u32>,
@@ -113,6 +76,46 @@ struct RenderArgs {
     /// Maximum recursion depth of reflection and refraction rays.
     #[arg(long, value_name = "N")]
     max_depth: Option<u32>,
+}
+
+impl CommonArgs {
+    /// `--fog` / `--no-fog` as an override of the scene's fog.
+    fn fog(&self) -> Option<bool> {
+        match (self.fog, self.no_fog) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
+        }
+    }
+
+    fn threads(&self) -> Option<usize> {
+        self.threads.map(|t| t as usize)
+    }
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    /// The scene file, or an OBJ mesh to look at.
+    scene: PathBuf,
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Where `s` saves snapshots [default: the current directory].
+    #[arg(long, value_name = "DIR")]
+    save_dir: Option<PathBuf>,
+    /// Print frame timings and the key-to-frame latency to stderr.
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// The scene file (TOML, see docs/scene-format.md), or an OBJ mesh to look at.
+    scene: PathBuf,
+    /// Output image, .png or .exr [default: out/NAME.png for a scene NAME.toml].
+    #[arg(short, long, value_name = "OUT")]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    common: CommonArgs,
     /// No progress bar and no closing statistics line.
     #[arg(short, long)]
     quiet: bool,
@@ -208,18 +211,14 @@ fn main() -> ExitCode {
 }
 
 fn view_command(args: ViewArgs) -> Result<()> {
-    let fog = match (args.fog, args.no_fog) {
-        (true, _) => Some(true),
-        (_, true) => Some(false),
-        _ => None,
-    };
+    let fog = args.common.fog();
     prism_view::run(prism_view::ViewOptions {
         scene: args.scene,
-        width: args.width,
-        height: args.height,
-        spp: args.spp,
-        threads: args.threads.map(|t| t as usize),
-        max_depth: args.max_depth,
+        width: args.common.width,
+        height: args.common.height,
+        spp: args.common.spp,
+        threads: args.common.threads(),
+        max_depth: args.common.max_depth,
         fog,
         save_dir: args.save_dir,
         verbose: args.verbose,
@@ -244,18 +243,14 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
-    let fog = match (args.fog, args.no_fog) {
-        (true, _) => Some(true),
-        (_, true) => Some(false),
-        _ => None,
-    };
+    let fog = args.common.fog();
     let opts = LoadOptions {
         limits: args.limits.limits(),
         overrides: Overrides {
-            width: args.width,
-            height: args.height,
-            spp: args.spp,
-            max_depth: args.max_depth,
+            width: args.common.width,
+            height: args.common.height,
+            spp: args.common.spp,
+            max_depth: args.common.max_depth,
             fog,
             camera_pos: args.camera.camera_pos,
             look_at: args.camera.look_at,
@@ -291,7 +286,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
 
     let mut settings = loaded.settings.clone();
-    settings.threads = args.threads.map(|t| t as usize);
+    settings.threads = args.common.threads();
     let (w, h) = (loaded.info.width, loaded.info.height);
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
