@@ -126,32 +126,69 @@ fn dense_mesh_agrees_across_layouts() {
     }
 }
 
+/// Rays per shared mesh for the cross-layout comparison (issue 7 asks for
+/// 100,000 random rays on the real meshes). Brute force on every one of
+/// them would take minutes, so every ray is checked between the two
+/// independent walks (CWBVH and BVH2) and every 200th hit also against
+/// brute force (`meshes.rs` checks more rays that way).
+///
+/// The comparison allows `t` to differ by 1e-5 relative: the kitchen has
+/// coincident faces of opposite orientation (z-fighting) a few ULPs apart,
+/// and the BVH2 walk's exact float boxes can cull the nearer of two such
+/// faces when rounding in the slab test puts the box's entry a few ULPs
+/// past the other face's `t` (the CWBVH's quantised boxes are rounded
+/// outward, so it does not); either answer is a hit on that surface.
+const MESH_RAYS: usize = 100_000;
+
+/// The two layouts agree within rounding: the same hit or miss, `t` within
+/// 1e-5 relative, the same occlusion answer.
+fn agree_close(a: &Accel, b: &Accel, ray: &Ray) -> Option<SceneHit> {
+    let (ha, hb) = (a.closest_hit(ray), b.closest_hit(ray));
+    match (&ha, &hb) {
+        (None, None) => {}
+        (Some(x), Some(y)) => {
+            let tol = 1e-5 * x.hit.t.abs().max(1.0);
+            assert!((x.hit.t - y.hit.t).abs() <= tol, "t differs for {ray:?}:\n{x:?}\n{y:?}");
+        }
+        _ => panic!("hit/miss differs for {ray:?}:\n{ha:?}\n{hb:?}"),
+    }
+    assert_eq!(a.occluded(ray), b.occluded(ray), "occlusion differs for {ray:?}");
+    ha
+}
+
 #[test]
-fn bunny_agrees_across_layouts() {
-    let Some(path) = data_dir().map(|d| d.join("stanford-bunny.obj")).filter(|p| p.is_file()) else {
-        eprintln!("skipped: ../shared/data/stanford-bunny.obj is absent");
+fn shared_meshes_agree_across_layouts() {
+    let Some(dir) = data_dir() else {
+        eprintln!("skipped: ../shared/data is absent (looked beside the workspace root)");
         return;
     };
-    let meshes = vec![Arc::new(load_obj(&path))];
-    let objects = vec![Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
-    let cw = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Cwbvh);
-    let b2 = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Bvh2);
-    let mut rng = Rng::new(7);
-    let c = b2.bounds().center();
-    let size = b2.bounds().extent().max_element();
-    let mut hits = 0;
-    for k in 0..20_000 {
-        let ray = random_ray(&mut rng, c, size);
-        if let Some(h) = agree(&cw, &b2, &ray) {
-            hits += 1;
-            for r in spawned(&mut rng, &h, c + Vec3::new(1.0, 2.0, 1.5) * size) {
-                agree(&cw, &b2, &r);
-            }
-            if k % 200 == 0 {
-                compare_closest(&b2, &ray).unwrap();
+    for name in ["stanford-bunny.obj", "kitchen.obj", "teapot.obj", "spot.obj", "beast.obj"] {
+        let path = dir.join(name);
+        if !path.is_file() {
+            eprintln!("skipped {name}: not found in {}", dir.display());
+            continue;
+        }
+        let meshes = vec![Arc::new(load_obj(&path))];
+        let objects = vec![Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
+        let cw = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Cwbvh);
+        let b2 = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Bvh2);
+        let mut rng = Rng::new(7 + name.len() as u64);
+        let c = b2.bounds().center();
+        let size = b2.bounds().extent().max_element();
+        let mut hits = 0;
+        for k in 0..MESH_RAYS {
+            let ray = random_ray(&mut rng, c, size);
+            if let Some(h) = agree_close(&cw, &b2, &ray) {
+                hits += 1;
+                for r in spawned(&mut rng, &h, c + Vec3::new(1.0, 2.0, 1.5) * size) {
+                    agree_close(&cw, &b2, &r);
+                }
+                if k % 200 == 0 {
+                    compare_closest(&b2, &ray).unwrap();
+                }
             }
         }
+        eprintln!("{name}: {MESH_RAYS} rays, {hits} hits agree across layouts");
+        assert!(hits > MESH_RAYS / 10, "{name}: {hits}");
     }
-    eprintln!("bunny: {hits} hits agree");
-    assert!(hits > 2000, "{hits}");
 }
