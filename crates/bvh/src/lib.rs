@@ -1007,17 +1007,14 @@ mod tests {
     use super::*;
     use prism_geometry::glam::Vec2;
 
-    /// The AVX2-compiled queries give bit-for-bit the answers of the
-    /// plain ones (where this CPU has AVX2; otherwise there is nothing to
-    /// compare).
-    #[test]
-    fn wide_queries_match_plain_ones() {
-        let n = 40;
+    /// An `n`×`n` grid over the unit square in x/z, two triangles a cell,
+    /// raised to `y = sin(fx·u)·cos(fz·v)·amp` for `[fx, fz, amp]`.
+    fn wavy_grid(n: u32, [fx, fz, amp]: [f32; 3]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let mut positions = Vec::new();
         for j in 0..=n {
             for i in 0..=n {
                 let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
-                positions.push(Vec3::new(u, (u * 9.0).sin() * (v * 7.0).cos() * 0.3, v));
+                positions.push(Vec3::new(u, (u * fx).sin() * (v * fz).cos() * amp, v));
             }
         }
         let w = n + 1;
@@ -1029,6 +1026,15 @@ mod tests {
                 indices.push([a, a + w + 1, a + w]);
             }
         }
+        (positions, indices)
+    }
+
+    /// The AVX2-compiled queries give bit-for-bit the answers of the
+    /// plain ones (where this CPU has AVX2; otherwise there is nothing to
+    /// compare).
+    #[test]
+    fn wide_queries_match_plain_ones() {
+        let (positions, indices) = wavy_grid(40, [9.0, 7.0, 0.3]);
         let mesh = Arc::new(TriangleMesh::new(positions, None, None, indices).unwrap());
         let mut objects = Vec::new();
         for k in 0..4 {
@@ -1076,23 +1082,7 @@ mod tests {
     /// meshes built at every quality.
     #[test]
     fn built_hierarchies_validate() {
-        let n = 30;
-        let mut positions = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
-                positions.push(Vec3::new(u, (u * 7.0).sin() * (v * 5.0).cos() * 0.2, v));
-            }
-        }
-        let w = n + 1;
-        let mut indices = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                let a = j * w + i;
-                indices.push([a, a + 1, a + w + 1]);
-                indices.push([a, a + w + 1, a + w]);
-            }
-        }
+        let (positions, indices) = wavy_grid(30, [7.0, 5.0, 0.2]);
         let uvs = positions.iter().map(|p| Vec2::new(p.x, p.z)).collect();
         let mesh = TriangleMesh::new(positions, None, Some(uvs), indices).unwrap();
         for q in BuildQuality::ALL {
