@@ -49,9 +49,30 @@ const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 /// reinsertion, leaf collapsing, reinsertion), optionally pre-splitting
 /// the triangles `tris`, without obvhs's (slow) debug validation.
 pub(crate) fn build(
-    mut aabbs: Vec<ObAabb>,
+    aabbs: Vec<ObAabb>,
     tris: Option<&[obvhs::triangle::Triangle]>,
     p: BvhBuildParams,
+) -> Bvh2 {
+    let mut bvh = ploc_tree(aabbs, tris, &p);
+    if bvh.nodes.is_empty() {
+        return bvh;
+    }
+    collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
+    ReinsertionOptimizer::default().run(
+        &mut bvh,
+        p.reinsertion_batch_ratio * p.post_collapse_reinsertion_batch_ratio_multiplier,
+        None,
+    );
+    bvh
+}
+
+/// The binary tree both layouts start from: optional pre-splitting of
+/// `tris` (when `p.pre_split`), a PLOC build over `aabbs`, then one pass of
+/// reinsertion. Empty input gives an empty tree.
+pub(crate) fn ploc_tree(
+    mut aabbs: Vec<ObAabb>,
+    tris: Option<&[obvhs::triangle::Triangle]>,
+    p: &BvhBuildParams,
 ) -> Bvh2 {
     if aabbs.is_empty() {
         return Bvh2::default();
@@ -77,14 +98,7 @@ pub(crate) fn build(
         p.search_depth_threshold,
     );
     bvh.uses_spatial_splits = split;
-    let mut reinsertion = ReinsertionOptimizer::default();
-    reinsertion.run(&mut bvh, p.reinsertion_batch_ratio, None);
-    collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
-    reinsertion.run(
-        &mut bvh,
-        p.reinsertion_batch_ratio * p.post_collapse_reinsertion_batch_ratio_multiplier,
-        None,
-    );
+    ReinsertionOptimizer::default().run(&mut bvh, p.reinsertion_batch_ratio, None);
     bvh
 }
 

@@ -85,10 +85,8 @@ mod tri;
 use cwbvh::BoxRay;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb as ObAabb;
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
-use obvhs::ploc::PlocBuilder;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
@@ -497,7 +495,7 @@ fn build_cwbvh(tris: &[obvhs::triangle::Triangle], quality: BuildQuality, allow_
 }
 
 fn build_cwbvh_aabbs(
-    mut aabbs: Vec<ObAabb>,
+    aabbs: Vec<ObAabb>,
     tris: Option<&[obvhs::triangle::Triangle]>,
     quality: BuildQuality,
 ) -> CwBvh {
@@ -505,28 +503,7 @@ fn build_cwbvh_aabbs(
         return CwBvh::default();
     }
     let p = quality.params();
-    let mut indices: Vec<u32> = (0..aabbs.len() as u32).collect();
-    let mut split = false;
-    if let (true, Some(tris)) = (p.pre_split, tris) {
-        let (mut largest, mut total) = (0.0f32, 0.0f32);
-        for a in &aabbs {
-            let h = a.half_area();
-            largest = largest.max(h);
-            total += h;
-        }
-        let avg = total / aabbs.len() as f32;
-        obvhs::splits::split_aabbs_preset(&mut aabbs, &mut indices, tris, avg, largest);
-        split = true;
-    }
-    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-        p.ploc_search_distance,
-        &aabbs,
-        indices,
-        p.sort_precision,
-        p.search_depth_threshold,
-    );
-    bvh2.uses_spatial_splits = split;
-    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+    let bvh2 = bvh2::ploc_tree(aabbs, tris, &p);
     bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
