@@ -1,0 +1,60 @@
+//! Support shared by prism's tests, examples and benchmarks.
+//!
+//! Not part of the renderer: only `dev-dependencies` (and the benchmark
+//! binary) use it. It depends on `prism-geometry` alone, so that any crate
+//! above geometry may use it without a cycle.
+//!
+//! # Missing tools and data
+//!
+//! Some tests need things the repository does not hold: the shared meshes in
+//! `../shared/data`, or Xvfb and xdotool for the viewer's window test. Outside
+//! CI such a test skips itself and prints why; under CI (`CI` set to anything
+//! but `false` or `0`, as `.ci/run` does) it fails instead, because there a
+//! skip would hide a missing install step.
+
+use std::path::PathBuf;
+
+/// Whether we run under CI: the environment variable `CI` is set to
+/// something other than empty, `0` or `false` (`.ci/run` exports `CI=true`).
+#[must_use]
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| !matches!(v.trim(), "" | "0" | "false" | "FALSE" | "False"))
+}
+
+/// Reports that a test cannot run because `reason` (what is missing, and
+/// where it was looked for). Outside CI it prints `skipped: REASON` and
+/// returns, and the caller returns early; under CI it panics, failing the
+/// test.
+///
+/// # Panics
+/// Under CI, always: a test whose tools or data are missing must fail there.
+pub fn skip(reason: &str) {
+    assert!(!in_ci(), "CI is set but {reason}: CI must provide it (see .ci/run)");
+    eprintln!("skipped: {reason}");
+}
+
+/// `<workspace root>/../shared/data`, the shared test meshes, if present;
+/// otherwise [`skip`]s (so under CI this panics) and returns `None`.
+#[must_use]
+pub fn shared_data() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        skip(&format!("the shared meshes are absent (looked for {})", dir.display()));
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shared_data_is_found_or_reported() {
+        // Either way this must not panic outside CI; under CI the data must be there.
+        if let Some(d) = shared_data() {
+            assert!(d.is_dir());
+        }
+    }
+}
