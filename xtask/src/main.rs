@@ -10,6 +10,8 @@ mod bless;
 mod ci;
 mod fuzz;
 mod render;
+#[cfg(test)]
+mod tidy;
 
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
@@ -47,7 +49,7 @@ fn print_help() {
          bench [ARGS…]           BVH and render benchmarks (release); see docs/benchmarks.md\n  \
          bless                   re-render the golden reference images after an intended change\n  \
          fuzz [TARGET] [--seconds N]  run the cargo-fuzz targets (scene, obj, texture); see docs/fuzzing.md\n  \
-         ci                      fmt --check, clippy -D warnings, tests, docs (what CI should pass)\n"
+         ci                      fmt --check, clippy -D warnings, tests (with tidy), docs, fuzz build: what CI runs\n"
     );
 }
 
