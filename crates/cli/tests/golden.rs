@@ -11,9 +11,12 @@
 //!
 //! After an intended change: `cargo xtask bless` (which sets
 //! `PRISM_BLESS=1`) rewrites the references; review them before committing.
+//! Only `PRISM_BLESS=1` writes; unset, empty or `0` compares, and any other
+//! value fails the test (see [`bless_requested`]).
 
 use prism_scene::{LoadOptions, Overrides, load_scene_with};
 use prism_shade::{RenderHooks, render};
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 const WIDTH: u32 = 160;
@@ -83,11 +86,44 @@ fn compare(a: &[u8], b: &[u8]) -> Diff {
     Diff { mean, p995, max, per_pixel }
 }
 
+/// Whether `PRISM_BLESS` (its value `value`) asks to write the golden
+/// images: only `1`, as `cargo xtask bless` sets it. Unset, empty or `0`
+/// compare; anything else is refused, so that neither `PRISM_BLESS=0` nor
+/// a typo can overwrite the references, and a wrong value is not silently
+/// read as "compare" either.
+fn bless_requested(value: Option<&OsStr>) -> Result<bool, String> {
+    match value.map(|v| v.to_str().map(str::trim)) {
+        None | Some(Some("" | "0")) => Ok(false),
+        Some(Some("1")) => Ok(true),
+        Some(_) => Err(format!(
+            "PRISM_BLESS={:?}: set it to 1 to write the golden images (`cargo xtask bless`), or to 0 or nothing to compare",
+            value.unwrap_or_default()
+        )),
+    }
+}
+
+#[test]
+fn only_prism_bless_1_writes_golden_images() {
+    let parse = |v: &str| bless_requested(Some(OsStr::new(v)));
+    assert_eq!(bless_requested(None), Ok(false));
+    assert_eq!(parse("1"), Ok(true));
+    assert_eq!(parse(" 1\n"), Ok(true));
+    assert_eq!(parse("0"), Ok(false));
+    assert_eq!(parse(""), Ok(false));
+    for bad in ["true", "yes", "2", "01", "no", "false"] {
+        let err = parse(bad).expect_err(bad);
+        assert!(err.contains("PRISM_BLESS") && err.contains(bad), "{err}");
+    }
+}
+
 #[test]
 fn every_scene_matches_its_golden_image() {
-    let bless = std::env::var_os("PRISM_BLESS").is_some();
-    let only: Option<Vec<String>> =
-        std::env::var("PRISM_BLESS_ONLY").ok().map(|s| s.split(',').map(str::to_string).collect());
+    let bless = bless_requested(std::env::var_os("PRISM_BLESS").as_deref()).unwrap_or_else(|e| panic!("{e}"));
+    // PRISM_BLESS_ONLY narrows a bless; a comparison always covers every scene.
+    let only: Option<Vec<String>> = std::env::var("PRISM_BLESS_ONLY")
+        .ok()
+        .filter(|_| bless)
+        .map(|s| s.split(',').map(str::to_string).collect());
     let scenes = scenes();
     assert!(scenes.len() >= 10, "expected the seed, mesh and feature scenes, found {}", scenes.len());
     let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("golden");
@@ -150,12 +186,15 @@ fn every_scene_matches_its_golden_image() {
 fn every_golden_image_has_a_scene() {
     let names: Vec<String> =
         scenes().iter().filter_map(|p| p.file_stem().and_then(|s| s.to_str()).map(str::to_string)).collect();
-    let Ok(entries) = std::fs::read_dir(golden_dir()) else { return };
+    let entries = std::fs::read_dir(golden_dir()).expect("tests/golden/ is readable");
+    let mut count = 0;
     for e in entries {
+        count += 1;
         let p = e.expect("entry").path();
         let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
         assert!(names.contains(&stem), "{} has no scene in scenes/; delete it", p.display());
     }
+    assert!(count >= names.len(), "{count} golden images for {} scenes", names.len());
 }
 
 #[test]

@@ -6,11 +6,14 @@
 //! - A scene written here: `r` reloads it; after it is broken, `r` shows
 //!   the error (stderr and title) and the last good scene stays.
 //!
-//! Skipped, with the reason printed, where Xvfb or xdotool is missing
-//! (`.ci/install-view-deps.sh` installs them). Also, always: without a
-//! display the viewer fails with a clear message.
+//! Where Xvfb or xdotool is missing the window tests skip themselves with
+//! the reason printed, and without ImageMagick's `import` the screen is not
+//! compared with the saved images; under CI (`CI=true`, as `.ci/run` sets
+//! it) each of these fails instead (`prism_testkit::skip`).
+//! `.ci/install-deps.sh` installs them. Also, always: without a display
+//! the viewer fails with a clear message.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{self, Receiver};
@@ -292,23 +295,20 @@ impl Session {
     }
 }
 
-/// True (with the reason printed) where Xvfb or xdotool is missing.
-fn skip(test: &str) -> bool {
-    let missing = on_path("Xvfb").is_none() || on_path("xdotool").is_none();
-    if missing {
-        // Straight to stderr, past the test harness's capture, so that the
-        // reason shows in a plain `cargo test`.
-        let _ = writeln!(
-            std::io::stderr(),
-            "SKIPPED {test}: Xvfb and xdotool are not on PATH (run .ci/install-view-deps.sh)"
-        );
+/// Whether Xvfb and xdotool are on PATH. Where one is missing this
+/// [`prism_testkit::skip`]s: prints why and returns false, or under CI fails.
+fn window_tools_present(test: &str) -> bool {
+    let missing: Vec<&str> = ["Xvfb", "xdotool"].into_iter().filter(|t| on_path(t).is_none()).collect();
+    if missing.is_empty() {
+        return true;
     }
-    missing
+    prism_testkit::skip(&format!("{test}: {} not on PATH (run .ci/install-deps.sh)", missing.join(" and ")));
+    false
 }
 
 #[test]
 fn fog_keys_in_a_real_window() {
-    if skip("fog_keys_in_a_real_window") {
+    if !window_tools_present("fog_keys_in_a_real_window") {
         return;
     }
     let dir = temp_dir("fog");
@@ -370,16 +370,17 @@ fn fog_keys_in_a_real_window() {
                 assert!(off * 100 < total, "{what}: the screen differs from the saved image in {off} pixels");
             }
         }
-        _ => {
-            println!("note: no screenshots (ImageMagick's `import` missing); compared the saved images only")
-        }
+        _ => prism_testkit::skip(
+            "fog_keys_in_a_real_window: no screenshots (ImageMagick's `import` is not on PATH or could not \
+             capture the window), so only the saved images were compared, not the screen",
+        ),
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn reload_in_a_real_window_keeps_the_last_good_scene() {
-    if skip("reload_in_a_real_window_keeps_the_last_good_scene") {
+    if !window_tools_present("reload_in_a_real_window_keeps_the_last_good_scene") {
         return;
     }
     let dir = temp_dir("reload");
