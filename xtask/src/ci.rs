@@ -1,13 +1,37 @@
-//! `cargo xtask ci`: everything a commit must pass.
+//! `cargo xtask ci`: everything a commit must pass, and exactly what CI
+//! (`.ci/run`) runs: rustfmt, clippy with warnings denied, every test
+//! (including the tidy tests of `xtask/src/tidy.rs`), the docs with
+//! warnings denied, and a build of the fuzz targets.
 
-use crate::{cargo, run_checked};
+use crate::{cargo, fuzz, run_checked};
 use anyhow::Result;
+use std::time::Instant;
 
 pub fn run(_args: &[String]) -> Result<()> {
+    let start = Instant::now();
+    let step =
+        |name: &str, t: Instant| eprintln!("xtask ci: {name} passed ({:.0} s)", t.elapsed().as_secs_f64());
+
+    let t = Instant::now();
     run_checked(cargo().args(["fmt", "--all", "--check"]))?;
+    step("fmt", t);
+
+    let t = Instant::now();
     run_checked(cargo().args(["clippy", "--workspace", "--all-targets", "--", "-D", "warnings"]))?;
+    step("clippy", t);
+
+    let t = Instant::now();
     run_checked(cargo().args(["test", "--workspace"]))?;
+    step("tests", t);
+
+    let t = Instant::now();
     run_checked(cargo().args(["doc", "--workspace", "--no-deps"]).env("RUSTDOCFLAGS", "-D warnings"))?;
-    eprintln!("xtask ci: all checks passed");
+    step("docs", t);
+
+    let t = Instant::now();
+    fuzz::build()?;
+    step("fuzz build", t);
+
+    eprintln!("xtask ci: all checks passed in {:.0} s", start.elapsed().as_secs_f64());
     Ok(())
 }

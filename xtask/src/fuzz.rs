@@ -13,6 +13,30 @@ use anyhow::{Context, Result, bail};
 use std::fs;
 use std::path::{Path, PathBuf};
 
+/// Where [`build`] puts the fuzz targets: apart from the workspace's own
+/// builds (other flags, another lock file), so neither invalidates the other.
+pub const BUILD_DIR: &str = "target/fuzz";
+
+/// Builds every fuzz target without running it, as `cargo xtask ci` does:
+/// a plain debug `cargo build` of `fuzz/` (no cargo-fuzz, no nightly flags,
+/// no sanitizer), with `--cfg fuzzing` as cargo-fuzz sets it, so that the
+/// targets and prism's crates compile and link against libFuzzer as a
+/// fuzzing run would build them.
+pub fn build() -> Result<()> {
+    let root = project_root();
+    let mut flags = std::env::var("RUSTFLAGS").unwrap_or_default();
+    flags.push_str(" --cfg fuzzing");
+    let mut cmd = cargo();
+    cmd.arg("build")
+        .arg("--manifest-path")
+        .arg(root.join("fuzz/Cargo.toml"))
+        .arg("--target-dir")
+        .arg(root.join(BUILD_DIR))
+        .arg("--bins")
+        .env("RUSTFLAGS", flags.trim());
+    run_checked(&mut cmd).context("building the fuzz targets (fuzz/) failed")
+}
+
 /// The targets, in the order `all` runs them.
 pub const TARGETS: [&str; 3] = ["scene", "obj", "texture"];
 
