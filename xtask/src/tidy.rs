@@ -6,8 +6,9 @@
 //!   `//!` line saying what it holds;
 //! - no `#[ignore]` and no `should_panic` anywhere: a test runs, and says
 //!   what it expects;
-//! - only `crates/cli` prints; library code returns values and errors
-//!   (tests, examples, benchmarks, xtask and the listed exceptions may);
+//! - only `crates/cli` prints or exits; library code returns values and
+//!   errors (tests, examples, benchmarks, xtask and the listed exceptions
+//!   may print);
 //! - `unsafe` only in the listed places, each with a `// SAFETY:` comment
 //!   just above it;
 //! - the crate layering, from `cargo metadata`, for every workspace crate.
@@ -71,6 +72,18 @@ const MAY_USE_UNSAFE: &[&str] = &["crates/bvh/src/"];
 /// The macros that print.
 const PRINTS: [&str; 5] = ["println", "eprintln", "print", "eprint", "dbg"];
 
+/// What a line does that only the CLI may: print (a macro, or a handle on
+/// stdout/stderr to write to) or end the process.
+fn prints(line: &str) -> Option<&'static str> {
+    if let Some(m) = PRINTS.iter().find(|m| has_token(line, m, Some('!'))) {
+        return Some(m);
+    }
+    [("stdout", "stdout()"), ("stderr", "stderr()"), ("exit", "process::exit")]
+        .into_iter()
+        .find(|(f, _)| has_token(line, f, Some('(')) && (*f != "exit" || line.contains("process::exit")))
+        .map(|(_, what)| what)
+}
+
 fn root() -> PathBuf {
     crate::project_root()
 }
@@ -112,11 +125,16 @@ struct Source {
     code: Vec<String>,
 }
 
+impl Source {
+    fn new(path: String, text: &str) -> Self {
+        Source { path, raw: text.lines().map(str::to_string).collect(), code: strip(text) }
+    }
+}
+
 fn read(rel: &Path) -> Source {
     let text = std::fs::read_to_string(root().join(rel))
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", rel.display()));
-    let path = rel.to_string_lossy().replace('\\', "/");
-    Source { path, raw: text.lines().map(str::to_string).collect(), code: strip(&text) }
+    Source::new(rel.to_string_lossy().replace('\\', "/"), &text)
 }
 
 /// The lines of `text` with comments and literal contents replaced by spaces
@@ -300,8 +318,8 @@ fn no_ignored_or_should_panic_tests() {
     });
 }
 
-/// The `mod NAME;` declarations under `#[cfg(test)]` in `src`, as the
-/// paths of the files they name (`NAME.rs` and `NAME/mod.rs`).
+/// The `mod NAME;` declarations under `#[cfg(test)]` in `src`, as path
+/// prefixes of the files they hold (`NAME.rs`, and everything in `NAME/`).
 fn test_module_files(src: &Source) -> Vec<String> {
     let dir = match src.path.rsplit_once('/') {
         Some((dir, "lib.rs" | "main.rs" | "mod.rs")) => dir.to_string(),
@@ -314,7 +332,7 @@ fn test_module_files(src: &Source) -> Vec<String> {
             && let Some(name) = decl.strip_prefix("mod ").and_then(|d| d.strip_suffix(';'))
         {
             files.push(format!("{dir}/{name}.rs"));
-            files.push(format!("{dir}/{name}/mod.rs"));
+            files.push(format!("{dir}/{name}/"));
         }
     }
     files
@@ -333,7 +351,7 @@ fn only_the_cli_prints() {
     let test_files: BTreeSet<String> = sources.iter().flat_map(test_module_files).collect();
     let mut problems = Vec::new();
     for src in &sources {
-        if test_files.contains(&src.path)
+        if test_files.iter().any(|t| src.path.starts_with(t.as_str()))
             || MAY_PRINT
                 .iter()
                 .any(|(p, _)| if p.ends_with('/') { src.path.starts_with(p) } else { src.path == *p })
@@ -351,14 +369,14 @@ fn only_the_cli_prints() {
             {
                 break;
             }
-            if let Some(m) = PRINTS.iter().find(|m| has_token(line, m, Some('!'))) {
-                problems.push(format!("{}:{}: {m}!: {}", src.path, n + 1, src.raw[n].trim()));
+            if let Some(what) = prints(line) {
+                problems.push(format!("{}:{}: {what}: {}", src.path, n + 1, src.raw[n].trim()));
             }
         }
     }
     assert!(
         problems.is_empty(),
-        "only crates/cli prints; libraries return values and errors (or add a justified entry to MAY_PRINT in xtask/src/tidy.rs):\n{}",
+        "only crates/cli prints or exits; libraries return values and errors (or add a justified entry to MAY_PRINT in xtask/src/tidy.rs):\n{}",
         problems.join("\n")
     );
 }
@@ -520,4 +538,18 @@ fn the_stripper_hides_comments_and_literals_only() {
     assert!(has_token("eprintln !(x)", "eprintln", Some('!')));
     assert!(!has_token("w.print(x)", "print", Some('!')));
     assert!(!has_token("#![forbid(unsafe_code)]", "unsafe", None));
+    // What counts as printing.
+    assert_eq!(prints("    eprintln!(\"{x}\");"), Some("eprintln"));
+    assert_eq!(prints("let _ = writeln!(std::io::stderr(), \"x\");"), Some("stderr()"));
+    assert_eq!(prints("std::process::exit(2);"), Some("process::exit"));
+    assert_eq!(prints("let printed = self.exit(); fmt.print_stats(x);"), None);
+}
+
+#[test]
+fn test_modules_are_found() {
+    let lib = Source::new("crates/x/src/lib.rs".into(), "//! x\n#[cfg(test)]\nmod tests;\nmod real;\n");
+    assert_eq!(test_module_files(&lib), ["crates/x/src/tests.rs", "crates/x/src/tests/"]);
+    let walk =
+        Source::new("crates/x/src/walk.rs".into(), "#[cfg(test)]\nmod checks;\n#[cfg(test)]\nmod t {}\n");
+    assert_eq!(test_module_files(&walk), ["crates/x/src/walk/checks.rs", "crates/x/src/walk/checks/"]);
 }
