@@ -1,7 +1,8 @@
 //! `cargo xtask ci`: everything a commit must pass, and exactly what CI
-//! (`.ci/run`) runs: rustfmt, clippy with warnings denied, every test
-//! (including the tidy tests of `xtask/src/tidy.rs`), the docs with
-//! warnings denied, and a build of the fuzz targets.
+//! (`.ci/run`) runs: rustfmt (the workspace and `fuzz/`), clippy with
+//! warnings denied, every test (including the tidy tests of
+//! `xtask/src/tidy.rs`), the docs with warnings denied, and a build of the
+//! fuzz targets.
 
 use crate::{cargo, fuzz, run_checked};
 use anyhow::Result;
@@ -14,6 +15,8 @@ pub fn run(_args: &[String]) -> Result<()> {
 
     let t = Instant::now();
     run_checked(cargo().args(["fmt", "--all", "--check"]))?;
+    // fuzz/ is outside the workspace, so `--all` does not reach it.
+    run_checked(cargo().args(["fmt", "--manifest-path", "fuzz/Cargo.toml", "--all", "--check"]))?;
     step("fmt", t);
 
     let t = Instant::now();
