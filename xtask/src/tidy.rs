@@ -48,7 +48,9 @@ const EXTERNAL: &[(&str, &[&str])] = &[
 
 /// Crate-source paths (a file, or a folder ending in `/`) outside `crates/cli`
 /// that may print, and why. Everywhere else under `crates/*/src`, printing
-/// is refused outside test code.
+/// is refused outside test code. Not checked at all, so free to print:
+/// every crate's `tests/`, `examples/` and `benches/`, `#[cfg(test)]`
+/// modules, `xtask/` (automation) and `fuzz/` (harnesses).
 const MAY_PRINT: &[(&str, &str)] = &[
     ("crates/bench/src/", "the benchmark binary: its output is the measurements"),
     ("crates/testkit/src/", "test support: prints why a test skips itself"),
