@@ -43,7 +43,6 @@ const EXTERNAL: &[(&str, &[&str])] = &[
     ("prism-geometry", &["glam"]),
     // The BVH: obvhs builds the trees, rayon builds them in parallel.
     ("prism-bvh", &["obvhs", "rayon"]),
-    ("prism-testkit", &[]),
 ];
 
 /// Crate-source paths (a file, or a folder ending in `/`) outside `crates/cli`
