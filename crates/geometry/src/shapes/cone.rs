@@ -1,7 +1,7 @@
 //! Finite cones with a base cap.
 
-use super::cylinder::{Part, azimuth_u, cap_t, cap_uv, keep};
-use super::{SEAL, check_finite, check_positive};
+use super::upright::{self, Part, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
+use super::{check_finite, check_positive};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -56,27 +56,6 @@ impl Cone {
     }
 }
 
-/// Roots of `a t² + 2 hb t + c = 0` given its discriminant `hb² − a c`, in
-/// ascending order; `a` may be zero (one root).
-#[inline]
-fn roots_from_disc(a: f32, hb: f32, c: f32, disc: f32) -> Option<(f32, f32)> {
-    if a == 0.0 {
-        return (hb != 0.0).then(|| {
-            let t = -c / (2.0 * hb);
-            (t, t)
-        });
-    }
-    if !(disc >= 0.0) {
-        return None;
-    }
-    let q = -(hb + hb.signum() * disc.sqrt());
-    if q == 0.0 {
-        return Some((0.0, 0.0));
-    }
-    let (t0, t1) = (q / a, c / q);
-    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
-}
-
 impl Cone {
     /// The nearest crossing in the interval: its `t` and the part hit.
     #[inline]
@@ -107,15 +86,8 @@ impl Cone {
         if disc < 0.0 && w.length_squared() <= noise * noise {
             disc = 0.0;
         }
-        if let Some(roots) = roots_from_disc(a, hb, c, disc) {
-            let eps = SEAL * h;
-            for t in [roots.0, roots.1] {
-                let y = o.y + t * d.y;
-                if ray.contains(t) && y >= -eps && y <= h + eps {
-                    keep(&mut best, t, Part::Side);
-                    break;
-                }
-            }
+        if let Some(t) = roots_from_disc(a, hb, c, disc).and_then(|roots| side_t(ray, o, roots, h)) {
+            keep(&mut best, t, Part::Side);
         }
         if let Some(t) = cap_t(ray, o, 0.0, r) {
             keep(&mut best, t, Part::Bottom);
@@ -154,8 +126,7 @@ impl Intersect for Cone {
     }
 
     fn bounds(&self) -> Aabb {
-        let r = self.radius;
-        Aabb::new(self.base - Vec3::new(r, 0.0, r), self.base + Vec3::new(r, self.height, r))
+        upright::bounds(self.base, self.radius, self.height)
     }
 }
 
