@@ -16,7 +16,7 @@
 //!
 //! * [`rng`]: the PCG32 generator ([`Rng`]);
 //! * [`obj`]: an OBJ file as one positions-only mesh ([`load_obj`]);
-//! * [`bench`]: the benchmark's framing camera and ray sets.
+//! * [`mod@bench`]: the benchmark's framing camera and ray sets.
 
 pub mod bench;
 pub mod obj;
