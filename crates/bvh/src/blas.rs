@@ -192,7 +192,7 @@ impl Visit for &mut ClosestTriangle<'_> {
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         if let Some((t, b1, b2)) = self.tr.intersect(&self.tris[slot as usize]) {
             self.tr.set_t_max(t);
-            br.t_max = t;
+            br.set_t_max(t);
             self.found = Some((slot, t, b1, b2));
         }
         true

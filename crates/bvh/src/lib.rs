@@ -311,8 +311,11 @@ impl Visit for &mut ClosestObject<'_> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         let i = self.accel.tlas_objects[slot as usize];
+        let t_max = self.ray.t_max;
         self.accel.closest_object(i, &mut self.ray, &mut self.best);
-        br.t_max = self.ray.t_max;
+        if self.ray.t_max != t_max {
+            br.set_t_max(self.ray.t_max);
+        }
         true
     }
 }

@@ -15,7 +15,8 @@ pub(crate) struct BoxRay {
     /// Child order by octant, as obvhs's `ray_get_octant_inv4`.
     pub oct_inv4: u32,
     pub t_min: f32,
-    pub t_max: f32,
+    /// The ray's `t_max` widened by [`FAR_SCALE`]: see [`BoxRay::reach`].
+    reach: f32,
 }
 
 /// `1 + 2γ₃` with `γ₃ = 3u / (1 - 3u)`, `u = 2⁻²⁴`, rounded up (to
@@ -42,7 +43,7 @@ impl BoxRay {
             inv: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
             oct_inv4,
             t_min: ray.t_min,
-            t_max: ray.t_max,
+            reach: ray.t_max * FAR_SCALE,
         }
     }
 }
@@ -55,14 +56,22 @@ impl BoxRay {
     /// just been set by a coincident face a few ULPs farther (z-fighting
     /// faces), and the walk would return the farther face. Visiting it
     /// costs little: the triangle test then decides exactly.
+    /// Kept with the ray (a product per hit, not per box test).
     #[inline(always)]
     pub fn reach(&self) -> f32 {
-        self.t_max * FAR_SCALE
+        self.reach
+    }
+
+    /// Narrows the interval to `t_max` (after a closer hit).
+    #[inline(always)]
+    pub fn set_t_max(&mut self, t_max: f32) {
+        self.reach = t_max * FAR_SCALE;
     }
 }
 
 /// What a walk calls for each primitive slot it reaches: `visit(slot,
-/// ray)` may shrink `ray.t_max` and returns `false` to stop the walk.
+/// ray)` may shrink the ray's interval ([`BoxRay::set_t_max`]) and
+/// returns `false` to stop the walk.
 ///
 /// Closures implement it; the hot queries use named types instead, whose
 /// `#[inline(always)]` method is sure to be compiled into its caller (a
@@ -162,7 +171,7 @@ pub(crate) trait Tree {
     /// Walks the tree front to back for `ray`, calling `prim.visit(slot,
     /// ray)` for each primitive slot (an index into the tree's
     /// `primitive_indices`) of each leaf whose box the ray's interval
-    /// meets. The callback may shrink `ray.t_max`; it returns `false` to
+    /// meets. The callback may shrink the ray's interval; it returns `false` to
     /// stop the walk. `stack` must hold [`depth`] entries.
     fn walk<S: Stack<Self::Entry>>(&self, stack: &mut S, ray: &mut BoxRay, prim: impl Visit);
 }
