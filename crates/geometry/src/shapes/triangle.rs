@@ -87,8 +87,17 @@ pub struct TriangleRay {
     my: Vec3A,
     /// Row giving the scaled `z`: `sz` at `kz`.
     mz: Vec3A,
+    /// The ray's `t_min`, raised to `f32::MIN` (so `−∞` never passes).
     t_min: f32,
+    /// The ray's `t_max`, lowered to `f32::MAX` (so `+∞` never passes).
     t_max: f32,
+}
+
+/// `[t_min, t_max]` narrowed to finite bounds: the interval test then also
+/// rejects an infinite or `NaN` `t`, at no cost per triangle.
+#[inline(always)]
+fn finite_interval(t_min: f32, t_max: f32) -> (f32, f32) {
+    (t_min.max(f32::MIN), t_max.min(f32::MAX))
 }
 
 impl TriangleRay {
@@ -118,20 +127,14 @@ impl TriangleRay {
         my[ky] = 1.0;
         my[kz] = -sy;
         mz[kz] = sz;
-        Self { origin: ray.origin.into(), mx, my, mz, t_min: ray.t_min, t_max: ray.t_max }
-    }
-
-    /// The upper end of the accepted interval.
-    #[inline(always)]
-    #[must_use]
-    pub fn t_max(&self) -> f32 {
-        self.t_max
+        let (t_min, t_max) = finite_interval(ray.t_min, ray.t_max);
+        Self { origin: ray.origin.into(), mx, my, mz, t_min, t_max }
     }
 
     /// Narrows the accepted interval's upper end (after a closer hit).
     #[inline(always)]
     pub fn set_t_max(&mut self, t_max: f32) {
-        self.t_max = t_max;
+        self.t_max = finite_interval(self.t_min, t_max).1;
     }
 
     /// `(t, b1, b2)` if the ray meets the triangle with corners `v` within
@@ -168,7 +171,8 @@ impl TriangleRay {
         let t_scaled = u * self.mz.dot(a) + v * self.mz.dot(b) + w * self.mz.dot(c);
         let rcp = 1.0 / det;
         let t = t_scaled * rcp;
-        if !(t >= self.t_min && t <= self.t_max && t.is_finite()) {
+        // The bounds are finite, so this also rejects an infinite or NaN t.
+        if !(t >= self.t_min && t <= self.t_max) {
             return None;
         }
         Some((t, v * rcp, w * rcp))
