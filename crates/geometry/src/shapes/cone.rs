@@ -1,7 +1,6 @@
 //! Finite cones with a base cap.
 
-use super::upright::{self, Part, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
-use super::{check_finite, check_positive};
+use super::upright::{Part, Upright, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -18,11 +17,7 @@ use glam::{Vec2, Vec3};
 /// The side is accepted up to `1e-6 · height` below the base so that a ray
 /// through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cone {
-    base: Vec3,
-    radius: f32,
-    height: f32,
-}
+pub struct Cone(Upright);
 
 impl Cone {
     /// A cone standing on `base` (centre of its base cap).
@@ -30,29 +25,25 @@ impl Cone {
     /// # Errors
     /// If the radius or height is not positive or a value is not finite.
     pub fn new(base: Vec3, radius: f32, height: f32) -> Result<Self, GeometryError> {
-        Ok(Self {
-            base: check_finite("cone base", base)?,
-            radius: check_positive("cone radius", radius)?,
-            height: check_positive("cone height", height)?,
-        })
+        Upright::new(["cone base", "cone radius", "cone height"], base, radius, height).map(Self)
     }
 
     /// Centre of the base cap.
     #[must_use]
     pub fn base(&self) -> Vec3 {
-        self.base
+        self.0.base
     }
 
     /// Base radius.
     #[must_use]
     pub fn radius(&self) -> f32 {
-        self.radius
+        self.0.radius
     }
 
     /// Height of the apex above the base.
     #[must_use]
     pub fn height(&self) -> f32 {
-        self.height
+        self.0.height
     }
 }
 
@@ -60,9 +51,9 @@ impl Cone {
     /// The nearest crossing in the interval: its `t` and the part hit.
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<(f32, Part)> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let k = r / h;
         let k2 = k * k;
         let mut best: Option<(f32, Part)> = None;
@@ -103,9 +94,9 @@ impl Intersect for Cone {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let k = r / h;
         let k2 = k * k;
         let (t, part) = self.solve(ray)?;
@@ -122,11 +113,11 @@ impl Intersect for Cone {
             }
             Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r)),
         };
-        Some(Hit::new(t, self.base + rel, n, uv, d))
+        Some(Hit::new(t, self.0.base + rel, n, uv, d))
     }
 
     fn bounds(&self) -> Aabb {
-        upright::bounds(self.base, self.radius, self.height)
+        self.0.bounds()
     }
 }
 

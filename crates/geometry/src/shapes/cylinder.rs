@@ -1,7 +1,6 @@
 //! Finite cylinders with both caps.
 
-use super::upright::{self, Part, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
-use super::{check_finite, check_positive};
+use super::upright::{Part, Upright, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -17,11 +16,7 @@ use glam::{Vec2, Vec3};
 /// The side is accepted up to `1e-6 · height` beyond either cap so that a
 /// ray through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cylinder {
-    base: Vec3,
-    radius: f32,
-    height: f32,
-}
+pub struct Cylinder(Upright);
 
 impl Cylinder {
     /// A cylinder standing on `base` (centre of the bottom cap).
@@ -29,29 +24,25 @@ impl Cylinder {
     /// # Errors
     /// If the radius or height is not positive or a value is not finite.
     pub fn new(base: Vec3, radius: f32, height: f32) -> Result<Self, GeometryError> {
-        Ok(Self {
-            base: check_finite("cylinder base", base)?,
-            radius: check_positive("cylinder radius", radius)?,
-            height: check_positive("cylinder height", height)?,
-        })
+        Upright::new(["cylinder base", "cylinder radius", "cylinder height"], base, radius, height).map(Self)
     }
 
     /// Centre of the bottom cap.
     #[must_use]
     pub fn base(&self) -> Vec3 {
-        self.base
+        self.0.base
     }
 
     /// Radius.
     #[must_use]
     pub fn radius(&self) -> f32 {
-        self.radius
+        self.0.radius
     }
 
     /// Height.
     #[must_use]
     pub fn height(&self) -> f32 {
-        self.height
+        self.0.height
     }
 }
 
@@ -59,9 +50,9 @@ impl Cylinder {
     /// The nearest crossing in the interval: its `t` and the part hit.
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<(f32, Part)> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let mut best: Option<(f32, Part)> = None;
         // Side: x² + z² = r², with 0 <= y <= h.
         let a = d.x * d.x + d.z * d.z;
@@ -93,9 +84,9 @@ impl Intersect for Cylinder {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let (t, part) = self.solve(ray)?;
         let rel = o + t * d;
         let (rel, n, uv) = match part {
@@ -107,11 +98,11 @@ impl Intersect for Cylinder {
             Part::Bottom => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r)),
             Part::Top => (Vec3::new(rel.x, h, rel.z), Vec3::Y, cap_uv(rel, r)),
         };
-        Some(Hit::new(t, self.base + rel, n, uv, d))
+        Some(Hit::new(t, self.0.base + rel, n, uv, d))
     }
 
     fn bounds(&self) -> Aabb {
-        upright::bounds(self.base, self.radius, self.height)
+        self.0.bounds()
     }
 }
 

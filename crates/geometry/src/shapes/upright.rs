@@ -2,8 +2,8 @@
 //! [`super::Cone`]) share: the quadric's roots, the side's height check
 //! sealed to the caps, the cap disks, their uv, and their bounds.
 
-use super::SEAL;
-use crate::{Aabb, Ray};
+use super::{SEAL, check_finite, check_positive};
+use crate::{Aabb, GeometryError, Ray};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -84,8 +84,30 @@ pub(crate) fn side_t(ray: &Ray, o: Vec3, roots: (f32, f32), h: f32) -> Option<f3
     })
 }
 
-/// Bounds of a solid of `radius` about the Y axis through `base`, from
-/// `base.y` up to `base.y + height`.
-pub(crate) fn bounds(base: Vec3, radius: f32, height: f32) -> Aabb {
-    Aabb::new(base - Vec3::new(radius, 0.0, radius), base + Vec3::new(radius, height, radius))
+/// Where a solid stands and how large it is: the centre of its base cap,
+/// its (base) radius, and its height along +Y.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Upright {
+    pub base: Vec3,
+    pub radius: f32,
+    pub height: f32,
+}
+
+impl Upright {
+    /// Checks the values, named in errors by `what` (`"cone"`, …) as
+    /// `[base, radius, height]` labels.
+    pub fn new(what: [&'static str; 3], base: Vec3, radius: f32, height: f32) -> Result<Self, GeometryError> {
+        Ok(Self {
+            base: check_finite(what[0], base)?,
+            radius: check_positive(what[1], radius)?,
+            height: check_positive(what[2], height)?,
+        })
+    }
+
+    /// Bounds: `radius` about the Y axis through `base`, from `base.y` up
+    /// to `base.y + height`.
+    pub fn bounds(&self) -> Aabb {
+        let (b, r) = (self.base, self.radius);
+        Aabb::new(b - Vec3::new(r, 0.0, r), b + Vec3::new(r, self.height, r))
+    }
 }
