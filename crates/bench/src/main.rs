@@ -13,9 +13,9 @@
 //! bunny instances, from `DIR` (default `../shared/data`).
 
 use prism_bvh::{Accel, BuildOptions, BuildQuality, Object};
-use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Ray, Transform, TriangleMesh};
-use std::path::{Path, PathBuf};
+use prism_testkit::bench::{grid_offsets, incoherent_rays, offset_hit_points, primary_rays, shadow_rays};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -82,70 +82,6 @@ fn parse(args: &[String]) -> Result<Options, Error> {
     Ok(o)
 }
 
-/// Every shape of an OBJ as one mesh (positions only, polygons
-/// triangulated).
-fn load_obj(path: &Path) -> Result<TriangleMesh, Error> {
-    let opts = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for m in models {
-        let base = positions.len() as u32;
-        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-        indices.extend(m.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
-    }
-    Ok(TriangleMesh::new(positions, None, None, indices)?)
-}
-
-fn mesh_bounds(m: &TriangleMesh) -> Aabb {
-    Aabb::from_points(m.positions())
-}
-
-/// PCG32 (fixed seed: the same rays on every run).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
-    }
-    /// Uniform on the hemisphere around `n` (uniform on the sphere, flipped).
-    fn hemisphere(&mut self, n: Vec3) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f32();
-        let phi = std::f32::consts::TAU * self.f32();
-        let s = (1.0 - z * z).max(0.0).sqrt();
-        let d = Vec3::new(s * phi.cos(), s * phi.sin(), z);
-        if d.dot(n) < 0.0 { -d } else { d }
-    }
-}
-
-/// The issue's "bbox framing" camera: one ray per pixel centre.
-fn primary_rays(b: Aabb, w: u32, h: u32) -> Vec<Ray> {
-    let c = b.center();
-    let r = (b.max - b.min).length() / 2.0;
-    let vfov = 40f32.to_radians();
-    let eye = c + Vec3::new(0.0, 0.0, r / (vfov / 2.0).sin());
-    let forward = (c - eye).normalize();
-    let right = forward.cross(Vec3::Y).normalize();
-    let up = right.cross(forward);
-    let tan = (vfov / 2.0).tan();
-    let aspect = w as f32 / h as f32;
-    let mut rays = Vec::with_capacity((w * h) as usize);
-    for j in 0..h {
-        for i in 0..w {
-            let sx = (2.0 * (i as f32 + 0.5) / w as f32 - 1.0) * tan * aspect;
-            let sy = (1.0 - 2.0 * (j as f32 + 0.5) / h as f32) * tan;
-            rays.push(Ray::new(eye, (forward + sx * right + sy * up).normalize()));
-        }
-    }
-    rays
-}
-
 /// Runs `f` over `rays` on `threads` threads; returns how many it counted.
 fn trace(rays: &[Ray], threads: usize, f: Query<'_>) -> usize {
     const CHUNK: usize = 4096;
@@ -190,35 +126,12 @@ struct Row {
 fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
     let stats = accel.stats();
     let b = accel.bounds();
-    let c = b.center();
-    let r = (b.max - b.min).length() / 2.0;
     let t0 = Instant::now();
     let primary = primary_rays(b, o.width, o.height);
-    // Hit points (offset along the normal turned toward the ray) for the
-    // secondary sets.
-    let mut points = Vec::new();
-    for ray in &primary {
-        if let Some(h) = accel.closest_hit(ray) {
-            let n = if h.hit.geo_normal.dot(ray.dir) > 0.0 { -h.hit.geo_normal } else { h.hit.geo_normal };
-            points.push((h.hit.point + n * (2e-4 * r), n));
-        }
-    }
-    let mut rng = Rng(0x5eed_0007);
-    let mut incoherent = Vec::with_capacity(points.len() * 8);
-    for &(p, n) in &points {
-        for _ in 0..8 {
-            incoherent.push(Ray::new(p, rng.hemisphere(n)));
-        }
-    }
-    let light = c + r * Vec3::new(1.0, 2.0, 1.5);
-    let shadow: Vec<Ray> = points
-        .iter()
-        .map(|&(p, _)| {
-            let to = light - p;
-            let dist = to.length();
-            Ray::with_interval(p, to / dist, 0.0, dist)
-        })
-        .collect();
+    let points =
+        offset_hit_points(&primary, b, |r| accel.closest_hit(r).map(|h| (h.hit.point, h.hit.geo_normal)));
+    let incoherent = incoherent_rays(&points, 8);
+    let shadow = shadow_rays(&points, b);
     eprintln!(
         "{name}: {} triangles stored, {} as seen by rays; built in {:.1} ms, {:.1} MB; \
          {} + {} + {} rays generated in {:.1} s",
@@ -275,16 +188,10 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
 }
 
 fn build(name: &str, mesh: TriangleMesh, grid: Option<u32>, o: &Options) -> Result<Accel, Error> {
-    let extent = mesh_bounds(&mesh).extent();
+    let extent = Aabb::from_points(mesh.positions()).extent();
     let mut objects = Vec::new();
-    let n = grid.unwrap_or(1).max(1);
-    for ix in 0..n {
-        for iy in 0..n {
-            for iz in 0..n {
-                let offset = 1.25 * Vec3::new(ix as f32, iy as f32, iz as f32) * extent;
-                objects.push(Object::Mesh { mesh: 0, transform: Transform::translate(offset)? });
-            }
-        }
+    for offset in grid_offsets(extent, grid.unwrap_or(1)) {
+        objects.push(Object::Mesh { mesh: 0, transform: Transform::translate(offset)? });
     }
     let mut options = BuildOptions::default();
     if let Some(q) = o.quality {
@@ -315,7 +222,7 @@ fn run() -> Result<(), Error> {
     };
     let mut rows = Vec::new();
     for (name, path, grid) in scenes {
-        let mesh = load_obj(&path)?;
+        let mesh = prism_testkit::load_obj(&path)?;
         let accel = build(&name, mesh, grid, &o)?;
         bench_scene(&name, &accel, &o, &mut rows);
     }

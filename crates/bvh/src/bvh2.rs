@@ -20,17 +20,18 @@
 //! * front to back: the nearer child (by its entry distance) is taken
 //!   first, a leaf child's triangles are tested at once, the farther inner
 //!   child is pushed with its entry distance and skipped when popped if
-//!   the ray's `t_max` has since shrunk below it.
+//!   the ray's `t_max` has since shrunk below it;
+//! * every comparison with `t_max` uses [`BoxRay::reach`], `t_max` widened
+//!   the same way.
 //!
 //! The walk calls the same [`Visit`] as the CWBVH walk, with slots indexing
 //! `primitive_indices` (the caller keeps its triangles in that order). The
 //! two siblings' boxes are tested together (their horizontal reductions
-//! share shuffles), and the stack is left uninitialised (no `memset` per
-//! walk). Measured against the CWBVH walk it runs more instructions for
-//! every query kind (docs/benchmarks.md), so it is an option
+//! share shuffles); the stack is [`crate::traverse`]'s. Measured against
+//! the CWBVH walk it runs more instructions for every query kind (docs/benchmarks.md), so it is an option
 //! (`BlasKind::Bvh2`), not the default.
 
-use crate::cwbvh::{BoxRay, Visit};
+use crate::traverse::{BoxRay, FAR_SCALE, Stack, Tree, Visit};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb as ObAabb;
 use obvhs::bvh2::Bvh2;
@@ -39,11 +40,6 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::ploc::PlocBuilder;
 use prism_geometry::glam::Vec3A;
-use std::mem::MaybeUninit;
-
-/// `1 + 2γ₃` with `γ₃ = 3u / (1 - 3u)`, `u = 2⁻²⁴`, rounded up (to
-/// `1 + 2⁻²¹`).
-const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// Builds a BVH2 over `aabbs` as obvhs's `build_bvh2` does (PLOC,
 /// reinsertion, leaf collapsing, reinsertion), optionally pre-splitting
@@ -100,25 +96,6 @@ pub(crate) fn ploc_tree(
     bvh.uses_spatial_splits = split;
     ReinsertionOptimizer::default().run(&mut bvh, p.reinsertion_batch_ratio, None);
     bvh
-}
-
-/// Depth of the tree (root = 1), for sizing the stack.
-pub(crate) fn depth(bvh: &Bvh2) -> usize {
-    if bvh.nodes.is_empty() {
-        return 0;
-    }
-    let mut best = 0;
-    let mut todo = vec![(0usize, 1usize)];
-    while let Some((i, d)) = todo.pop() {
-        best = best.max(d);
-        let Some(node) = bvh.nodes.get(i) else { continue };
-        if !node.is_leaf() {
-            let c = node.first_index as usize;
-            todo.push((c, d + 1));
-            todo.push((c + 1, d + 1));
-        }
-    }
-    best
 }
 
 /// Bytes held by the nodes and the primitive indices.
@@ -229,59 +206,6 @@ impl Slabs {
     }
 }
 
-/// Fixed-capacity stack of `(node, entry distance)`, left uninitialised
-/// (zeroing it cost a `memset` per walk, about 2% of a query's
-/// instructions).
-struct Stack<const N: usize> {
-    data: [MaybeUninit<(u32, f32)>; N],
-    len: usize,
-}
-
-impl<const N: usize> Stack<N> {
-    #[inline(always)]
-    fn new() -> Self {
-        Self { data: [const { MaybeUninit::uninit() }; N], len: 0 }
-    }
-}
-
-/// The stack interface the walk needs.
-trait NodeStack {
-    fn push(&mut self, v: (u32, f32));
-    fn pop(&mut self) -> Option<(u32, f32)>;
-}
-
-impl<const N: usize> NodeStack for Stack<N> {
-    #[inline(always)]
-    fn push(&mut self, v: (u32, f32)) {
-        // The caller sized N from the tree depth, so this never overflows;
-        // if it did, `get_mut` keeps it memory-safe (the node is dropped).
-        if let Some(slot) = self.data.get_mut(self.len) {
-            slot.write(v);
-            self.len += 1;
-        }
-    }
-    #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, f32)> {
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        // SAFETY: entries below `len` were written by `push`.
-        Some(unsafe { self.data.get(self.len)?.assume_init() })
-    }
-}
-
-impl NodeStack for Vec<(u32, f32)> {
-    #[inline(always)]
-    fn push(&mut self, v: (u32, f32)) {
-        Vec::push(self, v);
-    }
-    #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, f32)> {
-        Vec::pop(self)
-    }
-}
-
 /// Calls `prim` for each slot of leaf `node`; `false` if it stopped.
 #[inline(always)]
 fn leaf(node: &Bvh2Node, ray: &mut BoxRay, prim: &mut impl Visit) -> bool {
@@ -294,93 +218,80 @@ fn leaf(node: &Bvh2Node, ray: &mut BoxRay, prim: &mut impl Visit) -> bool {
     true
 }
 
-/// Walks `bvh` front to back for `ray`, calling `prim(slot, ray)` for each
-/// primitive slot (an index into `bvh.primitive_indices`) of each leaf
-/// whose box the ray's interval meets. The callback may shrink
-/// `ray.t_max`; it returns `false` to stop the walk.
-#[inline(always)]
-fn walk<S: NodeStack>(bvh: &Bvh2, stack: &mut S, ray: &mut BoxRay, mut prim: impl Visit) {
-    let nodes = bvh.nodes.as_slice();
-    let Some(root) = nodes.first() else { return };
-    let s = Slabs { origin: ray.origin, inv: ray.inv, t_min: Vec3A::splat(ray.t_min) };
-    if !s.test(root, ray.t_max).0 {
-        return;
+impl Tree for Bvh2 {
+    /// An inner node to visit, with its entry distance.
+    type Entry = (u32, f32);
+
+    fn node_count(&self) -> usize {
+        self.nodes.len()
     }
-    if root.is_leaf() {
-        leaf(root, ray, &mut prim);
-        return;
-    }
-    let mut current = root.first_index as usize;
-    loop {
-        let (Some(a), Some(b)) = (nodes.get(current), nodes.get(current + 1)) else { return };
-        let ((hit_a, near_a), (hit_b, near_b)) = s.test2(a, b, ray.t_max);
-        let ((first, hit_first), (second, hit_second, near_second)) =
-            if near_b < near_a { ((b, hit_b), (a, hit_a, near_a)) } else { ((a, hit_a), (b, hit_b, near_b)) };
-        let mut next = None;
-        if hit_first {
-            if first.is_leaf() {
-                if !leaf(first, ray, &mut prim) {
-                    return;
-                }
-            } else {
-                next = Some(first.first_index);
-            }
+
+    fn inner_children(&self, i: usize, mut f: impl FnMut(usize)) {
+        if let Some(node) = self.nodes.get(i)
+            && !node.is_leaf()
+        {
+            f(node.first_index as usize);
+            f(node.first_index as usize + 1);
         }
-        // The first child's triangles may have moved `t_max` in front.
-        if hit_second && near_second <= ray.t_max {
-            if second.is_leaf() {
-                if !leaf(second, ray, &mut prim) {
-                    return;
-                }
-            } else if next.is_some() {
-                stack.push((second.first_index, near_second));
-            } else {
-                next = Some(second.first_index);
-            }
+    }
+
+    /// Front to back: the nearer child first; the farther inner child is
+    /// pushed with its entry distance and skipped when popped if `t_max`
+    /// has since shrunk below it.
+    #[inline(always)]
+    fn walk<S: Stack<(u32, f32)>>(&self, stack: &mut S, ray: &mut BoxRay, mut prim: impl Visit) {
+        let bvh = self;
+        let nodes = bvh.nodes.as_slice();
+        let Some(root) = nodes.first() else { return };
+        let s = Slabs { origin: ray.origin, inv: ray.inv, t_min: Vec3A::splat(ray.t_min) };
+        if !s.test(root, ray.reach()).0 {
+            return;
         }
-        current = match next {
-            Some(n) => n as usize,
-            None => loop {
-                match stack.pop() {
-                    Some((n, near)) if near <= ray.t_max => break n as usize,
-                    Some(_) => {}
-                    None => return,
+        if root.is_leaf() {
+            leaf(root, ray, &mut prim);
+            return;
+        }
+        let mut current = root.first_index as usize;
+        loop {
+            let (Some(a), Some(b)) = (nodes.get(current), nodes.get(current + 1)) else { return };
+            let ((hit_a, near_a), (hit_b, near_b)) = s.test2(a, b, ray.reach());
+            let ((first, hit_first), (second, hit_second, near_second)) = if near_b < near_a {
+                ((b, hit_b), (a, hit_a, near_a))
+            } else {
+                ((a, hit_a), (b, hit_b, near_b))
+            };
+            let mut next = None;
+            if hit_first {
+                if first.is_leaf() {
+                    if !leaf(first, ray, &mut prim) {
+                        return;
+                    }
+                } else {
+                    next = Some(first.first_index);
                 }
-            },
-        };
-    }
-}
-
-/// Stack entries kept inline for shallow trees.
-const SMALL_STACK: usize = 32;
-/// Stack entries kept inline for deeper trees; beyond, a heap stack.
-const INLINE_STACK: usize = 64;
-
-/// [`walk`] with a stack that fits a tree of depth `depth`.
-#[inline(always)]
-pub(crate) fn walk_any(bvh: &Bvh2, depth: usize, ray: &mut BoxRay, prim: impl Visit) {
-    if depth <= SMALL_STACK {
-        walk(bvh, &mut Stack::<SMALL_STACK>::new(), ray, prim);
-    } else if depth <= INLINE_STACK {
-        walk(bvh, &mut Stack::<INLINE_STACK>::new(), ray, prim);
-    } else {
-        walk(bvh, &mut Vec::with_capacity(depth), ray, prim);
-    }
-}
-
-/// A [`Bvh2`] that prints as a summary (obvhs's type is not `Debug`).
-#[derive(Default)]
-pub(crate) struct Tree(pub Bvh2);
-
-impl std::ops::Deref for Tree {
-    type Target = Bvh2;
-    fn deref(&self) -> &Bvh2 {
-        &self.0
-    }
-}
-
-impl std::fmt::Debug for Tree {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Bvh2").field("nodes", &self.0.nodes.len()).finish_non_exhaustive()
+            }
+            // The first child's triangles may have moved `t_max` in front.
+            if hit_second && near_second <= ray.reach() {
+                if second.is_leaf() {
+                    if !leaf(second, ray, &mut prim) {
+                        return;
+                    }
+                } else if next.is_some() {
+                    stack.push((second.first_index, near_second));
+                } else {
+                    next = Some(second.first_index);
+                }
+            }
+            current = match next {
+                Some(n) => n as usize,
+                None => loop {
+                    match stack.pop() {
+                        Some((n, near)) if near <= ray.reach() => break n as usize,
+                        Some(_) => {}
+                        None => return,
+                    }
+                },
+            };
+        }
     }
 }

@@ -16,56 +16,21 @@
 //!   `±1/EPSILON` (a ray in a face plane then misses the box) and gives
 //!   `-0.0` a negative reciprocal while ordering slabs by `dir < 0`, which
 //!   culls every box for such rays;
-//! * the traversal stack is sized from the tree's measured depth.
+//! * a box is culled only when its entry lies beyond [`BoxRay::reach`]
+//!   (`t_max` widened by a few ULPs), not `t_max` itself: the entry
+//!   distance may round past the `t` the triangle test gives for a
+//!   triangle on the box's face, and a coincident face hit first (a few
+//!   ULPs farther) would otherwise hide the nearer one;
+//! * the traversal stack is sized from the tree's measured depth
+//!   ([`crate::traverse`]).
 
+use crate::traverse::{BoxRay, Stack, Tree, Visit};
+use crate::{BuildQuality, bvh2};
+use obvhs::aabb::Aabb as ObAabb;
 use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
-use prism_geometry::Ray;
 use prism_geometry::glam::{Vec3, Vec3A, Vec4};
-
-/// Stack entries kept inline; deeper trees (never seen in practice) use a
-/// heap stack.
-pub(crate) const INLINE_STACK: usize = 32;
-
-/// Stack entries for shallow trees (most meshes): a stack this small is
-/// zeroed with a few vector stores instead of a call to `memset`, which
-/// showed up at several per cent of a query's time.
-const SMALL_STACK: usize = 16;
-
-/// A ray prepared for box tests.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct BoxRay {
-    pub origin: Vec3A,
-    pub inv: Vec3A,
-    pub oct_inv4: u32,
-    pub t_min: f32,
-    pub t_max: f32,
-}
-
-/// `1/d`, with `+inf` for both zeros (slab order uses `d < 0`).
-#[inline(always)]
-fn inv(d: f32) -> f32 {
-    if d == 0.0 { f32::INFINITY } else { 1.0 / d }
-}
-
-impl BoxRay {
-    #[inline(always)]
-    pub fn new(ray: &Ray) -> Self {
-        let d = ray.dir;
-        let neg = [d.x < 0.0, d.y < 0.0, d.z < 0.0];
-        // Child order by octant, as obvhs's ray_get_octant_inv4.
-        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
-            | (if neg[1] { 0 } else { 0x0202_0202 })
-            | (if neg[2] { 0 } else { 0x0101_0101 });
-        Self {
-            origin: Vec3A::from(ray.origin),
-            inv: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
-            oct_inv4,
-            t_min: ray.t_min,
-            t_max: ray.t_max,
-        }
-    }
-}
 
 /// `_mm_min_ps(a, b)` on one lane: `b` when either is `NaN`.
 #[inline(always)]
@@ -111,6 +76,7 @@ pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay) -> u32 {
     let ext = node.compute_extent();
     let po = Vec3A::from(node.p) - ray.origin;
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(ray.oct_inv4);
+    let reach = ray.reach();
     let mut near = [0.0f32; 8];
     let mut far = [0.0f32; 8];
     for k in 0..8 {
@@ -118,7 +84,7 @@ pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay) -> u32 {
         let (ny, fy) = slab(node.child_min_y[k], node.child_max_y[k], ext.y, po.y, ray.inv.y);
         let (nz, fz) = slab(node.child_min_z[k], node.child_max_z[k], ext.z, po.z, ray.inv.z);
         near[k] = max_ps(nx, max_ps(ny, max_ps(nz, ray.t_min)));
-        far[k] = min_ps(fx, min_ps(fy, min_ps(fz, ray.t_max)));
+        far[k] = min_ps(fx, min_ps(fy, min_ps(fz, reach)));
     }
     let half = |v: &[f32; 8], i: usize| Vec4::new(v[i], v[i + 1], v[i + 2], v[i + 3]);
     let mut mask =
@@ -139,156 +105,67 @@ fn firstbithigh(v: u32) -> u32 {
     31 - v.leading_zeros()
 }
 
-/// Fixed-capacity stack of node groups.
-pub(crate) struct GroupStack<const N: usize> {
-    data: [(u32, u32); N],
-    len: usize,
-}
+impl Tree for CwBvh {
+    /// A node group: (base index, hit mask), as in obvhs.
+    type Entry = (u32, u32);
 
-impl<const N: usize> GroupStack<N> {
-    #[inline(always)]
-    pub fn new() -> Self {
-        Self { data: [(0, 0); N], len: 0 }
+    fn node_count(&self) -> usize {
+        self.nodes.len()
     }
-}
 
-/// The stack interface the walk needs.
-pub(crate) trait Stack {
-    fn push(&mut self, v: (u32, u32));
-    fn pop(&mut self) -> Option<(u32, u32)>;
-}
-
-impl<const N: usize> Stack for GroupStack<N> {
-    #[inline(always)]
-    fn push(&mut self, v: (u32, u32)) {
-        // The caller sized N from the tree depth, so this never overflows;
-        // if it did, `get_mut` keeps it memory-safe (the group is dropped).
-        if let Some(slot) = self.data.get_mut(self.len) {
-            *slot = v;
-            self.len += 1;
-        }
-    }
-    #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, u32)> {
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        Some(self.data[self.len])
-    }
-}
-
-impl Stack for Vec<(u32, u32)> {
-    #[inline(always)]
-    fn push(&mut self, v: (u32, u32)) {
-        Vec::push(self, v);
-    }
-    #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, u32)> {
-        Vec::pop(self)
-    }
-}
-
-/// What a walk calls for each primitive slot it reaches: `visit(slot,
-/// ray)` may shrink `ray.t_max` and returns `false` to stop the walk.
-///
-/// Closures implement it; the hot queries use named types instead, whose
-/// `#[inline(always)]` method is sure to be compiled into its caller (a
-/// closure big enough is left out of line, and then misses the features a
-/// `#[target_feature]` caller is compiled with).
-pub(crate) trait Visit {
-    fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool;
-}
-
-impl<F: FnMut(u32, &mut BoxRay) -> bool> Visit for F {
-    #[inline(always)]
-    fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool {
-        self(slot, ray)
-    }
-}
-
-/// `f` as a [`Visit`] (pins down the closure's signature for inference).
-#[inline(always)]
-pub(crate) fn visitor<F: FnMut(u32, &mut BoxRay) -> bool>(f: F) -> F {
-    f
-}
-
-/// Walks `bvh` front to back (approximately) for `ray`, calling
-/// `prim(slot, ray)` for each primitive slot (an index into
-/// `bvh.primitive_indices`) whose leaf box the ray's interval meets. The
-/// callback may shrink `ray.t_max`; it returns `false` to stop the walk.
-#[inline(always)]
-pub(crate) fn walk<S: Stack>(bvh: &CwBvh, stack: &mut S, ray: &mut BoxRay, mut prim: impl Visit) {
-    if bvh.nodes.is_empty() {
-        return;
-    }
-    // (base index, mask) pairs as in obvhs: bit 31 stands for the root.
-    let mut current: (u32, u32) = (0, 0x8000_0000);
-    let mut prims: (u32, u32) = (0, 0);
-    loop {
-        while prims.1 != 0 {
-            let local = firstbithigh(prims.1);
-            prims.1 &= !(1u32 << local);
-            if !prim.visit(prims.0 + local, ray) {
-                return;
-            }
-        }
-        if current.1 & 0xff00_0000 != 0 {
-            let hits_imask = current.1;
-            let child_index_offset = firstbithigh(hits_imask);
-            let child_index_base = current.0;
-            current.1 &= !(1u32 << child_index_offset);
-            if current.1 & 0xff00_0000 != 0 {
-                stack.push(current);
-            }
-            let slot_index = (child_index_offset - 24) ^ (ray.oct_inv4 & 0xff);
-            let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
-            let Some(node) = bvh.nodes.get((child_index_base + relative_index) as usize) else {
-                return;
-            };
-            let hitmask = intersect_node(node, ray);
-            current = (node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
-            prims = (node.primitive_base_idx, hitmask & 0x00ff_ffff);
-        } else {
-            current = (0, 0);
-        }
-        if prims.1 == 0 && current.1 & 0xff00_0000 == 0 {
-            match stack.pop() {
-                Some(g) => current = g,
-                None => return,
-            }
-        }
-    }
-}
-
-/// Depth of the tree (root = 1), for sizing the stack.
-pub(crate) fn depth(bvh: &CwBvh) -> usize {
-    if bvh.nodes.is_empty() {
-        return 0;
-    }
-    let mut best = 0;
-    let mut todo = vec![(0usize, 1usize)];
-    while let Some((i, d)) = todo.pop() {
-        best = best.max(d);
-        let Some(node) = bvh.nodes.get(i) else { continue };
+    fn inner_children(&self, i: usize, mut f: impl FnMut(usize)) {
+        let Some(node) = self.nodes.get(i) else { return };
         for ch in 0..8 {
             if !node.is_child_empty(ch) && !node.is_leaf(ch) {
-                todo.push((node.child_node_index(ch) as usize, d + 1));
+                f(node.child_node_index(ch) as usize);
             }
         }
     }
-    best
-}
 
-/// [`walk`] with a stack that fits a tree of depth `depth`.
-#[inline(always)]
-pub(crate) fn walk_any(bvh: &CwBvh, depth: usize, ray: &mut BoxRay, prim: impl Visit) {
-    if depth <= SMALL_STACK {
-        walk(bvh, &mut GroupStack::<SMALL_STACK>::new(), ray, prim);
-    } else if depth <= INLINE_STACK {
-        walk(bvh, &mut GroupStack::<INLINE_STACK>::new(), ray, prim);
-    } else {
-        walk(bvh, &mut Vec::with_capacity(depth), ray, prim);
+    /// Front to back approximately: children in the ray's octant order.
+    #[inline(always)]
+    fn walk<S: Stack<(u32, u32)>>(&self, stack: &mut S, ray: &mut BoxRay, mut prim: impl Visit) {
+        let bvh = self;
+        if bvh.nodes.is_empty() {
+            return;
+        }
+        // (base index, mask) pairs as in obvhs: bit 31 stands for the root.
+        let mut current: (u32, u32) = (0, 0x8000_0000);
+        let mut prims: (u32, u32) = (0, 0);
+        loop {
+            while prims.1 != 0 {
+                let local = firstbithigh(prims.1);
+                prims.1 &= !(1u32 << local);
+                if !prim.visit(prims.0 + local, ray) {
+                    return;
+                }
+            }
+            if current.1 & 0xff00_0000 != 0 {
+                let hits_imask = current.1;
+                let child_index_offset = firstbithigh(hits_imask);
+                let child_index_base = current.0;
+                current.1 &= !(1u32 << child_index_offset);
+                if current.1 & 0xff00_0000 != 0 {
+                    stack.push(current);
+                }
+                let slot_index = (child_index_offset - 24) ^ (ray.oct_inv4 & 0xff);
+                let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+                let Some(node) = bvh.nodes.get((child_index_base + relative_index) as usize) else {
+                    return;
+                };
+                let hitmask = intersect_node(node, ray);
+                current = (node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
+                prims = (node.primitive_base_idx, hitmask & 0x00ff_ffff);
+            } else {
+                current = (0, 0);
+            }
+            if prims.1 == 0 && current.1 & 0xff00_0000 == 0 {
+                match stack.pop() {
+                    Some(g) => current = g,
+                    None => return,
+                }
+            }
+        }
     }
 }
 
@@ -296,6 +173,38 @@ pub(crate) fn walk_any(bvh: &CwBvh, depth: usize, ray: &mut BoxRay, prim: impl V
 #[inline]
 pub(crate) fn to_obvhs(min: Vec3, max: Vec3) -> obvhs::aabb::Aabb {
     obvhs::aabb::Aabb::new(Vec3A::from(min), Vec3A::from(max))
+}
+
+/// Bytes held by the nodes and the primitive indices.
+pub(crate) fn bytes(bvh: &CwBvh) -> usize {
+    bvh.nodes.len() * std::mem::size_of::<CwBvhNode>()
+        + bvh.primitive_indices.len() * std::mem::size_of::<u32>()
+}
+
+/// Builds a CWBVH over triangles (`tris`, which may pre-split) or boxes.
+/// Unlike obvhs's helpers this never runs the (slow) debug validation.
+pub(crate) fn build_tris(
+    tris: &[obvhs::triangle::Triangle],
+    quality: BuildQuality,
+    allow_split: bool,
+) -> CwBvh {
+    let aabbs: Vec<ObAabb> = tris.iter().map(obvhs::triangle::Triangle::aabb).collect();
+    build(aabbs, Some(tris).filter(|_| allow_split), quality)
+}
+
+/// Builds a CWBVH over `aabbs` (pre-splitting `tris` if given and the
+/// quality asks for it) from [`bvh2::ploc_tree`]'s binary tree.
+pub(crate) fn build(
+    aabbs: Vec<ObAabb>,
+    tris: Option<&[obvhs::triangle::Triangle]>,
+    quality: BuildQuality,
+) -> CwBvh {
+    if aabbs.is_empty() {
+        return CwBvh::default();
+    }
+    let p = quality.params();
+    let bvh2 = bvh2::ploc_tree(aabbs, tris, &p);
+    bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
 #[cfg(test)]

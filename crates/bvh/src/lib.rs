@@ -78,21 +78,20 @@
 
 #![warn(missing_docs)]
 
+mod blas;
 mod bvh2;
 mod cwbvh;
-mod tri;
+mod traverse;
 
-use cwbvh::BoxRay;
+use blas::Blas;
 use obvhs::BvhBuildParams;
-use obvhs::aabb::Aabb as ObAabb;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
-use tri::TriRay;
+use traverse::{BoxRay, Visit, visitor, walk_any};
 
 /// One object of the scene: an analytic shape or an instance of a mesh.
 #[derive(Clone, Debug)]
@@ -108,6 +107,20 @@ pub enum Object {
         /// Object (mesh) space to world.
         transform: Transform,
     },
+}
+
+impl Object {
+    /// Whether the object is a closed solid, so that a ray leaving it
+    /// through a back face was inside: see [`Shape::is_closed`]. A mesh
+    /// instance is not known to be closed (that would have to be proven
+    /// from its edges) and counts as open.
+    #[must_use]
+    pub fn is_closed(&self) -> bool {
+        match self {
+            Self::Shape(s) => s.shape.is_closed(),
+            Self::Mesh { .. } => false,
+        }
+    }
 }
 
 /// A hit on the scene: which object (and triangle) and the geometry.
@@ -287,169 +300,6 @@ const DEFAULT_MESH_LAYOUT: BlasKind = BlasKind::Cwbvh;
 /// (the compressed node boxes cannot represent them well).
 const MAX_BOUNDED_COORD: f32 = 1e18;
 
-/// One mesh's own hierarchy, with its triangles copied in leaf order.
-#[derive(Debug, Default)]
-struct Blas {
-    /// The CWBVH (empty when the mesh uses a BVH2).
-    bvh: CwBvh,
-    /// The BVH2 (empty when the mesh uses a CWBVH).
-    bvh2: bvh2::Tree,
-    depth: usize,
-    /// Corners of the triangle in each primitive slot.
-    tris: Vec<[Vec3; 3]>,
-    /// Mesh face of each primitive slot.
-    faces: Vec<u32>,
-    /// A face may occupy several slots (pre-split build).
-    split: bool,
-}
-
-impl Blas {
-    fn build(mesh: &TriangleMesh, quality: BuildQuality, layout: BlasKind) -> Self {
-        let kept: Vec<u32> = (0..mesh.len())
-            .filter(|&f| {
-                let [a, b, c] = mesh.triangle(f);
-                (b - a).cross(c - a).length_squared() != 0.0
-            })
-            .map(|f| f as u32)
-            .collect();
-        let tris: Vec<obvhs::triangle::Triangle> = kept
-            .iter()
-            .map(|&f| {
-                let [a, b, c] = mesh.triangle(f as usize);
-                obvhs::triangle::Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
-            })
-            .collect();
-        let (bvh, bvh2, depth, split, order) = match layout {
-            BlasKind::Cwbvh => {
-                let bvh = build_cwbvh(&tris, quality, true);
-                let (depth, split) = (cwbvh::depth(&bvh), bvh.uses_spatial_splits);
-                let order = bvh.primitive_indices.clone();
-                (bvh, bvh2::Tree::default(), depth, split, order)
-            }
-            BlasKind::Bvh2 => {
-                let aabbs = tris.iter().map(obvhs::triangle::Triangle::aabb).collect();
-                let b = bvh2::build(aabbs, Some(&tris), quality.params());
-                let (depth, split) = (bvh2::depth(&b), b.uses_spatial_splits);
-                let order = b.primitive_indices.clone();
-                (CwBvh::default(), bvh2::Tree(b), depth, split, order)
-            }
-        };
-        let faces: Vec<u32> = order.iter().map(|&i| kept[i as usize]).collect();
-        let tris = faces.iter().map(|&f| mesh.triangle(f as usize)).collect();
-        Self { depth, split, bvh, bvh2, tris, faces }
-    }
-
-    /// Whether the mesh has no hierarchy (nothing to hit).
-    fn is_empty(&self) -> bool {
-        self.bvh.nodes.is_empty() && self.bvh2.nodes.is_empty()
-    }
-
-    /// Nodes of its hierarchy.
-    fn node_count(&self) -> usize {
-        self.bvh.nodes.len() + self.bvh2.nodes.len()
-    }
-
-    /// Walks whichever hierarchy the mesh has.
-    #[inline(always)]
-    fn walk(&self, br: &mut BoxRay, v: impl cwbvh::Visit) {
-        if self.bvh2.nodes.is_empty() {
-            cwbvh::walk_any(&self.bvh, self.depth, br, v);
-        } else {
-            bvh2::walk_any(&self.bvh2, self.depth, br, v);
-        }
-    }
-
-    fn bytes(&self) -> usize {
-        bvh_bytes(&self.bvh)
-            + bvh2::bytes(&self.bvh2)
-            + self.tris.len() * std::mem::size_of::<[Vec3; 3]>()
-            + self.faces.len() * std::mem::size_of::<u32>()
-    }
-
-    /// Closest triangle hit by the object-space `ray`: `(face, t, b1, b2)`.
-    #[inline(always)]
-    fn closest(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
-        let mut br = BoxRay::new(ray);
-        let mut v = ClosestTriangle { tris: &self.tris, tr: TriRay::new(ray), found: None };
-        self.walk(&mut br, &mut v);
-        v.found.map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2))
-    }
-
-    /// Whether any triangle lies in the ray's interval.
-    #[inline(always)]
-    fn occluded(&self, ray: &Ray) -> bool {
-        let mut br = BoxRay::new(ray);
-        let mut v = AnyTriangle { tris: &self.tris, tr: TriRay::new(ray), hit: false };
-        self.walk(&mut br, &mut v);
-        v.hit
-    }
-
-    /// Calls `f(face, t, b1, b2)` for every triangle crossing in the
-    /// interval, each face once, until `f` breaks.
-    fn crossings(
-        &self,
-        ray: &Ray,
-        mut f: impl FnMut(u32, f32, f32, f32) -> ControlFlow<()>,
-    ) -> ControlFlow<()> {
-        let tr = TriRay::new(ray);
-        let mut br = BoxRay::new(ray);
-        let mut flow = ControlFlow::Continue(());
-        let mut seen: Vec<u32> = Vec::new();
-        self.walk(
-            &mut br,
-            cwbvh::visitor(|slot, _| {
-                if let Some((t, b1, b2)) = tr.intersect(&self.tris[slot as usize]) {
-                    let face = self.faces[slot as usize];
-                    if self.split {
-                        if seen.contains(&face) {
-                            return true;
-                        }
-                        seen.push(face);
-                    }
-                    flow = f(face, t, b1, b2);
-                }
-                flow.is_continue()
-            }),
-        );
-        flow
-    }
-}
-
-/// The closest-hit walk over one mesh's triangles.
-struct ClosestTriangle<'a> {
-    tris: &'a [[Vec3; 3]],
-    tr: TriRay,
-    /// `(slot, t, b1, b2)` of the nearest hit so far.
-    found: Option<(u32, f32, f32, f32)>,
-}
-
-impl cwbvh::Visit for &mut ClosestTriangle<'_> {
-    #[inline(always)]
-    fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
-        if let Some((t, b1, b2)) = self.tr.intersect(&self.tris[slot as usize]) {
-            self.tr.t_max = t;
-            br.t_max = t;
-            self.found = Some((slot, t, b1, b2));
-        }
-        true
-    }
-}
-
-/// The occlusion walk over one mesh's triangles (stops at the first hit).
-struct AnyTriangle<'a> {
-    tris: &'a [[Vec3; 3]],
-    tr: TriRay,
-    hit: bool,
-}
-
-impl cwbvh::Visit for &mut AnyTriangle<'_> {
-    #[inline(always)]
-    fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
-        self.hit = self.tr.intersect(&self.tris[slot as usize]).is_some();
-        !self.hit
-    }
-}
-
 /// The closest-hit walk over the top level's objects.
 struct ClosestObject<'a> {
     accel: &'a Accel,
@@ -457,12 +307,15 @@ struct ClosestObject<'a> {
     best: Best,
 }
 
-impl cwbvh::Visit for &mut ClosestObject<'_> {
+impl Visit for &mut ClosestObject<'_> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         let i = self.accel.tlas_objects[slot as usize];
+        let t_max = self.ray.t_max;
         self.accel.closest_object(i, &mut self.ray, &mut self.best);
-        br.t_max = self.ray.t_max;
+        if self.ray.t_max != t_max {
+            br.set_t_max(self.ray.t_max);
+        }
         true
     }
 }
@@ -474,37 +327,12 @@ struct AnyObject<'a> {
     hit: bool,
 }
 
-impl cwbvh::Visit for &mut AnyObject<'_> {
+impl Visit for &mut AnyObject<'_> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
         self.hit = self.accel.object_occludes(self.accel.tlas_objects[slot as usize], self.ray);
         !self.hit
     }
-}
-
-fn bvh_bytes(bvh: &CwBvh) -> usize {
-    bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
-        + bvh.primitive_indices.len() * std::mem::size_of::<u32>()
-}
-
-/// Builds a CWBVH over triangles (`tris`, which may pre-split) or boxes.
-/// Unlike obvhs's helpers this never runs the (slow) debug validation.
-fn build_cwbvh(tris: &[obvhs::triangle::Triangle], quality: BuildQuality, allow_split: bool) -> CwBvh {
-    let aabbs: Vec<ObAabb> = tris.iter().map(|t| t.aabb()).collect();
-    build_cwbvh_aabbs(aabbs, Some(tris).filter(|_| allow_split), quality)
-}
-
-fn build_cwbvh_aabbs(
-    aabbs: Vec<ObAabb>,
-    tris: Option<&[obvhs::triangle::Triangle]>,
-    quality: BuildQuality,
-) -> CwBvh {
-    if aabbs.is_empty() {
-        return CwBvh::default();
-    }
-    let p = quality.params();
-    let bvh2 = bvh2::ploc_tree(aabbs, tris, &p);
-    bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
 /// The best hit so far during a closest-hit query (world hits are made
@@ -649,11 +477,11 @@ impl Accel {
                 unbounded.push(i as u32);
             }
         }
-        let tlas = build_cwbvh_aabbs(tlas_boxes, None, options.top_quality);
+        let tlas = cwbvh::build(tlas_boxes, None, options.top_quality);
         let tlas_objects = tlas.primitive_indices.iter().map(|&k| top[k as usize]).collect();
         let stats = BuildStats {
             build_seconds: start.elapsed().as_secs_f64(),
-            bvh_bytes: bvh_bytes(&tlas)
+            bvh_bytes: cwbvh::bytes(&tlas)
                 + std::mem::size_of::<u32>() * (top.len() + unbounded.len())
                 + blas.iter().map(Blas::bytes).sum::<usize>(),
             stored_triangles: meshes.iter().map(|m| m.len()).sum(),
@@ -671,7 +499,7 @@ impl Accel {
             bounds,
             stats,
             blas,
-            tlas_depth: cwbvh::depth(&tlas),
+            tlas_depth: traverse::depth(&tlas),
             tlas,
             tlas_objects,
             unbounded,
@@ -798,7 +626,7 @@ impl Accel {
             self.closest_object(i, &mut v.ray, &mut v.best);
         }
         let mut br = BoxRay::new(&v.ray);
-        cwbvh::walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
+        walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
         self.finish(v.best)
     }
 
@@ -842,7 +670,7 @@ impl Accel {
         }
         let mut br = BoxRay::new(ray);
         let mut v = AnyObject { accel: self, ray, hit: false };
-        cwbvh::walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
+        walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
         v.hit
     }
 
@@ -897,11 +725,11 @@ impl Accel {
             }
         }
         let mut br = BoxRay::new(ray);
-        cwbvh::walk_any(
+        walk_any(
             &self.tlas,
             self.tlas_depth,
             &mut br,
-            cwbvh::visitor(|slot, _| {
+            visitor(|slot, _| {
                 self.object_crossings(self.tlas_objects[slot as usize], ray, &mut f).is_continue()
             }),
         );
@@ -957,8 +785,7 @@ impl Accel {
                     let tr = TriangleRay::new(&local);
                     let mut flow = ControlFlow::Continue(());
                     for face in 0..m.len() {
-                        let [a, b, c] = m.triangle(face);
-                        if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+                        if let Some((t, b1, b2)) = tr.intersect(&m.triangle(face)) {
                             let hit = transform.hit_to_world(&m.hit(face, t, b1, b2, local.dir));
                             flow = f(&SceneHit { object: i as u32, triangle: face as u32, hit });
                             if flow.is_break() {
@@ -982,11 +809,10 @@ const MAX_SHAPE_CROSSINGS: usize = 8;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use prism_geometry::glam::Vec2;
 
     /// An `n`×`n` grid over the unit square in x/z, two triangles a cell,
     /// raised to `y = sin(fx·u)·cos(fz·v)·amp` for `[fx, fz, amp]`.
-    fn wavy_grid(n: u32, [fx, fz, amp]: [f32; 3]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    pub(crate) fn wavy_grid(n: u32, [fx, fz, amp]: [f32; 3]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let mut positions = Vec::new();
         for j in 0..=n {
             for i in 0..=n {
@@ -1026,13 +852,8 @@ mod tests {
             eprintln!("skipped: this CPU lacks the wide variant's features");
             return;
         }
-        let mut s = 0x9e37_79b9_u32;
-        let mut f = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = prism_testkit::Rng::new(0x9e37_79b9);
+        let mut f = move || rng.range(-1.0, 1.0);
         let mut hits = 0;
         for k in 0..20_000 {
             let o = Vec3::new(f() * 3.0 + 1.0, f() * 2.0, f() * 3.0 + 0.5);
@@ -1053,38 +874,5 @@ mod tests {
             hits += usize::from(plain.is_some());
         }
         assert!(hits > 500, "{hits}");
-    }
-
-    /// obvhs's own validation (skipped by our builds, as it is slow) on
-    /// meshes built at every quality.
-    #[test]
-    fn built_hierarchies_validate() {
-        let (positions, indices) = wavy_grid(30, [7.0, 5.0, 0.2]);
-        let uvs = positions.iter().map(|p| Vec2::new(p.x, p.z)).collect();
-        let mesh = TriangleMesh::new(positions, None, Some(uvs), indices).unwrap();
-        for q in BuildQuality::ALL {
-            let blas = Blas::build(&mesh, q, BlasKind::Cwbvh);
-            let tris: Vec<obvhs::triangle::Triangle> = (0..mesh.len())
-                .map(|f| {
-                    let [a, b, c] = mesh.triangle(f);
-                    obvhs::triangle::Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
-                })
-                .collect();
-            blas.bvh.validate(&tris, false);
-            assert_eq!(blas.tris.len(), blas.faces.len());
-            assert!(blas.depth >= 1 && blas.depth <= cwbvh::INLINE_STACK);
-            let mut faces = blas.faces.clone();
-            faces.sort_unstable();
-            faces.dedup();
-            assert_eq!(faces.len(), mesh.len(), "{}: every face is in a leaf", q.name());
-            let blas = Blas::build(&mesh, q, BlasKind::Bvh2);
-            blas.bvh2.validate(&tris, false, blas.split);
-            assert!(blas.bvh.nodes.is_empty());
-            assert_eq!(blas.tris.len(), blas.faces.len());
-            let mut faces = blas.faces.clone();
-            faces.sort_unstable();
-            faces.dedup();
-            assert_eq!(faces.len(), mesh.len(), "{} bvh2: every face is in a leaf", q.name());
-        }
     }
 }

@@ -1,9 +1,10 @@
 //! The hierarchy against brute force on the shared real meshes (skipped
-//! with a printed reason when `../shared/data` is absent).
+//! with a printed reason when `../shared/data` is absent, failed under CI:
+//! see prism-testkit).
 
 mod common;
 
-use common::{Rng, compare_all, compare_closest, data_dir, load_obj};
+use common::{Rng, compare_all, compare_closest};
 use prism_bvh::{Accel, Object};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Ray, Transform};
@@ -17,17 +18,8 @@ const RAYS: usize = 400;
 
 #[test]
 fn shared_meshes_match_brute_force() {
-    let Some(dir) = data_dir() else {
-        eprintln!("skipped: ../shared/data is absent (looked beside the workspace root)");
-        return;
-    };
-    for name in ["stanford-bunny.obj", "kitchen.obj", "teapot.obj", "spot.obj", "beast.obj"] {
-        let path = dir.join(name);
-        if !path.is_file() {
-            eprintln!("skipped {name}: not found in {}", dir.display());
-            continue;
-        }
-        let mesh = Arc::new(load_obj(&path));
+    for (name, path) in prism_testkit::shared_meshes() {
+        let mesh = Arc::new(prism_testkit::load_obj(&path).unwrap());
         let b = prism_geometry::Intersect::bounds(&*mesh);
         let size = b.extent().max_element();
         // The mesh as is, and a second, rotated and scaled instance beside it.

@@ -166,8 +166,7 @@ impl TriangleMesh {
         let mut tr = TriangleRay::new(ray);
         let mut best = None;
         for f in 0..self.len() {
-            let [a, b, c] = self.triangle(f);
-            if let Some((t, b1, b2)) = tr.intersect(a, b, c) {
+            if let Some((t, b1, b2)) = tr.intersect(&self.triangle(f)) {
                 best = Some((f, t, b1, b2));
                 tr.set_t_max(t);
             }

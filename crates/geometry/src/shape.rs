@@ -56,6 +56,23 @@ impl Shape {
         !matches!(self, Shape::Plane(_))
     }
 
+    /// Whether the shape is a closed solid: its surface encloses a finite
+    /// inside, so a ray leaving through it (a back-face hit) was inside.
+    /// Spheres, boxes, capped cylinders and cones (with their base cap) are;
+    /// planes, disks and single triangles are open surfaces. An affine
+    /// [`Transform`] keeps the answer, so it holds for an [`Instance`] too.
+    ///
+    /// Triangle meshes are not [`Shape`]s and have no such answer: whether
+    /// one is closed would have to be proven from its edges, so callers
+    /// treat a mesh as open.
+    #[must_use]
+    pub fn is_closed(&self) -> bool {
+        match self {
+            Shape::Sphere(_) | Shape::Cuboid(_) | Shape::Cylinder(_) | Shape::Cone(_) => true,
+            Shape::Plane(_) | Shape::Disk(_) | Shape::Triangle(_) => false,
+        }
+    }
+
     /// A short lower-case name of the kind of shape.
     #[must_use]
     pub fn kind(&self) -> &'static str {
@@ -156,5 +173,52 @@ impl<S: Intersect> Intersect for Instance<S> {
 
     fn bounds(&self) -> Aabb {
         self.transform.aabb(&self.shape.bounds())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// Every kind of shape, once.
+    fn one_of_each() -> [Shape; 7] {
+        [
+            Sphere::new(Vec3::ZERO, 1.0).unwrap().into(),
+            Plane::new(Vec3::ZERO, Vec3::Y).unwrap().into(),
+            Cuboid::new(Vec3::ZERO, Vec3::ONE).unwrap().into(),
+            Cylinder::new(Vec3::ZERO, 1.0, 2.0).unwrap().into(),
+            Cone::new(Vec3::ZERO, 1.0, 2.0).unwrap().into(),
+            Disk::new(Vec3::ZERO, Vec3::Y, 1.0).unwrap().into(),
+            Triangle::new([Vec3::ZERO, Vec3::X, Vec3::Y]).unwrap().into(),
+        ]
+    }
+
+    #[test]
+    fn closed_solids_are_the_sphere_box_cylinder_and_cone() {
+        for s in one_of_each() {
+            let want = matches!(s.kind(), "sphere" | "cuboid" | "cylinder" | "cone");
+            assert_eq!(s.is_closed(), want, "{}", s.kind());
+        }
+    }
+
+    /// What "closed" promises: a ray from inside a closed shape leaves
+    /// through a back face, and one from far outside aimed at its middle
+    /// enters through a front face and then leaves through a back face.
+    #[test]
+    fn closed_shapes_are_entered_and_left() {
+        for s in one_of_each().into_iter().filter(Shape::is_closed) {
+            let c = s.bounds().center();
+            for d in [Vec3::X, Vec3::Y, Vec3::Z, Vec3::new(1.0, -0.3, 0.2)] {
+                let out = s.intersect(&Ray::new(c, d)).unwrap_or_else(|| panic!("{} from inside", s.kind()));
+                assert!(!out.front_face, "{} from inside along {d}", s.kind());
+                let from = c - 10.0 * d;
+                let enter = s.intersect(&Ray::new(from, d)).unwrap_or_else(|| panic!("{}", s.kind()));
+                assert!(enter.front_face, "{} from outside along {d}", s.kind());
+                let past = Ray::with_interval(from, d, enter.t.next_up(), f32::INFINITY);
+                let leave = s.intersect(&past).unwrap_or_else(|| panic!("{} exit along {d}", s.kind()));
+                assert!(!leave.front_face, "{} exit along {d}", s.kind());
+            }
+        }
     }
 }

@@ -116,7 +116,7 @@ fn crossings(mesh: &TriangleMesh, ray: &Ray) -> Vec<(f32, bool)> {
     let mut hits: Vec<(f32, bool)> = (0..mesh.len())
         .filter_map(|f| {
             let [a, b, c] = mesh.triangle(f);
-            let (t, ..) = tr.intersect(a, b, c)?;
+            let (t, ..) = tr.intersect(&[a, b, c])?;
             Some((t, ray.dir.dot((b - a).cross(c - a)) < 0.0))
         })
         .collect();

@@ -10,7 +10,7 @@ use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::{Object, SceneHit};
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Hit, Ray, Shape};
+use prism_geometry::{Hit, Ray};
 use std::ops::ControlFlow;
 
 /// Recursion never goes deeper than this, whatever the settings say (a
@@ -33,14 +33,11 @@ pub(crate) struct Tracer<'a> {
     pub rays: u64,
 }
 
-/// Whether object `object` is a closed solid (its inside is bounded by it).
+/// Whether object `object` is a closed solid (its inside is bounded by it):
+/// geometry's answer, [`Object::is_closed`].
 #[inline]
 fn is_closed(scene: &Scene, object: u32) -> bool {
-    matches!(
-        scene.accel.objects().get(object as usize),
-        Some(Object::Shape(inst))
-            if matches!(inst.shape, Shape::Sphere(_) | Shape::Cuboid(_) | Shape::Cylinder(_) | Shape::Cone(_))
-    )
+    scene.accel.objects().get(object as usize).is_some_and(Object::is_closed)
 }
 
 #[inline]

@@ -11,6 +11,19 @@
 //! CI such a test skips itself and prints why; under CI (`CI` set to anything
 //! but `false` or `0`, as `.ci/run` does) it fails instead, because there a
 //! skip would hide a missing install step.
+//!
+//! # Modules
+//!
+//! * [`rng`]: the PCG32 generator ([`Rng`]);
+//! * [`obj`]: an OBJ file as one positions-only mesh ([`load_obj`]);
+//! * [`mod@bench`]: the benchmark's framing camera and ray sets.
+
+pub mod bench;
+pub mod obj;
+pub mod rng;
+
+pub use obj::{ObjError, load_obj};
+pub use rng::Rng;
 
 use std::path::PathBuf;
 
@@ -44,6 +57,28 @@ pub fn shared_data() -> Option<PathBuf> {
         skip(&format!("the shared meshes are absent (looked for {})", dir.display()));
         None
     }
+}
+
+/// The real meshes of `../shared/data` the tests run on, smallest last.
+pub const SHARED_MESHES: [&str; 5] =
+    ["stanford-bunny.obj", "kitchen.obj", "teapot.obj", "spot.obj", "beast.obj"];
+
+/// `(name, path)` of each of [`SHARED_MESHES`] present in
+/// [`shared_data`]; each one missing (or the whole folder) is [`skip`]ped,
+/// so under CI it fails the test and outside CI it is named on stderr.
+#[must_use]
+pub fn shared_meshes() -> Vec<(&'static str, PathBuf)> {
+    let Some(dir) = shared_data() else { return Vec::new() };
+    let mut found = Vec::new();
+    for name in SHARED_MESHES {
+        let path = dir.join(name);
+        if path.is_file() {
+            found.push((name, path));
+        } else {
+            skip(&format!("{name} is absent from {}", dir.display()));
+        }
+    }
+    found
 }
 
 #[cfg(test)]

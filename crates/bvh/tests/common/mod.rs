@@ -1,7 +1,10 @@
-//! Shared helpers: a small deterministic RNG, random scenes, OBJ loading,
-//! and comparisons against the brute-force reference.
+//! Shared helpers of prism-bvh's tests: random scenes and rays, and
+//! comparisons against the brute-force reference. (The generator, OBJ
+//! loading and the shared meshes are prism-testkit's.)
 
 #![allow(dead_code)]
+
+pub use prism_testkit::Rng;
 
 use prism_bvh::{Accel, Object, SceneHit};
 use prism_geometry::glam::{Vec2, Vec3};
@@ -10,71 +13,7 @@ use prism_geometry::{
     TriangleMesh,
 };
 use std::ops::ControlFlow;
-use std::path::PathBuf;
 use std::sync::Arc;
-
-/// PCG32, enough for reproducible test data.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        let mut r = Rng(seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407));
-        r.next_u32();
-        r
-    }
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
-    }
-    /// Uniform in [0, 1).
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
-    }
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f32()
-    }
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u32() as usize) % n.max(1)
-    }
-    pub fn vec_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(self.range(lo.x, hi.x), self.range(lo.y, hi.y), self.range(lo.z, hi.z))
-    }
-    pub fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = self.vec_in(Vec3::splat(-1.0), Vec3::splat(1.0));
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-    /// A direction, sometimes axis-parallel (with zero or negative-zero
-    /// components).
-    pub fn direction(&mut self) -> Vec3 {
-        match self.below(10) {
-            0 => {
-                let axis = self.below(3);
-                let mut d = [0.0f32, -0.0, 0.0];
-                if self.below(2) == 0 {
-                    d = [-0.0, 0.0, -0.0];
-                }
-                d[axis] = if self.below(2) == 0 { 1.0 } else { -1.0 };
-                Vec3::from_array(d)
-            }
-            1 => {
-                let mut v = self.unit();
-                v[self.below(3)] = if self.below(2) == 0 { 0.0 } else { -0.0 };
-                if v == Vec3::ZERO { Vec3::X } else { v }
-            }
-            // Non-unit lengths: t is in units of dir.
-            2 => self.unit() * self.range(0.01, 50.0),
-            _ => self.unit(),
-        }
-    }
-}
 
 pub fn random_transform(rng: &mut Rng) -> Transform {
     let mut t = Transform::IDENTITY;
@@ -186,15 +125,31 @@ fn hit_finite(h: &SceneHit) -> bool {
         && x.uv.is_finite()
 }
 
-/// Relative tolerance on t between the two paths (they use the same
-/// intersection code, so equal primitives give equal t).
+/// Relative tolerance on the `t` of every crossing between the two paths
+/// ([`compare_all`]); closest hits must agree exactly ([`compare_closest`]).
 pub const T_TOL: f32 = 1e-5;
 
 fn close(a: f32, b: f32) -> bool {
     (a - b).abs() <= T_TOL * a.abs().max(b.abs()).max(1.0)
 }
 
-/// Compares closest hits; returns a description of the first mismatch.
+/// Whether brute force finds a crossing of `h`'s object and triangle at
+/// exactly `h`'s `t`.
+fn crosses_at(accel: &Accel, ray: &Ray, h: &SceneHit) -> bool {
+    let mut found = false;
+    accel.for_each_hit_brute_force(ray, |c| {
+        found = (c.object, c.triangle, c.hit.t.to_bits()) == (h.object, h.triangle, h.hit.t.to_bits());
+        if found { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    });
+    found
+}
+
+/// Compares the hierarchy's closest hit with brute force's: both miss, or
+/// both hit the same object and triangle at the same `t` (both paths run
+/// the same intersection code, so `t` is equal bit for bit). Where two
+/// primitives are crossed at exactly the same `t`, either may win; the
+/// hierarchy's choice must then be crossed at that `t` indeed. Also checks
+/// that `occluded` agrees. Returns a description of the first mismatch.
 pub fn compare_closest(accel: &Accel, ray: &Ray) -> Result<Option<SceneHit>, String> {
     let fast = accel.closest_hit(ray);
     let slow = accel.closest_hit_brute_force(ray);
@@ -204,15 +159,11 @@ pub fn compare_closest(accel: &Accel, ray: &Ray) -> Result<Option<SceneHit>, Str
             if !hit_finite(a) {
                 return Err(format!("non-finite hit {a:?} for {ray:?}"));
             }
-            if !close(a.hit.t, b.hit.t) {
+            if a.hit.t.to_bits() != b.hit.t.to_bits() {
                 return Err(format!("t differs: bvh {a:?}\nbrute {b:?}\nray {ray:?}"));
             }
-            // Same primitive, unless the two were hit at the same t.
-            if (a.object, a.triangle) != (b.object, b.triangle)
-                && a.hit.t != b.hit.t
-                && !close(a.hit.t, b.hit.t)
-            {
-                return Err(format!("different primitive: bvh {a:?}\nbrute {b:?}"));
+            if (a.object, a.triangle) != (b.object, b.triangle) && !crosses_at(accel, ray, a) {
+                return Err(format!("different primitive, not a tie: bvh {a:?}\nbrute {b:?}\nray {ray:?}"));
             }
         }
         _ => return Err(format!("hit/miss differs: bvh {fast:?}\nbrute {slow:?}\nray {ray:?}")),
@@ -251,27 +202,4 @@ pub fn compare_all(accel: &Accel, ray: &Ray) -> Result<usize, String> {
         }
     }
     Ok(fast.len())
-}
-
-/// `<workspace root>/../shared/data`, if present.
-pub fn data_dir() -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    d.is_dir().then_some(d)
-}
-
-/// Loads every shape of an OBJ into one mesh (positions only).
-pub fn load_obj(path: &std::path::Path) -> TriangleMesh {
-    let (models, _) = tobj::load_obj(
-        path,
-        &tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() },
-    )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for m in models {
-        let base = positions.len() as u32;
-        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-        indices.extend(m.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
-    }
-    TriangleMesh::new(positions, None, None, indices).unwrap()
 }

@@ -1,7 +1,6 @@
 //! Finite cones with a base cap.
 
-use super::cylinder::{Part, azimuth_u, cap_t, cap_uv, keep};
-use super::{SEAL, check_finite, check_positive};
+use super::upright::{Part, Upright, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -18,11 +17,7 @@ use glam::{Vec2, Vec3};
 /// The side is accepted up to `1e-6 · height` below the base so that a ray
 /// through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cone {
-    base: Vec3,
-    radius: f32,
-    height: f32,
-}
+pub struct Cone(Upright);
 
 impl Cone {
     /// A cone standing on `base` (centre of its base cap).
@@ -30,60 +25,35 @@ impl Cone {
     /// # Errors
     /// If the radius or height is not positive or a value is not finite.
     pub fn new(base: Vec3, radius: f32, height: f32) -> Result<Self, GeometryError> {
-        Ok(Self {
-            base: check_finite("cone base", base)?,
-            radius: check_positive("cone radius", radius)?,
-            height: check_positive("cone height", height)?,
-        })
+        Upright::new(["cone base", "cone radius", "cone height"], base, radius, height).map(Self)
     }
 
     /// Centre of the base cap.
     #[must_use]
     pub fn base(&self) -> Vec3 {
-        self.base
+        self.0.base
     }
 
     /// Base radius.
     #[must_use]
     pub fn radius(&self) -> f32 {
-        self.radius
+        self.0.radius
     }
 
     /// Height of the apex above the base.
     #[must_use]
     pub fn height(&self) -> f32 {
-        self.height
+        self.0.height
     }
-}
-
-/// Roots of `a t² + 2 hb t + c = 0` given its discriminant `hb² − a c`, in
-/// ascending order; `a` may be zero (one root).
-#[inline]
-fn roots_from_disc(a: f32, hb: f32, c: f32, disc: f32) -> Option<(f32, f32)> {
-    if a == 0.0 {
-        return (hb != 0.0).then(|| {
-            let t = -c / (2.0 * hb);
-            (t, t)
-        });
-    }
-    if !(disc >= 0.0) {
-        return None;
-    }
-    let q = -(hb + hb.signum() * disc.sqrt());
-    if q == 0.0 {
-        return Some((0.0, 0.0));
-    }
-    let (t0, t1) = (q / a, c / q);
-    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
 impl Cone {
     /// The nearest crossing in the interval: its `t` and the part hit.
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<(f32, Part)> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let k = r / h;
         let k2 = k * k;
         let mut best: Option<(f32, Part)> = None;
@@ -107,15 +77,8 @@ impl Cone {
         if disc < 0.0 && w.length_squared() <= noise * noise {
             disc = 0.0;
         }
-        if let Some(roots) = roots_from_disc(a, hb, c, disc) {
-            let eps = SEAL * h;
-            for t in [roots.0, roots.1] {
-                let y = o.y + t * d.y;
-                if ray.contains(t) && y >= -eps && y <= h + eps {
-                    keep(&mut best, t, Part::Side);
-                    break;
-                }
-            }
+        if let Some(t) = roots_from_disc(a, hb, c, disc).and_then(|roots| side_t(ray, o, roots, h)) {
+            keep(&mut best, t, Part::Side);
         }
         if let Some(t) = cap_t(ray, o, 0.0, r) {
             keep(&mut best, t, Part::Bottom);
@@ -131,9 +94,9 @@ impl Intersect for Cone {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let k = r / h;
         let k2 = k * k;
         let (t, part) = self.solve(ray)?;
@@ -150,12 +113,11 @@ impl Intersect for Cone {
             }
             Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r)),
         };
-        Some(Hit::new(t, self.base + rel, n, uv, d))
+        Some(Hit::new(t, self.0.base + rel, n, uv, d))
     }
 
     fn bounds(&self) -> Aabb {
-        let r = self.radius;
-        Aabb::new(self.base - Vec3::new(r, 0.0, r), self.base + Vec3::new(r, self.height, r))
+        self.0.bounds()
     }
 }
 

@@ -1,9 +1,8 @@
 //! Finite cylinders with both caps.
 
-use super::{SEAL, check_finite, check_positive};
+use super::upright::{Part, Upright, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
-use std::f32::consts::PI;
 
 /// A solid cylinder along +Y: base centre `base`, `radius`, `height`; both
 /// caps closed (the report's cylinder "with a visible top").
@@ -17,54 +16,7 @@ use std::f32::consts::PI;
 /// The side is accepted up to `1e-6 · height` beyond either cap so that a
 /// ray through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cylinder {
-    base: Vec3,
-    radius: f32,
-    height: f32,
-}
-
-/// Candidate hit kept while testing the side and the caps.
-#[derive(Clone, Copy)]
-pub(crate) enum Part {
-    Side,
-    Bottom,
-    Top,
-}
-
-/// Keeps the nearest candidate.
-#[inline]
-pub(crate) fn keep(best: &mut Option<(f32, Part)>, t: f32, part: Part) {
-    if best.is_none_or(|(b, _)| t < b) {
-        *best = Some((t, part));
-    }
-}
-
-/// Tests a cap disk at object height `y` (relative to the base) of radius
-/// `r` about the axis.
-#[inline]
-pub(crate) fn cap_t(ray: &Ray, o: Vec3, y: f32, r: f32) -> Option<f32> {
-    if ray.dir.y == 0.0 {
-        return None;
-    }
-    let t = (y - o.y) / ray.dir.y;
-    if !ray.contains(t) {
-        return None;
-    }
-    let (x, z) = (o.x + t * ray.dir.x, o.z + t * ray.dir.z);
-    (x * x + z * z <= r * r).then_some(t)
-}
-
-/// uv on a cap of radius `r`, from the point relative to the axis.
-#[inline]
-pub(crate) fn cap_uv(rel: Vec3, r: f32) -> Vec2 {
-    Vec2::new((rel.x / r + 1.0) * 0.5, (rel.z / r + 1.0) * 0.5)
-}
-
-/// `u` about the Y axis, matching the sphere's convention.
-#[inline]
-pub(crate) fn azimuth_u(rel: Vec3) -> f32 {
-    0.5 + rel.z.atan2(rel.x) / (2.0 * PI)
-}
+pub struct Cylinder(Upright);
 
 impl Cylinder {
     /// A cylinder standing on `base` (centre of the bottom cap).
@@ -72,29 +24,25 @@ impl Cylinder {
     /// # Errors
     /// If the radius or height is not positive or a value is not finite.
     pub fn new(base: Vec3, radius: f32, height: f32) -> Result<Self, GeometryError> {
-        Ok(Self {
-            base: check_finite("cylinder base", base)?,
-            radius: check_positive("cylinder radius", radius)?,
-            height: check_positive("cylinder height", height)?,
-        })
+        Upright::new(["cylinder base", "cylinder radius", "cylinder height"], base, radius, height).map(Self)
     }
 
     /// Centre of the bottom cap.
     #[must_use]
     pub fn base(&self) -> Vec3 {
-        self.base
+        self.0.base
     }
 
     /// Radius.
     #[must_use]
     pub fn radius(&self) -> f32 {
-        self.radius
+        self.0.radius
     }
 
     /// Height.
     #[must_use]
     pub fn height(&self) -> f32 {
-        self.height
+        self.0.height
     }
 }
 
@@ -102,9 +50,9 @@ impl Cylinder {
     /// The nearest crossing in the interval: its `t` and the part hit.
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<(f32, Part)> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let mut best: Option<(f32, Part)> = None;
         // Side: x² + z² = r², with 0 <= y <= h.
         let a = d.x * d.x + d.z * d.z;
@@ -113,18 +61,10 @@ impl Cylinder {
             // Discriminant in the cancellation-free form (see Sphere).
             let (lx, lz) = (o.x - hb / a * d.x, o.z - hb / a * d.z);
             let disc = a * (r * r - (lx * lx + lz * lz));
-            if disc >= 0.0 {
-                let c = o.x * o.x + o.z * o.z - r * r;
-                let q = -(hb + hb.signum() * disc.sqrt());
-                let roots = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
-                let eps = SEAL * h;
-                for t in [roots.0.min(roots.1), roots.0.max(roots.1)] {
-                    let y = o.y + t * d.y;
-                    if ray.contains(t) && y >= -eps && y <= h + eps {
-                        keep(&mut best, t, Part::Side);
-                        break;
-                    }
-                }
+            if let Some(t) = roots_from_disc(a, hb, o.x * o.x + o.z * o.z - r * r, disc)
+                .and_then(|roots| side_t(ray, o, roots, h))
+            {
+                keep(&mut best, t, Part::Side);
             }
         }
         if let Some(t) = cap_t(ray, o, 0.0, r) {
@@ -144,9 +84,9 @@ impl Intersect for Cylinder {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let o = ray.origin - self.base;
+        let o = ray.origin - self.0.base;
         let d = ray.dir;
-        let (r, h) = (self.radius, self.height);
+        let (r, h) = (self.0.radius, self.0.height);
         let (t, part) = self.solve(ray)?;
         let rel = o + t * d;
         let (rel, n, uv) = match part {
@@ -158,12 +98,11 @@ impl Intersect for Cylinder {
             Part::Bottom => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r)),
             Part::Top => (Vec3::new(rel.x, h, rel.z), Vec3::Y, cap_uv(rel, r)),
         };
-        Some(Hit::new(t, self.base + rel, n, uv, d))
+        Some(Hit::new(t, self.0.base + rel, n, uv, d))
     }
 
     fn bounds(&self) -> Aabb {
-        let r = self.radius;
-        Aabb::new(self.base - Vec3::new(r, 0.0, r), self.base + Vec3::new(r, self.height, r))
+        self.0.bounds()
     }
 }
 

@@ -7,6 +7,7 @@ mod disk;
 mod plane;
 mod sphere;
 mod triangle;
+mod upright;
 
 pub use cone::Cone;
 pub use cuboid::Cuboid;

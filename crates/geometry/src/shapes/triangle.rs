@@ -2,7 +2,7 @@
 
 use super::check_finite;
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 
 /// A single triangle `(v0, v1, v2)`; its outward normal follows the
 /// counter-clockwise winding, `(v1 − v0) × (v2 − v0)` (right-handed).
@@ -41,11 +41,11 @@ impl Triangle {
 impl Intersect for Triangle {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
-        TriangleRay::new(ray).intersect(self.v[0], self.v[1], self.v[2]).map(|(t, _, _)| t)
+        TriangleRay::new(ray).intersect(&self.v).map(|(t, _, _)| t)
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let (t, b1, b2) = TriangleRay::new(ray).intersect(self.v[0], self.v[1], self.v[2])?;
+        let (t, b1, b2) = TriangleRay::new(ray).intersect(&self.v)?;
         let b0 = 1.0 - b1 - b2;
         let p = b0 * self.v[0] + b1 * self.v[1] + b2 * self.v[2];
         Some(Hit::new(t, p, self.normal(), Vec2::new(b1, b2), ray.dir))
@@ -57,28 +57,53 @@ impl Intersect for Triangle {
 }
 
 /// A ray prepared for the watertight ray/triangle test of Woop, Benthin and
-/// Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013).
+/// Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013): prism's one
+/// implementation of that test, used by [`Triangle`], [`crate::TriangleMesh`]
+/// and the BVH's leaves alike.
 ///
 /// The ray is sheared so that it runs along +Z; each triangle is then
 /// tested in 2D with edge functions that are exact in sign on shared edges
 /// (falling back to `f64` when an edge function is exactly zero), so a ray
 /// aimed at a shared edge or vertex of a closed mesh never slips through.
-/// Prepare once per ray, test many triangles.
+/// Prepare once per ray ([`TriangleRay::new`]), then test many triangles
+/// ([`TriangleRay::intersect`]).
+///
+/// # Layout
+///
+/// The paper indexes the vertex by the permuted axes `kx`, `ky`, `kz` of the
+/// ray's dominant direction and computes the sheared vertex as
+/// `(a[kx] − sx·a[kz], a[ky] − sy·a[kz], sz·a[kz])`. Here the shear is
+/// stored as three row vectors (`Vec3A`, SIMD-friendly) so that the same
+/// three values are dot products instead of dynamically indexed loads: the
+/// extra terms are products with exact zeros, so every value, and so every
+/// edge-function sign (the watertightness), is the paper's (up to the sign
+/// of an exactly zero coordinate, which no test below distinguishes).
 #[derive(Clone, Copy, Debug)]
 pub struct TriangleRay {
-    origin: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    origin: Vec3A,
+    /// Row giving the sheared `x`: `1` at `kx`, `−sx` at `kz`.
+    mx: Vec3A,
+    /// Row giving the sheared `y`: `1` at `ky`, `−sy` at `kz`.
+    my: Vec3A,
+    /// Row giving the scaled `z`: `sz` at `kz`.
+    mz: Vec3A,
+    /// The ray's `t_min`, raised to `f32::MIN` (so `−∞` never passes).
     t_min: f32,
+    /// The ray's `t_max`, lowered to `f32::MAX` (so `+∞` never passes).
     t_max: f32,
 }
 
+/// `[t_min, t_max]` narrowed to finite bounds: the interval test then also
+/// rejects an infinite or `NaN` `t`, at no cost per triangle.
+#[inline(always)]
+fn finite_interval(t_min: f32, t_max: f32) -> (f32, f32) {
+    (t_min.max(f32::MIN), t_max.min(f32::MAX))
+}
+
 impl TriangleRay {
-    /// Prepares `ray` (its direction must be non-zero).
+    /// Prepares `ray` (its direction must be non-zero; a zero or non-finite
+    /// direction hits nothing).
+    #[inline(always)]
     #[must_use]
     pub fn new(ray: &Ray) -> Self {
         let a = ray.dir.abs();
@@ -95,40 +120,38 @@ impl TriangleRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = ray.dir[kz];
-        Self {
-            origin: ray.origin,
-            kx,
-            ky,
-            kz,
-            sx: ray.dir[kx] / dz,
-            sy: ray.dir[ky] / dz,
-            sz: 1.0 / dz,
-            t_min: ray.t_min,
-            t_max: ray.t_max,
-        }
+        let (sx, sy, sz) = (ray.dir[kx] / dz, ray.dir[ky] / dz, 1.0 / dz);
+        let (mut mx, mut my, mut mz) = (Vec3A::ZERO, Vec3A::ZERO, Vec3A::ZERO);
+        mx[kx] = 1.0;
+        mx[kz] = -sx;
+        my[ky] = 1.0;
+        my[kz] = -sy;
+        mz[kz] = sz;
+        let (t_min, t_max) = finite_interval(ray.t_min, ray.t_max);
+        Self { origin: ray.origin.into(), mx, my, mz, t_min, t_max }
     }
 
     /// Narrows the accepted interval's upper end (after a closer hit).
-    #[inline]
+    #[inline(always)]
     pub fn set_t_max(&mut self, t_max: f32) {
-        self.t_max = t_max;
+        self.t_max = finite_interval(self.t_min, t_max).1;
     }
 
-    /// `(t, b1, b2)` if the ray meets the triangle within its interval,
-    /// from either side. Zero-area triangles are never hit.
-    #[inline]
+    /// `(t, b1, b2)` if the ray meets the triangle with corners `v` within
+    /// its interval, from either side; `(b1, b2)` are the barycentric
+    /// coordinates of `v[1]` and `v[2]` (see [`Triangle`]). Zero-area
+    /// triangles are never hit, and neither is an infinite or `NaN` `t`
+    /// (a nearly parallel ray whose plane crossing overflows), whatever
+    /// the interval.
+    #[inline(always)]
     #[must_use]
-    pub fn intersect(&self, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let a = v0 - self.origin;
-        let b = v1 - self.origin;
-        let c = v2 - self.origin;
-        let ax = a[kx] - self.sx * a[kz];
-        let ay = a[ky] - self.sy * a[kz];
-        let bx = b[kx] - self.sx * b[kz];
-        let by = b[ky] - self.sy * b[kz];
-        let cx = c[kx] - self.sx * c[kz];
-        let cy = c[ky] - self.sy * c[kz];
+    pub fn intersect(&self, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
+        let a = Vec3A::from(v[0]) - self.origin;
+        let b = Vec3A::from(v[1]) - self.origin;
+        let c = Vec3A::from(v[2]) - self.origin;
+        let (ax, ay) = (self.mx.dot(a), self.my.dot(a));
+        let (bx, by) = (self.mx.dot(b), self.my.dot(b));
+        let (cx, cy) = (self.mx.dot(c), self.my.dot(c));
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -145,13 +168,11 @@ impl TriangleRay {
         if det == 0.0 || !det.is_finite() {
             return None;
         }
-        let az = self.sz * a[kz];
-        let bz = self.sz * b[kz];
-        let cz = self.sz * c[kz];
-        let t_scaled = u * az + v * bz + w * cz;
+        let t_scaled = u * self.mz.dot(a) + v * self.mz.dot(b) + w * self.mz.dot(c);
         let rcp = 1.0 / det;
         let t = t_scaled * rcp;
-        if !(t >= self.t_min && t <= self.t_max && t.is_finite()) {
+        // The bounds are finite, so this also rejects an infinite or NaN t.
+        if !(t >= self.t_min && t <= self.t_max) {
             return None;
         }
         Some((t, v * rcp, w * rcp))

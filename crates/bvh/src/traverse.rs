@@ -1,0 +1,221 @@
+//! What the two walks ([`crate::cwbvh`] and [`crate::bvh2`]) share: the
+//! ray as the box tests want it, the callback a walk calls per primitive,
+//! the traversal stack, and the tree depth that sizes it.
+
+use prism_geometry::Ray;
+use prism_geometry::glam::Vec3A;
+use std::mem::MaybeUninit;
+
+/// A ray prepared for box tests.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxRay {
+    pub origin: Vec3A,
+    /// `1/dir` per axis, `+inf` for both zeros (see [`crate::cwbvh`]).
+    pub inv: Vec3A,
+    /// Child order by octant, as obvhs's `ray_get_octant_inv4`.
+    pub oct_inv4: u32,
+    pub t_min: f32,
+    /// The ray's `t_max` widened by [`FAR_SCALE`]: see [`BoxRay::reach`].
+    reach: f32,
+}
+
+/// `1 + 2γ₃` with `γ₃ = 3u / (1 - 3u)`, `u = 2⁻²⁴`, rounded up (to
+/// `1 + 2⁻²¹`): the widening of far distances in Ize, "Robust BVH Ray
+/// Traversal" (JCGT 2013), which bounds the rounding of a slab distance.
+pub(crate) const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// `1/d`, with `+inf` for both zeros (slab order uses `d < 0`).
+#[inline(always)]
+fn inv(d: f32) -> f32 {
+    if d == 0.0 { f32::INFINITY } else { 1.0 / d }
+}
+
+impl BoxRay {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.dir;
+        let neg = [d.x < 0.0, d.y < 0.0, d.z < 0.0];
+        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
+            | (if neg[1] { 0 } else { 0x0202_0202 })
+            | (if neg[2] { 0 } else { 0x0101_0101 });
+        Self {
+            origin: Vec3A::from(ray.origin),
+            inv: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+            oct_inv4,
+            t_min: ray.t_min,
+            reach: ray.t_max * FAR_SCALE,
+        }
+    }
+}
+
+impl BoxRay {
+    /// How far the box tests look: `t_max` widened by [`FAR_SCALE`]. A
+    /// box's entry distance may round a few ULPs past the `t` the triangle
+    /// test computes for a triangle lying on the box's face; compared with
+    /// `t_max` itself, such a box would be culled whenever `t_max` had
+    /// just been set by a coincident face a few ULPs farther (z-fighting
+    /// faces), and the walk would return the farther face. Visiting it
+    /// costs little: the triangle test then decides exactly.
+    /// Kept with the ray (a product per hit, not per box test).
+    #[inline(always)]
+    pub fn reach(&self) -> f32 {
+        self.reach
+    }
+
+    /// Narrows the interval to `t_max` (after a closer hit).
+    #[inline(always)]
+    pub fn set_t_max(&mut self, t_max: f32) {
+        self.reach = t_max * FAR_SCALE;
+    }
+}
+
+/// What a walk calls for each primitive slot it reaches: `visit(slot,
+/// ray)` may shrink the ray's interval ([`BoxRay::set_t_max`]) and
+/// returns `false` to stop the walk.
+///
+/// Closures implement it; the hot queries use named types instead, whose
+/// `#[inline(always)]` method is sure to be compiled into its caller (a
+/// closure big enough is left out of line, and then misses the features a
+/// `#[target_feature]` caller is compiled with).
+pub(crate) trait Visit {
+    fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool;
+}
+
+impl<F: FnMut(u32, &mut BoxRay) -> bool> Visit for F {
+    #[inline(always)]
+    fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool {
+        self(slot, ray)
+    }
+}
+
+/// `f` as a [`Visit`] (pins down the closure's signature for inference).
+#[inline(always)]
+pub(crate) fn visitor<F: FnMut(u32, &mut BoxRay) -> bool>(f: F) -> F {
+    f
+}
+
+/// The stack interface the walks need.
+pub(crate) trait Stack<T> {
+    fn push(&mut self, v: T);
+    fn pop(&mut self) -> Option<T>;
+}
+
+/// Stack entries kept inline (on the call stack); a tree deeper than this
+/// (never seen in practice: a walk pushes at most one entry per level)
+/// walks with a heap stack.
+pub(crate) const INLINE_STACK: usize = 64;
+
+/// Fixed-capacity stack, left uninitialised: zeroing it cost a `memset`
+/// per walk (about 2 % of a query's instructions), and with nothing to
+/// zero its capacity costs nothing.
+pub(crate) struct InlineStack<T, const N: usize> {
+    data: [MaybeUninit<T>; N],
+    len: usize,
+}
+
+impl<T, const N: usize> InlineStack<T, N> {
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self { data: [const { MaybeUninit::uninit() }; N], len: 0 }
+    }
+}
+
+impl<T: Copy, const N: usize> Stack<T> for InlineStack<T, N> {
+    #[inline(always)]
+    fn push(&mut self, v: T) {
+        // The caller sized N from the tree depth, so this never overflows;
+        // if it did, `get_mut` keeps it memory-safe (the entry is dropped).
+        if let Some(slot) = self.data.get_mut(self.len) {
+            slot.write(v);
+            self.len += 1;
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        let slot = self.data.get(self.len)?;
+        // SAFETY: every entry below `len` was written by `push` (`len` grows
+        // only after a write), and `T: Copy` has no drop to run twice.
+        Some(unsafe { slot.assume_init() })
+    }
+}
+
+impl<T> Stack<T> for Vec<T> {
+    #[inline(always)]
+    fn push(&mut self, v: T) {
+        Vec::push(self, v);
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        Vec::pop(self)
+    }
+}
+
+/// A hierarchy this crate walks (obvhs's CWBVH and BVH2 nodes).
+pub(crate) trait Tree {
+    /// What the walk keeps on its stack.
+    type Entry: Copy;
+
+    /// Number of nodes (node 0 is the root).
+    fn node_count(&self) -> usize;
+
+    /// Calls `f` with the index of each child of node `i` that is an inner
+    /// node (nothing for a leaf or an index out of range).
+    fn inner_children(&self, i: usize, f: impl FnMut(usize));
+
+    /// Walks the tree front to back for `ray`, calling `prim.visit(slot,
+    /// ray)` for each primitive slot (an index into the tree's
+    /// `primitive_indices`) of each leaf whose box the ray's interval
+    /// meets. The callback may shrink the ray's interval; it returns `false` to
+    /// stop the walk. `stack` must hold [`depth`] entries.
+    fn walk<S: Stack<Self::Entry>>(&self, stack: &mut S, ray: &mut BoxRay, prim: impl Visit);
+}
+
+/// Depth of `tree` (root = 1, empty = 0), for sizing the walk's stack.
+pub(crate) fn depth(tree: &impl Tree) -> usize {
+    if tree.node_count() == 0 {
+        return 0;
+    }
+    let mut best = 0;
+    let mut todo = vec![(0usize, 1usize)];
+    while let Some((i, d)) = todo.pop() {
+        best = best.max(d);
+        tree.inner_children(i, |c| todo.push((c, d + 1)));
+    }
+    best
+}
+
+/// [`Tree::walk`] with a stack that fits a tree of depth `depth`.
+#[inline(always)]
+pub(crate) fn walk_any<T: Tree>(tree: &T, depth: usize, ray: &mut BoxRay, prim: impl Visit) {
+    if depth <= INLINE_STACK {
+        tree.walk(&mut InlineStack::<T::Entry, INLINE_STACK>::new(), ray, prim);
+    } else {
+        tree.walk(&mut Vec::with_capacity(depth), ray, prim);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inline_stack_is_last_in_first_out_and_drops_beyond_capacity() {
+        let mut s = InlineStack::<(u32, f32), 3>::new();
+        assert_eq!(s.pop(), None);
+        for k in 0..5 {
+            s.push((k, k as f32));
+        }
+        assert_eq!(s.pop(), Some((2, 2.0)));
+        s.push((9, 9.0));
+        assert_eq!(s.pop(), Some((9, 9.0)));
+        assert_eq!(s.pop(), Some((1, 1.0)));
+        assert_eq!(s.pop(), Some((0, 0.0)));
+        assert_eq!(s.pop(), None);
+    }
+}

@@ -1,0 +1,113 @@
+//! What the solids standing on the Y axis (capped [`super::Cylinder`] and
+//! [`super::Cone`]) share: the quadric's roots, the side's height check
+//! sealed to the caps, the cap disks, their uv, and their bounds.
+
+use super::{SEAL, check_finite, check_positive};
+use crate::{Aabb, GeometryError, Ray};
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// Candidate hit kept while testing the side and the caps.
+#[derive(Clone, Copy)]
+pub(crate) enum Part {
+    Side,
+    Bottom,
+    Top,
+}
+
+/// Keeps the nearest candidate.
+#[inline]
+pub(crate) fn keep(best: &mut Option<(f32, Part)>, t: f32, part: Part) {
+    if best.is_none_or(|(b, _)| t < b) {
+        *best = Some((t, part));
+    }
+}
+
+/// Tests a cap disk at object height `y` (relative to the base) of radius
+/// `r` about the axis.
+#[inline]
+pub(crate) fn cap_t(ray: &Ray, o: Vec3, y: f32, r: f32) -> Option<f32> {
+    if ray.dir.y == 0.0 {
+        return None;
+    }
+    let t = (y - o.y) / ray.dir.y;
+    if !ray.contains(t) {
+        return None;
+    }
+    let (x, z) = (o.x + t * ray.dir.x, o.z + t * ray.dir.z);
+    (x * x + z * z <= r * r).then_some(t)
+}
+
+/// uv on a cap of radius `r`, from the point relative to the axis.
+#[inline]
+pub(crate) fn cap_uv(rel: Vec3, r: f32) -> Vec2 {
+    Vec2::new((rel.x / r + 1.0) * 0.5, (rel.z / r + 1.0) * 0.5)
+}
+
+/// `u` about the Y axis, matching the sphere's convention.
+#[inline]
+pub(crate) fn azimuth_u(rel: Vec3) -> f32 {
+    0.5 + rel.z.atan2(rel.x) / (2.0 * PI)
+}
+
+/// Roots of `a t² + 2 hb t + c = 0` given its discriminant `hb² − a c`, in
+/// ascending order; `a` may be zero (one root).
+#[inline]
+pub(crate) fn roots_from_disc(a: f32, hb: f32, c: f32, disc: f32) -> Option<(f32, f32)> {
+    if a == 0.0 {
+        return (hb != 0.0).then(|| {
+            let t = -c / (2.0 * hb);
+            (t, t)
+        });
+    }
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let q = -(hb + hb.signum() * disc.sqrt());
+    if q == 0.0 {
+        return Some((0.0, 0.0));
+    }
+    let (t0, t1) = (q / a, c / q);
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+}
+
+/// The nearer of the side's two `roots` (ascending) that lies in the ray's
+/// interval at a height `o.y + t·dir.y` within `[0, h]` (relative to the
+/// base), the range widened by [`SEAL`]`·h` at both ends so that a ray
+/// through a rim cannot slip between the side and the cap tests.
+#[inline]
+pub(crate) fn side_t(ray: &Ray, o: Vec3, roots: (f32, f32), h: f32) -> Option<f32> {
+    let eps = SEAL * h;
+    [roots.0, roots.1].into_iter().find(|&t| {
+        let y = o.y + t * ray.dir.y;
+        ray.contains(t) && y >= -eps && y <= h + eps
+    })
+}
+
+/// Where a solid stands and how large it is: the centre of its base cap,
+/// its (base) radius, and its height along +Y.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Upright {
+    pub base: Vec3,
+    pub radius: f32,
+    pub height: f32,
+}
+
+impl Upright {
+    /// Checks the values, named in errors by `what` (`"cone"`, …) as
+    /// `[base, radius, height]` labels.
+    pub fn new(what: [&'static str; 3], base: Vec3, radius: f32, height: f32) -> Result<Self, GeometryError> {
+        Ok(Self {
+            base: check_finite(what[0], base)?,
+            radius: check_positive(what[1], radius)?,
+            height: check_positive(what[2], height)?,
+        })
+    }
+
+    /// Bounds: `radius` about the Y axis through `base`, from `base.y` up
+    /// to `base.y + height`.
+    pub fn bounds(&self) -> Aabb {
+        let (b, r) = (self.base, self.radius);
+        Aabb::new(b - Vec3::new(r, 0.0, r), b + Vec3::new(r, self.height, r))
+    }
+}

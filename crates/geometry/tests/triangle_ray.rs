@@ -1,0 +1,86 @@
+//! prism's one ray/triangle test ([`TriangleRay`], which the BVH's leaves
+//! also run) on the rays where a careless implementation returns an
+//! infinite `t`: `t_max = ∞`, nearly parallel rays, and triangles so small
+//! that the determinant underflows.
+
+use prism_geometry::glam::Vec3;
+use prism_geometry::{Ray, TriangleRay};
+use proptest::prelude::*;
+
+/// What every answer must satisfy: a finite `t` in the ray's interval and
+/// barycentrics of a point inside the triangle.
+fn check(ray: &Ray, tri: &[Vec3; 3]) -> Result<(), TestCaseError> {
+    if let Some((t, b1, b2)) = TriangleRay::new(ray).intersect(tri) {
+        prop_assert!(t.is_finite() && t >= ray.t_min && t <= ray.t_max, "t = {t} for {ray:?} {tri:?}");
+        prop_assert!(b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0 + 1e-5, "({b1}, {b2}) for {ray:?} {tri:?}");
+    }
+    Ok(())
+}
+
+#[test]
+fn a_tiny_triangle_never_gives_an_infinite_t() {
+    // Edge functions of ~1e-41 (subnormal): 1/det overflows to +inf, and
+    // so would t, without the finiteness check.
+    for scale in [1e-19f32, 1e-20, 1e-21, 1e-22] {
+        let tri = [Vec3::ZERO, Vec3::new(scale, 0.0, 0.0), Vec3::new(0.0, scale, 0.0)];
+        let o = Vec3::new(0.25 * scale, 0.25 * scale, 1.0);
+        for t_max in [f32::INFINITY, f32::MAX, 10.0] {
+            let ray = Ray::with_interval(o, Vec3::NEG_Z, 0.0, t_max);
+            if let Some((t, ..)) = TriangleRay::new(&ray).intersect(&tri) {
+                assert!(t.is_finite(), "scale {scale}, t_max {t_max}: t = {t}");
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(20_000))]
+
+    /// Nearly parallel rays (the direction's component along the normal
+    /// 1e-30 to 1e-3 of the rest) toward triangles of any scale, with
+    /// `t_max = ∞`.
+    #[test]
+    fn nearly_parallel_rays_with_unbounded_interval(
+        corners in prop::array::uniform3((-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0)),
+        scale_exp in -25i32..25,
+        origin in (-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0),
+        along in (-1.0f32..1.0, -1.0f32..1.0),
+        tilt_exp in -30i32..-3,
+        flip in any::<bool>(),
+    ) {
+        let unit = corners.map(|(x, y, z)| Vec3::new(x, y, z));
+        let n = (unit[1] - unit[0]).cross(unit[2] - unit[0]).normalize_or_zero();
+        prop_assume!(n != Vec3::ZERO);
+        let e1 = (unit[1] - unit[0]).normalize_or_zero();
+        let e2 = n.cross(e1);
+        let scale = 10f32.powi(scale_exp);
+        let tri = unit.map(|v| v * scale);
+        let tilt = 10f32.powi(tilt_exp) * if flip { -1.0 } else { 1.0 };
+        let dir = e1 * along.0 + e2 * along.1 + n * tilt;
+        prop_assume!(dir != Vec3::ZERO && dir.is_finite());
+        let o = Vec3::new(origin.0, origin.1, origin.2) * scale;
+        check(&Ray::new(o, dir), &tri)?;
+        check(&Ray::new(o - n * (tilt * scale), dir), &tri)?;
+    }
+
+    /// Rays aimed at a random point of the triangle (which they must hit,
+    /// unless the triangle is too thin to tell) with `t_max = ∞`.
+    #[test]
+    fn aimed_rays_hit_with_a_finite_t(
+        corners in prop::array::uniform3((-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0)),
+        bary in (0.05f32..0.9, 0.05f32..0.9),
+        origin in (-4.0f32..4.0, -4.0f32..4.0, -4.0f32..4.0),
+    ) {
+        let tri = corners.map(|(x, y, z)| Vec3::new(x, y, z));
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        prop_assume!(n.length() > 1e-2);
+        let (b1, b2) = (bary.0, bary.1 * (1.0 - bary.0));
+        let target = (1.0 - b1 - b2) * tri[0] + b1 * tri[1] + b2 * tri[2];
+        let o = Vec3::new(origin.0, origin.1, origin.2);
+        let ray = Ray::new(o, target - o);
+        prop_assume!((target - o).normalize_or_zero().dot(n.normalize()).abs() > 1e-2);
+        check(&ray, &tri)?;
+        let hit = TriangleRay::new(&ray).intersect(&tri);
+        prop_assert!(hit.is_some_and(|(t, ..)| (t - 1.0).abs() < 1e-3), "{hit:?} for {ray:?} {tri:?}");
+    }
+}
