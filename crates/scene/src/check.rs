@@ -125,3 +125,17 @@ pub(crate) fn vec3_of(v: &[f64; 3]) -> Option<Vec3> {
     let out = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
     out.is_finite().then_some(out)
 }
+
+/// The span of an optional value, if given.
+pub(crate) fn span_of<T>(v: &Option<Spanned<T>>) -> Option<Range<usize>> {
+    v.as_ref().map(Spanned::span)
+}
+
+/// The first of `keys` (name, span if given) that is given but not in
+/// `allowed`.
+pub(crate) fn first_foreign<'k>(
+    keys: &[(&'k str, Option<Range<usize>>)],
+    allowed: &[&str],
+) -> Option<(&'k str, Range<usize>)> {
+    keys.iter().find_map(|(key, span)| span.clone().filter(|_| !allowed.contains(key)).map(|s| (*key, s)))
+}

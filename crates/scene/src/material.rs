@@ -2,13 +2,12 @@
 //! conversion of MTL materials, and the table of materials by index and
 //! name. No I/O: images come from the caller.
 
-use crate::check::{Ctx, Result};
+use crate::check::{Ctx, Result, first_foreign, span_of};
 use crate::error::{Location, SceneError};
 use crate::format::{MappingDef, MaterialDef, Num, SpaceDef, TextureDef, TextureKind};
 use prism_geometry::glam::{Vec2, Vec3};
 use prism_shade::{ImageTexture, Mapping, Material, Texture, Wrap};
 use std::collections::HashMap;
-use std::ops::Range;
 use std::sync::Arc;
 use toml::Spanned;
 
@@ -120,33 +119,23 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
 fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Texture> {
     let d = t.get_ref();
     let kind = *d.kind.get_ref();
-    let span = |s: Option<Range<usize>>, k: &'static str| s.map(|s| (k, s));
-    let foreign = match kind {
-        TextureKind::Checker => [
-            span(d.path.as_ref().map(Spanned::span), "path"),
-            span(d.mapping.as_ref().map(Spanned::span), "mapping"),
-            span(d.wrap.as_ref().map(Spanned::span), "wrap"),
-            span(d.scale.as_ref().map(Spanned::span), "scale"),
-            span(d.tint.as_ref().map(Spanned::span), "tint"),
-        ]
-        .into_iter()
-        .flatten()
-        .next(),
-        TextureKind::Image => [
-            span(d.a.as_ref().map(Spanned::span), "a"),
-            span(d.b.as_ref().map(Spanned::span), "b"),
-            span(d.size.as_ref().map(Spanned::span), "size"),
-            span(d.space.as_ref().map(Spanned::span), "space"),
-        ]
-        .into_iter()
-        .flatten()
-        .next(),
+    let keys = [
+        ("a", span_of(&d.a)),
+        ("b", span_of(&d.b)),
+        ("size", span_of(&d.size)),
+        ("space", span_of(&d.space)),
+        ("path", span_of(&d.path)),
+        ("mapping", span_of(&d.mapping)),
+        ("wrap", span_of(&d.wrap)),
+        ("scale", span_of(&d.scale)),
+        ("tint", span_of(&d.tint)),
+    ];
+    let (kname, allowed): (_, &[&str]) = match kind {
+        TextureKind::Checker => ("checker", &["a", "b", "size", "space"]),
+        TextureKind::Image => ("image", &["path", "mapping", "wrap", "scale", "tint"]),
     };
-    if let Some((key, span)) = foreign {
-        let (kname, allowed) = match kind {
-            TextureKind::Checker => ("checker", "a, b, size, space"),
-            TextureKind::Image => ("image", "path, mapping, wrap, scale, tint"),
-        };
+    if let Some((key, span)) = first_foreign(&keys, allowed) {
+        let allowed = allowed.join(", ");
         return Err(ctx.invalid(
             &span,
             format!("`{key}` is not a key of a {kname} texture (it takes: type, {allowed})"),

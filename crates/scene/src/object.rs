@@ -2,7 +2,7 @@
 //! instanced from their files by the build), the keys each kind takes, and
 //! the `transform` steps. No I/O.
 
-use crate::check::{Ctx, Result, vec3_of};
+use crate::check::{Ctx, Result, first_foreign, span_of, vec3_of};
 use crate::format::{Num, ObjectDef, ObjectKind, Step};
 use prism_geometry::glam::{Mat4, Vec3};
 use prism_geometry::{Cone, Cuboid, Cylinder, Disk, Plane, Shape, Shear, Sphere, Transform, Triangle};
@@ -83,19 +83,19 @@ fn required_num<'n>(
 
 /// Refuses a key that belongs to another kind of object.
 pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<()> {
-    let present: [(&str, Option<Range<usize>>); 12] = [
-        ("center", d.center.as_ref().map(Spanned::span)),
-        ("radius", d.radius.as_ref().map(Spanned::span)),
-        ("point", d.point.as_ref().map(Spanned::span)),
-        ("normal", d.normal.as_ref().map(Spanned::span)),
-        ("min", d.min.as_ref().map(Spanned::span)),
-        ("max", d.max.as_ref().map(Spanned::span)),
-        ("size", d.size.as_ref().map(Spanned::span)),
-        ("base", d.base.as_ref().map(Spanned::span)),
-        ("height", d.height.as_ref().map(Spanned::span)),
-        ("vertices", d.vertices.as_ref().map(Spanned::span)),
-        ("path", d.path.as_ref().map(Spanned::span)),
-        ("normals", d.normals.as_ref().map(Spanned::span)),
+    let present = [
+        ("center", span_of(&d.center)),
+        ("radius", span_of(&d.radius)),
+        ("point", span_of(&d.point)),
+        ("normal", span_of(&d.normal)),
+        ("min", span_of(&d.min)),
+        ("max", span_of(&d.max)),
+        ("size", span_of(&d.size)),
+        ("base", span_of(&d.base)),
+        ("height", span_of(&d.height)),
+        ("vertices", span_of(&d.vertices)),
+        ("path", span_of(&d.path)),
+        ("normals", span_of(&d.normals)),
     ];
     let allowed: &[&str] = match kind {
         ObjectKind::Sphere => &["center", "radius"],
@@ -106,21 +106,17 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
         ObjectKind::Triangle => &["vertices"],
         ObjectKind::Mesh => &["path", "normals"],
     };
-    for (key, span) in present {
-        if let Some(span) = span
-            && !allowed.contains(&key)
-        {
-            return Err(ctx.invalid(
-                &span,
-                format!(
-                    "`{key}` is not a key of a {} (it takes: {}, plus material, transform, name)",
-                    kind.name(),
-                    allowed.join(", ")
-                ),
-            ));
-        }
+    match first_foreign(&present, allowed) {
+        Some((key, span)) => Err(ctx.invalid(
+            &span,
+            format!(
+                "`{key}` is not a key of a {} (it takes: {}, plus material, transform, name)",
+                kind.name(),
+                allowed.join(", ")
+            ),
+        )),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// A cuboid from `min` and `max`, or `size` and `center`.
