@@ -5,7 +5,7 @@
 
 use crate::check::{Ctx, Result};
 use crate::error::{Location, SceneError};
-use crate::format::{ObjectDef, ObjectKind, SceneFile};
+use crate::format::{ObjectDef, SceneFile};
 use crate::material::{self, Materials};
 use crate::obj::{NormalMode, ObjFile};
 use crate::read::{Failure, Resources, TextureFile};
@@ -203,8 +203,8 @@ impl<'a> Build<'a> {
         let transform = crate::object::transform(&ctx, d)?;
         let material = d.material.as_ref().map(|name| self.materials.named(&ctx, name)).transpose()?;
         let ospan = o.span();
+        // No shape: a mesh, instanced from its file.
         let Some(shape) = crate::object::shape(&ctx, d, kind, &ospan)? else {
-            debug_assert_eq!(kind, ObjectKind::Mesh);
             let Some(p) = &d.path else {
                 return Err(
                     ctx.invalid(&ospan, "a mesh needs `path`, an OBJ file (relative to the scene file)")

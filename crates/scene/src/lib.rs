@@ -6,6 +6,14 @@
 //! what was expected; nothing in a scene file, mesh or texture can make
 //! the loader panic. Paths in a scene are relative to the scene file.
 //!
+//! Loading goes parse → read → build (as pbrt-v4's parse → description →
+//! build): the text is parsed into the file's description (`format`);
+//! every file it names (OBJ meshes, MTL libraries, textures) is read once
+//! (`read`, the only module that touches the file system); then a pure
+//! build (`build`, with `settings`, `view`, `material`, `object`) makes the
+//! [`prism_shade::Scene`]. An OBJ file as a scene ([`load_obj_scene`])
+//! enters the build with typed values of its own.
+//!
 //! # Example
 //!
 //! ```

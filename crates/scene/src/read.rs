@@ -277,10 +277,10 @@ fn io_reason(e: &std::io::Error) -> String {
     }
 }
 
-/// A file the user named to load (a scene file, or an OBJ file as a
-/// scene), read in full: `what` names it in messages and `kind` in the
-/// message for a directory ("a .toml file").
-fn read_named(path: &Path, what: &'static str, kind: &str) -> Result<(), SceneError> {
+/// Checks that a file the user named to load (a scene file, or an OBJ
+/// file as a scene) exists and is not a directory: `what` names it in
+/// messages and `kind` in the message for a directory ("a .toml file").
+fn check_named(path: &Path, what: &'static str, kind: &str) -> Result<(), SceneError> {
     let meta = std::fs::metadata(path).map_err(|e| named_error(path, what, io_reason(&e)))?;
     if meta.is_dir() {
         return Err(named_error(path, what, format!("it is a directory, expected {kind}")));
@@ -299,7 +299,7 @@ fn named_error(path: &Path, what: &'static str, reason: String) -> SceneError {
 /// [`SceneError::Read`] or, for text that is not UTF-8, [`SceneError::Syntax`].
 pub(crate) fn read_scene_text(path: &Path) -> Result<(String, Option<PathBuf>), SceneError> {
     use std::io::Read;
-    read_named(path, "scene file", "a .toml file")?;
+    check_named(path, "scene file", "a .toml file")?;
     let read_err = |reason: String| named_error(path, "scene file", reason);
     let file = std::fs::File::open(path).map_err(|e| read_err(io_reason(&e)))?;
     let mut bytes = Vec::new();
@@ -331,7 +331,7 @@ pub(crate) fn read_scene_text(path: &Path) -> Result<(String, Option<PathBuf>), 
 /// # Errors
 /// [`SceneError::Read`] naming `path`.
 pub(crate) fn obj_alone_path(path: &Path) -> Result<(PathBuf, PathBuf, String), SceneError> {
-    read_named(path, "mesh", "an .obj file")?;
+    check_named(path, "mesh", "an .obj file")?;
     let canonical = std::fs::canonicalize(path).map_err(|e| named_error(path, "mesh", io_reason(&e)))?;
     let base = canonical.parent().map(Path::to_path_buf).unwrap_or_default();
     let name = canonical.file_name().and_then(|n| n.to_str()).map(str::to_owned).ok_or_else(|| {
