@@ -2,10 +2,14 @@
 //! `docs/scene-format.md`. Every table rejects unknown keys; fields that
 //! are validated after deserialising keep their spans.
 
+use crate::error::{Location, SceneError};
+use crate::obj::NormalMode;
+use prism_shade::Wrap;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use std::collections::BTreeMap;
 use std::fmt;
+use std::path::Path;
 use toml::Spanned;
 
 /// A spanned number.
@@ -27,6 +31,31 @@ pub struct SceneFile {
     pub materials: BTreeMap<Spanned<String>, Spanned<MaterialDef>>,
     #[serde(default)]
     pub objects: Vec<Spanned<ObjectDef>>,
+}
+
+impl SceneFile {
+    /// Parses the scene text `text` of `file_name` (used in messages).
+    ///
+    /// # Errors
+    /// [`SceneError::Syntax`] at the place toml names.
+    pub fn parse(text: &str, file_name: &Path) -> Result<Self, SceneError> {
+        toml::from_str(text).map_err(|e| {
+            let location = match e.span() {
+                Some(span) => Location::at_span(file_name, text, &span),
+                None => Location::file(file_name),
+            };
+            SceneError::Syntax { location, message: syntax_message(e.message()) }
+        })
+    }
+}
+
+/// toml's messages, made to say what was expected in scene terms.
+fn syntax_message(m: &str) -> String {
+    let m = m.trim();
+    if m.starts_with("missing field `camera`") {
+        return "missing [camera] table (position and look_at are required)".into();
+    }
+    m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value")
 }
 
 #[derive(Deserialize, Default)]
@@ -145,6 +174,16 @@ pub struct TextureDef {
     pub tint: Option<Spanned<Color>>,
 }
 
+impl TextureDef {
+    /// How an image texture wraps (`repeat` unless `wrap = "clamp"`).
+    pub fn wrap(&self) -> Wrap {
+        match self.wrap.as_ref().map(|w| *w.get_ref()) {
+            Some(WrapDef::Clamp) => Wrap::Clamp,
+            _ => Wrap::Repeat,
+        }
+    }
+}
+
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
 #[serde(rename_all = "snake_case")]
 pub enum ObjectKind {
@@ -210,6 +249,17 @@ pub struct ObjectDef {
     pub normals: Option<Spanned<NormalsDef>>,
 }
 
+impl ObjectDef {
+    /// How a mesh's vertex normals are chosen (`auto` unless `normals` says).
+    pub fn normal_mode(&self) -> NormalMode {
+        match self.normals.as_ref().map(|n| *n.get_ref()) {
+            None | Some(NormalsDef::Auto) => NormalMode::Auto,
+            Some(NormalsDef::Smooth) => NormalMode::Smooth,
+            Some(NormalsDef::Flat) => NormalMode::Flat,
+        }
+    }
+}
+
 /// One transform step, a table with a single key.
 #[derive(Deserialize, Debug)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
@@ -262,7 +312,7 @@ impl<'de> Deserialize<'de> for Color {
                 f.write_str("a colour: an array [r, g, b] of linear values or a \"#rrggbb\" sRGB string")
             }
             fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Color, A::Error> {
-                Ok(Color(seq3(seq, &self)?))
+                Ok(Color(seq_n(seq, &self)?))
             }
             fn visit_str<E: de::Error>(self, s: &str) -> Result<Color, E> {
                 parse_hex(s).map(Color).ok_or_else(|| E::invalid_value(de::Unexpected::Str(s), &self))
@@ -286,76 +336,52 @@ fn parse_hex(s: &str) -> Option<[f64; 3]> {
     Some(out)
 }
 
-fn seq3<'de, A: SeqAccess<'de>>(mut seq: A, exp: &dyn de::Expected) -> Result<[f64; 3], A::Error> {
-    let mut out = [0.0; 3];
+/// Exactly `N` numbers from `seq`.
+fn seq_n<'de, A: SeqAccess<'de>, const N: usize>(
+    mut seq: A,
+    exp: &dyn de::Expected,
+) -> Result<[f64; N], A::Error> {
+    let mut out = [0.0; N];
     for (i, v) in out.iter_mut().enumerate() {
         *v = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(i, exp))?;
     }
     if seq.next_element::<de::IgnoredAny>()?.is_some() {
-        return Err(de::Error::invalid_length(4, exp));
+        return Err(de::Error::invalid_length(N + 1, exp));
     }
     Ok(out)
 }
 
+/// A number (the same on every axis) or an array of `N` numbers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Uniform<const N: usize>(pub [f64; N]);
+
 /// A number (uniform) or `[x, y, z]`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Scale3(pub [f64; 3]);
-
-impl<'de> Deserialize<'de> for Scale3 {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Scale3;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a number or an array [x, y, z] of numbers")
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Scale3, A::Error> {
-                Ok(Scale3(seq3(seq, &self)?))
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale3, E> {
-                Ok(Scale3([v; 3]))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale3, E> {
-                Ok(Scale3([v as f64; 3]))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale3, E> {
-                Ok(Scale3([v as f64; 3]))
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
-
+pub type Scale3 = Uniform<3>;
 /// A number (uniform) or `[u, v]`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Scale2(pub [f64; 2]);
+pub type Scale2 = Uniform<2>;
 
-impl<'de> Deserialize<'de> for Scale2 {
+impl<'de, const N: usize> Deserialize<'de> for Uniform<N> {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Scale2;
+        struct V<const N: usize>;
+        impl<'de, const N: usize> Visitor<'de> for V<N> {
+            type Value = Uniform<N>;
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a number or an array [u, v] of numbers")
+                let names = if N == 2 { "[u, v]" } else { "[x, y, z]" };
+                write!(f, "a number or an array {names} of numbers")
             }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Scale2, A::Error> {
-                let u = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(0, &self))?;
-                let v = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(1, &self))?;
-                if seq.next_element::<de::IgnoredAny>()?.is_some() {
-                    return Err(de::Error::invalid_length(3, &self));
-                }
-                Ok(Scale2([u, v]))
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Uniform<N>, A::Error> {
+                Ok(Uniform(seq_n(seq, &self)?))
             }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale2, E> {
-                Ok(Scale2([v; 2]))
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Uniform<N>, E> {
+                Ok(Uniform([v; N]))
             }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale2, E> {
-                Ok(Scale2([v as f64; 2]))
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Uniform<N>, E> {
+                Ok(Uniform([v as f64; N]))
             }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale2, E> {
-                Ok(Scale2([v as f64; 2]))
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Uniform<N>, E> {
+                Ok(Uniform([v as f64; N]))
             }
         }
-        d.deserialize_any(V)
+        d.deserialize_any(V::<N>)
     }
 }

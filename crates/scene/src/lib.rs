@@ -6,6 +6,14 @@
 //! what was expected; nothing in a scene file, mesh or texture can make
 //! the loader panic. Paths in a scene are relative to the scene file.
 //!
+//! Loading goes parse → read → build (as pbrt-v4's parse → description →
+//! build): the text is parsed into the file's description (`format`);
+//! every file it names (OBJ meshes, MTL libraries, textures) is read once
+//! (`read`, the only module that touches the file system); then a pure
+//! build (`build`, with `settings`, `view`, `material`, `object`) makes the
+//! [`prism_shade::Scene`]. An OBJ file as a scene ([`load_obj_scene`])
+//! enters the build with typed values of its own.
+//!
 //! # Example
 //!
 //! ```
@@ -42,12 +50,19 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod build;
+mod check;
 mod error;
 mod format;
-mod load;
+mod material;
 mod obj;
+mod object;
+mod read;
+mod settings;
+mod view;
 
 pub use error::{Location, SceneError, line_col};
+pub use settings::fit_size;
 
 use prism_geometry::Aabb;
 use prism_geometry::glam::Vec3;
@@ -208,28 +223,11 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
 /// # Errors
 /// A [`SceneError`] naming the file, the place and the problem.
 pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    let read_err = |reason: String| SceneError::Read {
-        location: Location::file(path),
-        what: "scene file",
-        path: path.to_path_buf(),
-        reason,
-    };
-    let meta = std::fs::metadata(path).map_err(|e| read_err(load::io_reason(&e)))?;
-    if meta.is_dir() {
-        return Err(read_err("it is a directory, expected a .toml file".into()));
-    }
-    let bytes = read_capped(path, MAX_SCENE_BYTES).map_err(read_err)?;
-    let text = decode_scene_text(&bytes).map_err(|(offset, message)| {
-        let location = match offset {
-            Some(o) => Location::at_offset(path, std::str::from_utf8(&bytes[..o]).unwrap_or(""), o),
-            None => Location::file(path),
-        };
-        SceneError::Syntax { location, message }
-    })?;
+    let (text, canonical) = read::read_scene_text(path)?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let base = if base.as_os_str().is_empty() { PathBuf::from(".") } else { base };
-    let mut loaded = parse_scene_str_with(text, &base, path, options)?;
-    if let Ok(c) = std::fs::canonicalize(path) {
+    let mut loaded = parse_scene_str_with(&text, &base, path, options)?;
+    if let Some(c) = canonical {
         loaded.inputs.insert(0, c);
     }
     Ok(loaded)
@@ -239,22 +237,6 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
 /// would otherwise be read until memory runs out. (A pipe, as in
 /// `prism render <(generate-scene)`, is read like a file.)
 pub const MAX_SCENE_BYTES: u64 = 256 << 20;
-
-/// The bytes of `path`, or why not, if it cannot be read or holds more
-/// than `max` bytes.
-fn read_capped(path: &Path, max: u64) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| load::io_reason(&e))?;
-    let mut bytes = Vec::new();
-    file.take(max + 1).read_to_end(&mut bytes).map_err(|e| load::io_reason(&e))?;
-    if bytes.len() as u64 > max {
-        return Err(format!(
-            "it holds more than {} MiB; a scene file is text (is this the right file?)",
-            max >> 20
-        ));
-    }
-    Ok(bytes)
-}
 
 /// Loads a scene from `path`, whatever its kind: an OBJ mesh (extension
 /// `.obj`, any case) becomes a scene of its own ([`load_obj_scene`]);
@@ -298,24 +280,9 @@ pub fn is_obj_path(path: &Path) -> bool {
 /// # Errors
 /// A [`SceneError`] naming the file, the place and the problem.
 pub fn load_obj_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    let read_err = |reason: String| SceneError::Read {
-        location: Location::file(path),
-        what: "mesh",
-        path: path.to_path_buf(),
-        reason,
-    };
-    let meta = std::fs::metadata(path).map_err(|e| read_err(load::io_reason(&e)))?;
-    if meta.is_dir() {
-        return Err(read_err("it is a directory, expected an .obj file".into()));
-    }
-    let canonical = std::fs::canonicalize(path).map_err(|e| read_err(load::io_reason(&e)))?;
-    let base = canonical.parent().map(Path::to_path_buf).unwrap_or_default();
-    let name = canonical.file_name().and_then(|n| n.to_str()).map(str::to_owned).ok_or_else(|| {
-        read_err("the file name is not valid UTF-8; rename the file or name it from a scene file".into())
-    })?;
-    load::Builder::new(path, "", &base, options)
-        .build_obj_scene(&name)
-        .map_err(|e| load::obj_scene_error(e, path, &canonical))
+    let (canonical, base, name) = read::obj_alone_path(path)?;
+    let res = read::read_obj_alone(&base, &name);
+    build::build_obj_scene(check::Ctx::new(path, ""), &name, &canonical, &res, options)
 }
 
 /// Parses a scene from `text` as if read from `file_name` (used in
@@ -337,38 +304,9 @@ pub fn parse_scene_str_with(
     file_name: &Path,
     options: &LoadOptions,
 ) -> Result<LoadedScene, SceneError> {
-    let file: format::SceneFile = toml::from_str(text).map_err(|e| {
-        let location = match e.span() {
-            Some(span) => Location::at_span(file_name, text, &span),
-            None => Location::file(file_name),
-        };
-        SceneError::Syntax { location, message: syntax_message(e.message()) }
-    })?;
-    load::Builder::new(file_name, text, base_dir, options).build(file)
-}
-
-/// toml's messages, made to say what was expected in scene terms.
-fn syntax_message(m: &str) -> String {
-    let m = m.trim();
-    if m.starts_with("missing field `camera`") {
-        return "missing [camera] table (position and look_at are required)".into();
-    }
-    m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value")
-}
-
-/// The text of a scene file, or the byte offset (if any) and the reason
-/// it is not UTF-8 text.
-fn decode_scene_text(bytes: &[u8]) -> Result<&str, (Option<usize>, String)> {
-    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
-        return Err((None, "the file is UTF-16 text; scene files must be UTF-8".into()));
-    }
-    let bom = if bytes.starts_with(b"\xEF\xBB\xBF") { 3 } else { 0 };
-    std::str::from_utf8(&bytes[bom..]).map_err(|e| {
-        (
-            Some(bom + e.valid_up_to()),
-            "invalid UTF-8 here: scene files are UTF-8 TOML text (is this a binary file?)".to_string(),
-        )
-    })
+    let file = format::SceneFile::parse(text, file_name)?;
+    let res = read::read_resources(&file, base_dir);
+    build::build_scene(check::Ctx::new(file_name, text), &file, &res, options)
 }
 
 #[cfg(test)]

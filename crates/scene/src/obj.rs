@@ -4,18 +4,22 @@
 //! tobj reports without a place (or not at all): numbers that do not parse
 //! or are not finite, faces with fewer than three corners, and face indices
 //! that are zero or out of range, each with the OBJ file's line.
+//!
+//! No I/O here: the OBJ's bytes are given, and its material libraries are
+//! read through a function the caller passes (see `read.rs`).
 
-use crate::error::{Location, SceneError};
+use crate::error::Location;
 use prism_geometry::TriangleMesh;
 use prism_geometry::glam::{Vec2, Vec3};
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// One model of an OBJ file (an `o`/`g` group with one material).
 #[derive(Debug)]
 pub struct ObjModel {
     /// The geometry.
-    pub mesh: TriangleMesh,
+    pub mesh: Arc<TriangleMesh>,
     /// Index into [`ObjFile::materials`], if the model uses one.
     pub material: Option<usize>,
     /// Faces of zero area (kept but never hit).
@@ -25,18 +29,20 @@ pub struct ObjModel {
 /// A loaded OBJ file.
 #[derive(Debug)]
 pub struct ObjFile {
+    /// The file (canonical path).
+    pub path: PathBuf,
     /// Its models.
     pub models: Vec<ObjModel>,
     /// Materials from its MTL libraries (empty when unavailable).
     pub materials: Vec<tobj::Material>,
     /// Why the MTL libraries could not be used, if they could not.
     pub material_error: Option<String>,
-    /// The MTL files that were read.
+    /// The MTL files it names (the caller canonicalizes those that exist).
     pub mtl_files: Vec<PathBuf>,
 }
 
 /// How vertex normals are chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum NormalMode {
     /// The file's normals when every vertex has one, else computed smooth.
     Auto,
@@ -46,21 +52,18 @@ pub enum NormalMode {
     Flat,
 }
 
-/// Loads and validates the OBJ file `path` (already read as `bytes`).
-/// `referenced_at` is where the scene names it, for error messages.
+/// Parses and validates the OBJ file `path` (already read as `bytes`);
+/// `read_mtl` gives the bytes of a material library it names (`None`
+/// where it cannot be read). An error is the place in the OBJ file and
+/// what is wrong.
 pub fn load_obj(
     path: &Path,
     bytes: &[u8],
     normals: NormalMode,
-    referenced_at: &Location,
-) -> Result<ObjFile, SceneError> {
-    let asset = |location: Location, message: String| SceneError::Asset {
-        location,
-        message,
-        referenced_at: Box::new(referenced_at.clone()),
-    };
-    let text = decode_text(bytes).map_err(|m| asset(Location::file(path), m))?;
-    let mtllibs = precheck(text).map_err(|(line, m)| asset(Location::at_line(path, line), m))?;
+    read_mtl: &dyn Fn(&Path) -> Option<Vec<u8>>,
+) -> Result<ObjFile, (Location, String)> {
+    let text = decode_text(bytes).map_err(|m| (Location::file(path), m))?;
+    let mtllibs = precheck(text).map_err(|(line, m)| (Location::at_line(path, line), m))?;
 
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_files: Vec<PathBuf> = mtllibs.iter().map(|m| dir.join(m)).collect();
@@ -68,12 +71,8 @@ pub fn load_obj(
     // A problem found in an MTL file before tobj sees it, with its place.
     let mtl_problem: std::cell::RefCell<Option<String>> = std::cell::RefCell::new(None);
     let loader = |p: &Path| {
-        // Only regular files: a device such as /dev/zero would be read forever.
         let path = dir.join(p);
-        if !std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
-            return Err(tobj::LoadError::OpenFileFailed);
-        }
-        let bytes = std::fs::read(&path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let bytes = read_mtl(&path).ok_or(tobj::LoadError::OpenFileFailed)?;
         let text = match decode_text(&bytes) {
             Ok(t) => t,
             Err(m) => {
@@ -89,7 +88,7 @@ pub fn load_obj(
         tobj::load_mtl_buf(&mut BufReader::new(text.as_bytes()))
     };
     let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
-        .map_err(|e| asset(Location::file(path), format!("malformed OBJ: {e}")))?;
+        .map_err(|e| (Location::file(path), format!("malformed OBJ: {e}")))?;
     let (materials, material_error) = match (materials, mtl_problem.into_inner()) {
         (Ok(m), _) => (m, None),
         (Err(_), Some(problem)) => (Vec::new(), Some(format!("cannot use material library {problem}"))),
@@ -119,20 +118,20 @@ pub fn load_obj(
             NormalMode::Flat => (None, false),
         };
         let mut mesh = TriangleMesh::new(positions, given, uvs, indices)
-            .map_err(|e| asset(Location::file(path), format!("model `{}`: {e}", model.name)))?;
+            .map_err(|e| (Location::file(path), format!("model `{}`: {e}", model.name)))?;
         if smooth {
             mesh.compute_smooth_normals();
         }
         let degenerate = mesh.degenerate_count();
-        out.push(ObjModel { mesh, material: m.material_id, degenerate });
+        out.push(ObjModel { mesh: Arc::new(mesh), material: m.material_id, degenerate });
     }
     if out.is_empty() {
-        return Err(asset(
+        return Err((
             Location::file(path),
             "the OBJ file has no faces (lines and points are not rendered)".into(),
         ));
     }
-    Ok(ObjFile { models: out, materials, material_error, mtl_files })
+    Ok(ObjFile { path: path.to_path_buf(), models: out, materials, material_error, mtl_files })
 }
 
 /// UTF-8 text, with a clear word for the usual wrong encodings.

@@ -1,0 +1,443 @@
+//! The build: a scene description ([`SceneFile`], or the typed values of
+//! an OBJ file as a scene) and the files it names, already read
+//! ([`Resources`]), to a renderable [`LoadedScene`]. Pure: no I/O, so a
+//! scene can be built from a string and in-memory resources.
+
+use crate::check::{Ctx, Result};
+use crate::error::{Location, SceneError};
+use crate::format::{ObjectDef, SceneFile};
+use crate::material::{self, Materials};
+use crate::obj::{NormalMode, ObjFile};
+use crate::read::{Failure, Resources, TextureFile};
+use crate::settings::{self, Defaults, Settings};
+use crate::view::{self, CameraSource};
+use crate::{LoadOptions, LoadedScene, MeshInfo, Overrides, SceneInfo};
+use prism_bvh::{Accel, Object};
+use prism_geometry::glam::Vec3;
+use prism_geometry::{Aabb, Instance, Transform, TriangleMesh};
+use prism_shade::{Camera, Fog, FogMode, ImageTexture, PointLight, RenderSettings, Scene};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use toml::Spanned;
+
+/// The vertical field of view (degrees) of an OBJ file as a scene.
+const OBJ_FOV: f32 = 40.0;
+
+/// Builds the scene `file` (whose text and name `ctx` holds) from the
+/// files it names, `res`, with `options`.
+pub(crate) fn build_scene(
+    ctx: Ctx,
+    file: &SceneFile,
+    res: &Resources,
+    options: &LoadOptions,
+) -> Result<LoadedScene> {
+    let settings =
+        settings::resolve(&ctx, file.render.as_ref().map(Spanned::get_ref), Defaults::FILE, options)?;
+    let mut b = Build::new(ctx, res, options);
+    let mut lights = Vec::with_capacity(file.lights.len());
+    for l in &file.lights {
+        let d = l.get_ref();
+        lights.push(PointLight {
+            position: ctx.vec3(&d.position, "light position")?,
+            color: ctx.opt_color(d.color.as_ref(), "light color", Vec3::ONE)?,
+            intensity: ctx.opt_num(d.intensity.as_ref(), 1.0, |n| ctx.non_negative(n, "light intensity"))?,
+        });
+    }
+    if lights.is_empty() {
+        b.warn("the scene has no lights; only ambient light will show");
+    }
+    let fog = file.fog.as_ref().map(|f| view::fog(&ctx, f)).transpose()?;
+    for (name, def) in &file.materials {
+        let m = material::material(&ctx, def, &mut |p, wrap| b.image(res.texture(p.get_ref(), wrap), p))?;
+        b.materials.add_named(&ctx, name, m)?;
+    }
+    for o in &file.objects {
+        b.object(o)?;
+    }
+    b.finish(settings, &CameraSource::File(&file.camera), lights, fog)
+}
+
+/// Builds a scene of the OBJ file `name` alone (read into `res`; its
+/// canonical path `canonical`): the mesh, a camera framing it, one light
+/// (see [`crate::load_obj_scene`] for the placement). `ctx` names the
+/// file as the user gave it; problems in the OBJ are reported at its
+/// lines, not as an asset "used at" itself.
+pub(crate) fn build_obj_scene(
+    ctx: Ctx,
+    name: &str,
+    canonical: &Path,
+    res: &Resources,
+    options: &LoadOptions,
+) -> Result<LoadedScene> {
+    let own = |e: SceneError| match e {
+        SceneError::Asset { location, message, .. } if location.file == canonical => {
+            SceneError::Invalid { location: Location { file: ctx.file.to_path_buf(), ..location }, message }
+        }
+        e => e,
+    };
+    let mut b = Build::new(ctx, res, options);
+    let named_at = Location::file(ctx.file);
+    let obj = b.lookup_mesh(name, NormalMode::Auto, named_at.clone()).map_err(own)?;
+    b.register_mesh(&obj, NormalMode::Auto);
+    let material = match &obj.material_error {
+        Some(e) => {
+            b.warnings.push(format!("{}: {e}; rendering the mesh in neutral grey", obj.path.display()));
+            Some(b.materials.default_material())
+        }
+        None => None,
+    };
+    b.instance_mesh(&obj, NormalMode::Auto, &named_at, Transform::IDENTITY, material).map_err(own)?;
+
+    let bounds = b.meshes.iter().fold(Aabb::EMPTY, |b, m| b.union(Aabb::from_points(m.positions())));
+    let (c, r) =
+        if bounds.is_empty() { (Vec3::ZERO, 1.0) } else { (bounds.center(), bounds.extent().length() / 2.0) };
+    let r = if r > 0.0 { r } else { 1.0 };
+    let ov = options.overrides;
+    let d = Defaults::OBJ;
+    let (w, h) = settings::fit_size(d.width, d.height, ov.width, ov.height);
+    let vfov = ov.fov.filter(|f| f.is_finite() && *f > 0.0 && *f < 180.0).unwrap_or(OBJ_FOV);
+    let half_v = (vfov / 2.0).to_radians();
+    let half_h = (half_v.tan() * w.max(1) as f32 / h.max(1) as f32).atan();
+    let eye = c + Vec3::new(0.0, 0.0, r / half_v.min(half_h).sin());
+    let light = c + r * Vec3::new(1.0, 2.0, 1.5);
+    if !(c.is_finite() && r.is_finite() && eye.is_finite() && light.is_finite() && eye != c) {
+        return Err(ctx.invalid_file(format!(
+            "cannot frame the mesh, its bounds {} to {} are too large (or too small for their distance from the origin)",
+            bounds.min, bounds.max
+        )));
+    }
+    let settings = settings::resolve(&ctx, None, d, options)?;
+    let lights = vec![PointLight { position: light, color: Vec3::ONE, intensity: 1.0 }];
+    let camera = CameraSource::Framed { eye, look_at: c, fov: OBJ_FOV };
+    b.finish(settings, &camera, lights, None).map_err(own)
+}
+
+/// Where a mesh's models went: their meshes in the acceleration
+/// structure, the prism material of each MTL material (converted on first
+/// use), and its row of [`SceneInfo::meshes`].
+struct MeshSlot {
+    /// `(mesh index, MTL material index)` per model.
+    models: Vec<(u32, Option<usize>)>,
+    mtl_materials: Vec<Option<u32>>,
+    info: usize,
+}
+
+/// The scene as it is built.
+struct Build<'a> {
+    ctx: Ctx<'a>,
+    res: &'a Resources,
+    overrides: Overrides,
+    /// Files used (canonical paths), in order of first use.
+    inputs: Vec<PathBuf>,
+    warnings: Vec<String>,
+    materials: Materials,
+    meshes: Vec<Arc<TriangleMesh>>,
+    slots: HashMap<(PathBuf, NormalMode), MeshSlot>,
+    mesh_info: Vec<MeshInfo>,
+    objects: Vec<Object>,
+    object_materials: Vec<u32>,
+    kinds: BTreeMap<String, usize>,
+}
+
+impl<'a> Build<'a> {
+    fn new(ctx: Ctx<'a>, res: &'a Resources, options: &LoadOptions) -> Self {
+        Self {
+            ctx,
+            res,
+            overrides: options.overrides,
+            inputs: Vec::new(),
+            warnings: Vec::new(),
+            materials: Materials::default(),
+            meshes: Vec::new(),
+            slots: HashMap::new(),
+            mesh_info: Vec::new(),
+            objects: Vec::new(),
+            object_materials: Vec::new(),
+            kinds: BTreeMap::new(),
+        }
+    }
+
+    /// A warning about the scene file.
+    fn warn(&mut self, message: &str) {
+        self.warnings.push(format!("{}: {message}", self.ctx.file.display()));
+    }
+
+    fn note_input(&mut self, p: &Path) {
+        if !self.inputs.iter().any(|q| q == p) {
+            self.inputs.push(p.to_path_buf());
+        }
+    }
+
+    /// The image of `found` (the texture the scene names with `p`), noted
+    /// as an input; its failure reported at `p`.
+    fn image(
+        &mut self,
+        found: Option<&std::result::Result<TextureFile, Failure>>,
+        p: &Spanned<String>,
+    ) -> Result<Arc<ImageTexture>> {
+        self.image_at(found, self.ctx.loc(&p.span()), p.get_ref())
+    }
+
+    fn image_at(
+        &mut self,
+        found: Option<&std::result::Result<TextureFile, Failure>>,
+        named_at: Location,
+        raw: &str,
+    ) -> Result<Arc<ImageTexture>> {
+        match found {
+            Some(Ok(t)) => {
+                self.note_input(&t.path);
+                Ok(Arc::clone(&t.image))
+            }
+            Some(Err(f)) => Err(f.at(named_at)),
+            None => Err(not_read(named_at, raw)),
+        }
+    }
+
+    fn object(&mut self, o: &Spanned<ObjectDef>) -> Result<()> {
+        let ctx = self.ctx;
+        let d = o.get_ref();
+        let kind = *d.kind.get_ref();
+        crate::object::check_keys(&ctx, d, kind)?;
+        let transform = crate::object::transform(&ctx, d)?;
+        let material = d.material.as_ref().map(|name| self.materials.named(&ctx, name)).transpose()?;
+        let ospan = o.span();
+        // No shape: a mesh, instanced from its file.
+        let Some(shape) = crate::object::shape(&ctx, d, kind, &ospan)? else {
+            let Some(p) = &d.path else {
+                return Err(
+                    ctx.invalid(&ospan, "a mesh needs `path`, an OBJ file (relative to the scene file)")
+                );
+            };
+            let named_at = ctx.loc(&p.span());
+            let obj = self.lookup_mesh(p.get_ref(), d.normal_mode(), named_at.clone())?;
+            return self.instance_mesh(&obj, d.normal_mode(), &named_at, transform, material);
+        };
+        let material = material.unwrap_or_else(|| self.materials.default_material());
+        *self.kinds.entry(shape.kind().to_string()).or_default() += 1;
+        self.objects.push(Object::Shape(Instance::new(shape, transform)));
+        self.object_materials.push(material);
+        Ok(())
+    }
+
+    /// The OBJ file written `raw`, read with `normals`; its failure
+    /// reported at `named_at`.
+    fn lookup_mesh(&self, raw: &str, normals: NormalMode, named_at: Location) -> Result<Arc<ObjFile>> {
+        match self.res.mesh(raw, normals) {
+            Some(Ok(obj)) => Ok(Arc::clone(obj)),
+            Some(Err(f)) => Err(f.at(named_at)),
+            None => Err(not_read(named_at, raw)),
+        }
+    }
+
+    /// One instance of every model of `obj`, with `material` or else
+    /// each model's MTL material (the default where it has none).
+    fn instance_mesh(
+        &mut self,
+        obj: &ObjFile,
+        normals: NormalMode,
+        named_at: &Location,
+        transform: Transform,
+        material: Option<u32>,
+    ) -> Result<()> {
+        let key = self.register_mesh(obj, normals);
+        if let (None, Some(e)) = (material, &obj.material_error) {
+            return Err(mtl_unusable(obj, e, named_at));
+        }
+        let Some(slot) = self.slots.get_mut(&key) else {
+            return Err(not_read(named_at.clone(), &obj.path.display().to_string()));
+        };
+        if let Some(mi) = self.mesh_info.get_mut(slot.info) {
+            mi.instances += 1;
+        }
+        for (mesh, mtl) in slot.models.clone() {
+            let mat = match (material, mtl) {
+                (Some(m), _) => m,
+                (None, Some(k)) => self.mtl_material(obj, &key, k, named_at)?,
+                (None, None) => self.materials.default_material(),
+            };
+            self.objects.push(Object::Mesh { mesh, transform });
+            self.object_materials.push(mat);
+            *self.kinds.entry("mesh".into()).or_default() += 1;
+        }
+        Ok(())
+    }
+
+    /// Adds the models of `obj` (read with `normals`) to the scene's
+    /// meshes, once: notes its files as inputs, warns of degenerate
+    /// triangles. The key of its slot.
+    fn register_mesh(&mut self, obj: &ObjFile, normals: NormalMode) -> (PathBuf, NormalMode) {
+        let key = (obj.path.clone(), normals);
+        if !self.slots.contains_key(&key) {
+            self.note_input(&obj.path);
+            for m in &obj.mtl_files {
+                self.note_input(m);
+            }
+            let mut models = Vec::with_capacity(obj.models.len());
+            let (mut triangles, mut degenerate) = (0, 0);
+            for model in &obj.models {
+                triangles += model.mesh.len();
+                degenerate += model.degenerate;
+                models.push((self.meshes.len() as u32, model.material));
+                self.meshes.push(Arc::clone(&model.mesh));
+            }
+            if degenerate > 0 {
+                self.warnings.push(format!(
+                    "{}: {degenerate} of {triangles} triangles have zero area and will not be rendered",
+                    obj.path.display()
+                ));
+            }
+            let info = self.mesh_info.len();
+            self.mesh_info.push(MeshInfo {
+                path: obj.path.clone(),
+                models: models.len(),
+                triangles,
+                instances: 0,
+            });
+            let slot = MeshSlot { models, mtl_materials: vec![None; obj.materials.len()], info };
+            self.slots.insert(key.clone(), slot);
+        }
+        key
+    }
+
+    /// The prism material for MTL material `k` of `obj` (slot `key`).
+    fn mtl_material(
+        &mut self,
+        obj: &ObjFile,
+        key: &(PathBuf, NormalMode),
+        k: usize,
+        named_at: &Location,
+    ) -> Result<u32> {
+        if let Some(Some(i)) = self.slots.get(key).and_then(|s| s.mtl_materials.get(k)) {
+            return Ok(*i);
+        }
+        let Some(raw) = obj.materials.get(k) else {
+            return Err(SceneError::Invalid {
+                location: named_at.clone(),
+                message: format!("the OBJ file uses material {k}, which its MTL file does not define"),
+            });
+        };
+        let obj_name = obj.path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let res = self.res;
+        let found = res.mtl_texture(&obj.path, k);
+        let image = || self.image_at(found, named_at.clone(), raw.diffuse_texture.as_deref().unwrap_or(""));
+        let m = material::from_mtl(raw, &Location::file(&obj.path), named_at, image)?;
+        let i = self.materials.add(format!("{obj_name}/{}", raw.name), m);
+        if let Some(slot) = self.slots.get_mut(key).and_then(|s| s.mtl_materials.get_mut(k)) {
+            *slot = Some(i);
+        }
+        Ok(i)
+    }
+
+    /// The scene of what was added, with `settings`, the camera of
+    /// `camera`, `lights` and `fog`.
+    fn finish(
+        mut self,
+        settings: Settings,
+        camera: &CameraSource,
+        lights: Vec<PointLight>,
+        fog: Option<Fog>,
+    ) -> Result<LoadedScene> {
+        if self.objects.is_empty() {
+            self.warn("the scene has no objects");
+        }
+        let objects_len = self.objects.len();
+        let accel = Accel::build(std::mem::take(&mut self.meshes), std::mem::take(&mut self.objects))
+            .map_err(|e| self.ctx.invalid_file(format!("internal error: {e}")))?;
+        let bounds = accel.bounds();
+        let (camera, fog) = self.camera_and_fog(camera, fog, (settings.width, settings.height), bounds)?;
+        let stats = accel.stats();
+        let Settings {
+            width,
+            height,
+            spp,
+            max_depth,
+            min_contribution,
+            background,
+            ambient,
+            aovs,
+            aov_preview,
+        } = settings;
+        let info = SceneInfo {
+            file: self.ctx.file.to_path_buf(),
+            width,
+            height,
+            spp,
+            max_depth,
+            min_contribution,
+            objects: objects_len,
+            objects_by_kind: self.kinds,
+            meshes: self.mesh_info,
+            stored_triangles: stats.stored_triangles,
+            instanced_triangles: stats.instanced_triangles,
+            materials: self.materials.names,
+            lights: lights.clone(),
+            bounds,
+            fog,
+            camera,
+        };
+        let scene = Scene {
+            accel,
+            object_materials: self.object_materials,
+            materials: self.materials.list,
+            lights,
+            ambient,
+            background,
+            fog,
+            camera,
+        };
+        let settings = RenderSettings { spp, max_depth, min_contribution, threads: None };
+        Ok(LoadedScene {
+            scene,
+            settings,
+            info,
+            inputs: self.inputs,
+            warnings: self.warnings,
+            aovs,
+            aov_preview,
+        })
+    }
+
+    /// The camera and the fog of the scene, with the overrides applied:
+    /// the camera overrides (see [`view::camera`]) and `--fog`/`--no-fog`,
+    /// which turns the scene's fog on or off, or (on, in a scene without
+    /// `[fog]`) adds linear white fog reaching total at 1.5 times the
+    /// distance to the farthest corner of `bounds`, with a warning.
+    fn camera_and_fog(
+        &mut self,
+        camera: &CameraSource,
+        mut fog: Option<Fog>,
+        (width, height): (u32, u32),
+        bounds: Aabb,
+    ) -> Result<(Camera, Option<Fog>)> {
+        let camera = view::camera(&self.ctx, camera, &self.overrides, width, height)?;
+        match (self.overrides.fog, &mut fog) {
+            (Some(on), Some(f)) => f.enabled = on,
+            (Some(true), None) => {
+                let end = view::default_fog_end(camera.position(), bounds);
+                self.warn(&format!("the scene has no [fog]; --fog uses linear white fog from 0 to {end:.1}"));
+                fog =
+                    Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end }, enabled: true });
+            }
+            _ => {}
+        }
+        Ok((camera, fog))
+    }
+}
+
+/// The error for an OBJ file whose material library cannot be used, for
+/// an object that gives no `material`.
+fn mtl_unusable(obj: &ObjFile, e: &str, named_at: &Location) -> SceneError {
+    SceneError::Asset {
+        location: Location::file(&obj.path),
+        message: format!("{e}; give the object a `material` to render it without its MTL materials"),
+        referenced_at: Box::new(named_at.clone()),
+    }
+}
+
+/// A file the build needs that the resources do not hold (an internal
+/// error of the loader, or resources given by hand that lack it).
+fn not_read(named_at: Location, raw: &str) -> SceneError {
+    SceneError::Invalid { location: named_at, message: format!("internal error: `{raw}` was not read") }
+}

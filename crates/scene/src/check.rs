@@ -1,0 +1,141 @@
+//! Checked values with their place: the number, vector and colour checks
+//! of the build, each error pointing at the value's span in the scene
+//! text (or at the file alone for a value that is not written in it).
+
+use crate::error::{Location, SceneError};
+use crate::format::{Color, Num, V3};
+use prism_geometry::GeometryError;
+use prism_geometry::glam::Vec3;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+
+pub(crate) type Result<T> = std::result::Result<T, SceneError>;
+
+/// The scene being built: its file name (for messages) and its text (for
+/// turning spans into lines and columns; empty for a scene that has no
+/// text, such as an OBJ file loaded as a scene).
+#[derive(Clone, Copy)]
+pub(crate) struct Ctx<'a> {
+    pub file: &'a Path,
+    pub text: &'a str,
+}
+
+impl<'a> Ctx<'a> {
+    pub fn new(file: &'a Path, text: &'a str) -> Self {
+        Self { file, text }
+    }
+
+    /// Where `span` is, or the file alone for `None`.
+    pub fn place(&self, span: Option<&Range<usize>>) -> Location {
+        match span {
+            Some(span) => Location::at_span(self.file, self.text, span),
+            None => Location::file(self.file),
+        }
+    }
+
+    pub fn loc(&self, span: &Range<usize>) -> Location {
+        self.place(Some(span))
+    }
+
+    pub fn invalid(&self, span: &Range<usize>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid { location: self.loc(span), message: message.into() }
+    }
+
+    /// An error about the whole file (no span).
+    pub fn invalid_file(&self, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid { location: Location::file(self.file), message: message.into() }
+    }
+
+    pub fn geometry(&self, span: &Range<usize>, e: GeometryError) -> SceneError {
+        self.invalid(span, e.to_string())
+    }
+
+    pub fn finite(&self, n: &Num, what: &str) -> Result<f32> {
+        let v = *n.get_ref();
+        let f = v as f32;
+        if f.is_finite() {
+            Ok(f)
+        } else {
+            Err(self.invalid(&n.span(), format!("{what} must be a finite number, got {v}")))
+        }
+    }
+
+    /// A finite number that `ok` accepts; else `{what} must be {rule}`.
+    fn ranged(&self, n: &Num, what: &str, ok: impl Fn(f32) -> bool, rule: &str) -> Result<f32> {
+        let f = self.finite(n, what)?;
+        if ok(f) {
+            Ok(f)
+        } else {
+            Err(self.invalid(&n.span(), format!("{what} must be {rule}, got {}", n.get_ref())))
+        }
+    }
+
+    pub fn positive(&self, n: &Num, what: &str) -> Result<f32> {
+        self.ranged(n, what, |f| f > 0.0, "greater than 0")
+    }
+
+    pub fn non_negative(&self, n: &Num, what: &str) -> Result<f32> {
+        self.ranged(n, what, |f| f >= 0.0, "0 or more")
+    }
+
+    pub fn unit(&self, n: &Num, what: &str) -> Result<f32> {
+        self.ranged(n, what, |f| (0.0..=1.0).contains(&f), "between 0 and 1")
+    }
+
+    pub fn vec3(&self, v: &V3, what: &str) -> Result<Vec3> {
+        vec3_of(v.get_ref()).ok_or_else(|| {
+            self.invalid(&v.span(), format!("{what} must be three finite numbers, got {:?}", v.get_ref()))
+        })
+    }
+
+    /// `v` checked, or `default` when it is not given.
+    pub fn opt_vec3(&self, v: Option<&V3>, what: &str, default: Vec3) -> Result<Vec3> {
+        v.map_or(Ok(default), |v| self.vec3(v, what))
+    }
+
+    pub fn color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
+        match vec3_of(&c.get_ref().0) {
+            Some(v) if v.min_element() >= 0.0 => Ok(v),
+            _ => Err(self.invalid(
+                &c.span(),
+                format!("{what} must be three finite numbers >= 0, got {:?}", c.get_ref().0),
+            )),
+        }
+    }
+
+    /// `c` checked, or `default` when it is not given.
+    pub fn opt_color(&self, c: Option<&Spanned<Color>>, what: &str, default: Vec3) -> Result<Vec3> {
+        c.map_or(Ok(default), |c| self.color(c, what))
+    }
+
+    /// `n` checked with `check`, or `default` when it is not given.
+    pub fn opt_num(
+        &self,
+        n: Option<&Num>,
+        default: f32,
+        check: impl FnOnce(&Num) -> Result<f32>,
+    ) -> Result<f32> {
+        n.map_or(Ok(default), check)
+    }
+}
+
+/// Three finite `f32`s, or `None`.
+pub(crate) fn vec3_of(v: &[f64; 3]) -> Option<Vec3> {
+    let out = Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32);
+    out.is_finite().then_some(out)
+}
+
+/// The span of an optional value, if given.
+pub(crate) fn span_of<T>(v: &Option<Spanned<T>>) -> Option<Range<usize>> {
+    v.as_ref().map(Spanned::span)
+}
+
+/// The first of `keys` (name, span if given) that is given but not in
+/// `allowed`.
+pub(crate) fn first_foreign<'k>(
+    keys: &[(&'k str, Option<Range<usize>>)],
+    allowed: &[&str],
+) -> Option<(&'k str, Range<usize>)> {
+    keys.iter().find_map(|(key, span)| span.clone().filter(|_| !allowed.contains(key)).map(|s| (*key, s)))
+}

@@ -1,0 +1,153 @@
+//! The pure build: a scene from a TOML string and resources made in
+//! memory (no file is touched), including errors with their line and
+//! column.
+
+use super::*;
+use crate::build::build_scene;
+use crate::check::Ctx;
+use crate::format::SceneFile;
+use crate::obj::{NormalMode, ObjFile, ObjModel};
+use crate::read::{Failure, Resources, TextureFile};
+use prism_geometry::TriangleMesh;
+use prism_geometry::glam::Vec3;
+use prism_shade::{ImageTexture, Texture, Wrap};
+use std::sync::Arc;
+
+/// The base scene with a textured material, a mesh used twice and a sphere.
+const EXTRA: &str = r#"
+[materials.wood]
+texture = { type = "image", path = "mem/wood.png" }
+
+[[objects]]
+type = "mesh"
+path = "mem/tri.obj"
+
+[[objects]]
+type = "mesh"
+path = "mem/tri.obj"
+material = "wood"
+transform = [{ translate = [2, 0, 0] }]
+
+[[objects]]
+type = "sphere"
+radius = 0.5
+material = "wood"
+"#;
+
+/// A one-triangle OBJ file, as the reader would give it.
+fn triangle_obj(material_error: Option<&str>) -> Arc<ObjFile> {
+    let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+    let mesh = TriangleMesh::new(positions, None, None, vec![[0, 1, 2]]).unwrap();
+    Arc::new(ObjFile {
+        path: PathBuf::from("/in-memory/tri.obj"),
+        models: vec![ObjModel { mesh: Arc::new(mesh), material: None, degenerate: 0 }],
+        materials: Vec::new(),
+        material_error: material_error.map(str::to_owned),
+        mtl_files: Vec::new(),
+    })
+}
+
+fn wood() -> TextureFile {
+    let texels = vec![Vec3::new(0.6, 0.4, 0.2); 4];
+    let image = ImageTexture::from_linear(2, 2, texels, Wrap::Repeat).unwrap();
+    TextureFile { path: PathBuf::from("/in-memory/wood.png"), image: Arc::new(image) }
+}
+
+fn resources() -> Resources {
+    let mut res = Resources::default();
+    res.insert_mesh("mem/tri.obj", NormalMode::Auto, Ok(triangle_obj(None)));
+    res.insert_texture("mem/wood.png", Wrap::Repeat, Ok(wood()));
+    res
+}
+
+fn scene() -> String {
+    format!("{BASE}{EXTRA}")
+}
+
+fn build(text: &str, res: &Resources) -> Result<LoadedScene, SceneError> {
+    let file_name = Path::new("mem.toml");
+    let file = SceneFile::parse(text, file_name)?;
+    build_scene(Ctx::new(file_name, text), &file, res, &LoadOptions::default())
+}
+
+/// `mem.toml:LINE:COLUMN` of the first `needle` in `text`.
+fn place_of(text: &str, needle: &str) -> String {
+    let (line, column) = line_col(text, text.find(needle).unwrap());
+    format!("mem.toml:{line}:{column}")
+}
+
+#[test]
+fn a_scene_builds_from_a_string_and_in_memory_resources() {
+    let res = resources();
+    let loaded = build(&scene(), &res).unwrap();
+    let info = &loaded.info;
+    // The mesh is stored once and instanced twice; the sphere is a shape.
+    assert_eq!(info.objects, 3);
+    assert_eq!(info.objects_by_kind.get("mesh"), Some(&2));
+    assert_eq!(info.stored_triangles, 1);
+    assert_eq!(info.instanced_triangles, 2);
+    assert_eq!(info.meshes.len(), 1);
+    assert_eq!(info.meshes[0].instances, 2);
+    assert_eq!(info.meshes[0].path, Path::new("/in-memory/tri.obj"));
+    // The first mesh object names no material: the default.
+    assert_eq!(info.materials, ["red", "wood", "(default)"]);
+    assert_eq!(loaded.scene.object_materials[..2], [2, 1]);
+    // The texture is the image given, shared, not a copy.
+    let Texture::Image { image, .. } = &loaded.scene.materials[1].texture else { panic!("an image texture") };
+    let Some(Ok(t)) = res.texture("mem/wood.png", Wrap::Repeat) else { panic!("in the resources") };
+    assert!(Arc::ptr_eq(image, &t.image));
+    // Inputs in order of use: the texture (materials come first), the mesh.
+    assert_eq!(loaded.inputs, [PathBuf::from("/in-memory/wood.png"), PathBuf::from("/in-memory/tri.obj")]);
+    // The translated instance is where the transform puts it.
+    let hit = loaded
+        .scene
+        .accel
+        .closest_hit(&prism_geometry::Ray::new(Vec3::new(2.2, 0.2, 5.0), Vec3::new(0.0, 0.0, -1.0)));
+    assert!(hit.is_some_and(|h| h.object == 1 && (h.hit.t - 5.0).abs() < 1e-4), "{hit:?}");
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+}
+
+#[test]
+fn errors_point_at_the_value_in_the_string() {
+    let res = resources();
+    // A value the build refuses.
+    let text = scene().replace("radius = 0.5", "radius = -0.5");
+    let err = build(&text, &res).unwrap_err().to_string();
+    assert_eq!(err, format!("{}: sphere radius must be greater than 0, got -0.5", place_of(&text, "-0.5")));
+
+    // A file the reader could not read: reported where the scene names it.
+    let mut res = resources();
+    let failure = Failure::Read {
+        what: "texture",
+        path: PathBuf::from("/in-memory/wood.png"),
+        reason: "no such file".into(),
+    };
+    res.insert_texture("mem/wood.png", Wrap::Repeat, Err(failure));
+    let err = build(&scene(), &res).unwrap_err().to_string();
+    let at = place_of(&scene(), "\"mem/wood.png\"");
+    assert_eq!(err, format!("{at}: cannot read texture /in-memory/wood.png: no such file"));
+
+    // An OBJ whose material library cannot be used, for the object without
+    // a `material`: at the object's path; with a `material` it is fine.
+    let mut res = resources();
+    res.insert_mesh(
+        "mem/tri.obj",
+        NormalMode::Auto,
+        Ok(triangle_obj(Some("cannot use material library x.mtl"))),
+    );
+    let err = build(&scene(), &res).unwrap_err().to_string();
+    let at = place_of(&scene(), "\"mem/tri.obj\"");
+    assert!(err.starts_with("/in-memory/tri.obj: cannot use material library x.mtl"), "{err}");
+    assert!(err.ends_with(&format!("(used at {at})")), "{err}");
+    let with_material =
+        scene().replacen("path = \"mem/tri.obj\"\n", "path = \"mem/tri.obj\"\nmaterial = \"wood\"\n", 1);
+    assert!(build(&with_material, &res).is_ok());
+
+    // Resources that lack a file the scene names.
+    let text = scene().replace("mem/wood.png", "mem/other.png");
+    let err = build(&text, &resources()).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        format!("{}: internal error: `mem/other.png` was not read", place_of(&text, "\"mem/other.png\""))
+    );
+}

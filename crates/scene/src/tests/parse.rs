@@ -1,0 +1,357 @@
+//! Parsing a scene from text: what it holds, defaults, and every class of
+//! error with its line and column.
+
+use super::*;
+use prism_bvh::Object;
+use prism_geometry::glam::Vec3;
+use prism_shade::{Aov, FogMode, Texture};
+
+#[test]
+fn a_full_scene_parses() {
+    let extra = r##"
+[fog]
+mode = "exponential"
+density = 0.05
+color = "#ffffff"
+
+[materials.floor]
+texture = { type = "checker", a = [1, 1, 1], b = [0, 0, 0], size = 2 }
+
+[materials.glass]
+color = [1, 1, 1]
+transmission = 0.9
+ior = 1.5
+absorption = [0.1, 0.2, 0.3]
+
+[[objects]]
+type = "plane"
+material = "floor"
+
+[[objects]]
+type = "sphere"
+center = [0, 1, 0]
+radius = 1
+material = "glass"
+
+[[objects]]
+type = "cuboid"
+size = 1
+material = "red"
+transform = [{ rotate_y = 45 }, { translate = [2, 0.5, 0] }]
+
+[[objects]]
+type = "cuboid"
+min = [-1, 0, -1]
+max = [1, 1, 1]
+transform = [{ shear_angle = { xy = 20 } }, { scale = [1, 2, 1] }, { rotate = { axis = [1, 1, 0], degrees = 10 } }]
+
+[[objects]]
+type = "cylinder"
+base = [3, 0, 0]
+radius = 0.5
+height = 2
+
+[[objects]]
+type = "cone"
+radius = 0.5
+height = 1
+transform = [{ matrix = [[1, 0, 0, 4], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }]
+
+[[objects]]
+type = "disk"
+center = [0, 3, 0]
+normal = [0, 0, 1]
+radius = 1
+
+[[objects]]
+type = "triangle"
+vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+name = "a label"
+"##;
+    let loaded = parse(&format!("{BASE}{extra}")).unwrap();
+    let info = &loaded.info;
+    assert_eq!((info.width, info.height, info.spp), (320, 180, 2));
+    assert_eq!(info.objects, 8);
+    assert_eq!(info.objects_by_kind.get("cuboid"), Some(&2));
+    assert_eq!(info.objects_by_kind.get("plane"), Some(&1));
+    // Sorted names, then the built-in default for objects without a material.
+    assert_eq!(info.materials, ["floor", "glass", "red", "(default)"]);
+    let scene = &loaded.scene;
+    assert_eq!(scene.object_materials.len(), 8);
+    assert!(matches!(scene.materials[0].texture, Texture::Checker { size: 2.0, world: true, .. }));
+    assert_eq!(scene.materials[1].transmission, 0.9);
+    let fog = scene.fog.unwrap();
+    assert!(fog.enabled);
+    assert!(matches!(fog.mode, FogMode::Exponential { density } if (density - 0.05).abs() < 1e-7));
+    assert!((fog.color - Vec3::ONE).abs().max_element() < 1e-6);
+    // The box rotated 45° and moved: its transform maps the origin to (2, 0.5, 0).
+    let Object::Shape(inst) = &scene.accel.objects()[2] else { panic!("a shape") };
+    assert!((inst.transform.point(Vec3::ZERO) - Vec3::new(2.0, 0.5, 0.0)).length() < 1e-6);
+    let x = inst.transform.point(Vec3::X);
+    assert!((x - Vec3::new(2.0 + 0.5f32.sqrt(), 0.5, -(0.5f32.sqrt()))).length() < 1e-5, "{x}");
+    // The matrix is given by rows: the last column is the translation.
+    let Object::Shape(cone) = &scene.accel.objects()[5] else { panic!("a shape") };
+    assert!((cone.transform.point(Vec3::ZERO) - Vec3::new(4.0, 0.0, 0.0)).length() < 1e-6);
+    assert_eq!(loaded.settings.spp, 2);
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+}
+
+#[test]
+fn defaults_apply() {
+    let loaded = parse("[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n").unwrap();
+    assert_eq!((loaded.info.width, loaded.info.height), (1280, 720));
+    assert_eq!(loaded.settings.spp, 4);
+    assert_eq!(loaded.settings.max_depth, 8);
+    assert!((loaded.info.camera.vfov_deg() - 45.0).abs() < 1e-6);
+    assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings); // no lights, no objects
+}
+
+#[test]
+fn overrides_replace_the_file_and_keep_the_aspect() {
+    let opts = LoadOptions {
+        overrides: Overrides { width: Some(160), spp: Some(1), fog: Some(true), ..Overrides::default() },
+        ..LoadOptions::default()
+    };
+    let text = format!("{BASE}[[objects]]\ntype = \"sphere\"\nradius = 1\n");
+    let loaded = parse_scene_str_with(&text, Path::new("."), Path::new("t.toml"), &opts).unwrap();
+    assert_eq!((loaded.info.width, loaded.info.height), (160, 90));
+    assert_eq!(loaded.scene.camera.width(), 160);
+    assert_eq!(loaded.settings.spp, 1);
+    // --fog on a scene without fog adds one, with a warning.
+    assert!(loaded.scene.fog.is_some_and(|f| f.enabled));
+    assert!(loaded.warnings.iter().any(|w| w.contains("no [fog]")));
+
+    let opts = LoadOptions {
+        overrides: Overrides { width: Some(100_000), ..Overrides::default() },
+        ..LoadOptions::default()
+    };
+    let err = parse_scene_str_with(&text, Path::new("."), Path::new("t.toml"), &opts).unwrap_err();
+    assert!(err.to_string().starts_with("--width: "), "{err}");
+}
+
+#[test]
+fn syntax_errors_have_line_and_column() {
+    let err = expect_err("[[objects]]\ntype = \"sphere\"\nradius = = 1\n", "");
+    assert_at(&err, "[[objects]]\ntype = \"sphere\"\nradius = = 1\n", "radius = =");
+}
+
+#[test]
+fn unknown_keys_are_rejected_where_they_are() {
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\nradios = 2\n",
+            "unknown field `radios`",
+            Some("radios"),
+        ),
+        ("[materials.x]\ncolour = [1, 0, 0]\n", "unknown field `colour`", Some("colour")),
+    ]);
+    let err = parse(&BASE.replace("spp = 2", "widht = 3")).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:5:1:") && err.contains("unknown field `widht`"), "{err}");
+}
+
+#[test]
+fn wrong_types_say_what_was_expected() {
+    refused(&[
+        ("[[objects]]\ntype = \"sphere\"\nradius = \"big\"\n", "expected f64", Some("radius")),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ncenter = [1, 2]\n",
+            "expected an array of length 3",
+            Some("center"),
+        ),
+        ("[[objects]]\ntype = \"blob\"\n", "unknown variant `blob`", Some("blob")),
+        ("[materials.x]\ncolor = \"red\"\n", "#rrggbb", Some("\"red\"")),
+    ]);
+}
+
+#[test]
+fn missing_required_keys_are_named() {
+    let err = parse("[render]\nwidth = 10\n").unwrap_err().to_string();
+    assert!(err.contains("missing [camera]"), "{err}");
+    let err = parse("[camera]\nposition = [0, 0, 1]\n").unwrap_err().to_string();
+    assert!(err.contains("look_at"), "{err}");
+    refused(&[
+        ("[[objects]]\ntype = \"sphere\"\n", "a sphere needs `radius`", Some("[[objects]]")),
+        ("[[objects]]\ntype = \"cuboid\"\n", "a cuboid needs `size`", None),
+        ("[[objects]]\ntype = \"mesh\"\n", "a mesh needs `path`", None),
+    ]);
+}
+
+#[test]
+fn nan_and_infinity_are_refused() {
+    refused(&[
+        ("[[objects]]\ntype = \"sphere\"\nradius = nan\n", "must be a finite number", Some("nan")),
+        ("[[objects]]\ntype = \"sphere\"\nradius = 1\ncenter = [0, inf, 0]\n", "finite", Some("inf")),
+    ]);
+    // Too large for f32 is infinite too.
+    refused(&[
+        ("[[objects]]\ntype = \"sphere\"\nradius = 1e300\n", "finite", None),
+        ("[[lights]]\nposition = [0, 0, 0]\nintensity = -inf\n", "finite", None),
+    ]);
+}
+
+#[test]
+fn zero_and_negative_sizes_are_refused() {
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 0\n",
+            "sphere radius must be greater than 0, got 0",
+            Some("radius"),
+        ),
+        (
+            "[[objects]]\ntype = \"cylinder\"\nradius = 1\nheight = -2\n",
+            "cylinder height must be greater than 0",
+            Some("height = -2"),
+        ),
+        (
+            "[[objects]]\ntype = \"cuboid\"\nsize = [1, 0, 1]\n",
+            "cuboid size must be greater than 0",
+            Some("size"),
+        ),
+        (
+            "[[objects]]\ntype = \"cuboid\"\nmin = [0, 0, 0]\nmax = [1, 0, 1]\n",
+            "must be greater than min",
+            None,
+        ),
+        ("[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n", "", None),
+        (
+            "[materials.m]\ntexture = { type = \"checker\", size = 0 }\n",
+            "checker size must be greater than 0",
+            None,
+        ),
+    ]);
+}
+
+#[test]
+fn singular_transforms_are_refused_at_the_step() {
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [\n  { translate = [1, 0, 0] },\n  { scale = [1, 0, 1] },\n]\n",
+            "singular",
+            Some("scale"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ shear = { xy = 1, yx = 1 } }]\n",
+            "singular",
+            None,
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 1, 1]] }]\n",
+            "not affine",
+            None,
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ rotate = { axis = [0, 0, 0], degrees = 3 } }]\n",
+            "axis is zero",
+            None,
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ spin = 3 }]\n",
+            "unknown variant `spin`",
+            None,
+        ),
+    ]);
+}
+
+#[test]
+fn unknown_material_names_list_the_known_ones() {
+    refused(&[(
+        "[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"blue\"\n",
+        "unknown material `blue`; the scene defines: red",
+        Some("\"blue\""),
+    )]);
+}
+
+#[test]
+fn keys_of_another_shape_are_refused() {
+    refused(&[
+        ("[[objects]]\ntype = \"plane\"\nradius = 1\n", "`radius` is not a key of a plane", Some("radius")),
+        (
+            "[materials.m]\ntexture = { type = \"checker\", path = \"x.png\" }\n",
+            "`path` is not a key of a checker texture",
+            None,
+        ),
+        ("[materials.m]\ncolor = [1, 1, 1]\ntexture = { type = \"checker\" }\n", "not both", None),
+    ]);
+}
+
+#[test]
+fn render_limits_are_checked_before_allocating() {
+    let err = parse(&BASE.replace("width = 320", "width = 1000000")).unwrap_err().to_string();
+    assert!(err.contains("over the limit of 16384") && err.contains("--max-side"), "{err}");
+    assert!(err.starts_with("test.toml:3:9:"), "{err}");
+    let text = BASE.replace("width = 320", "width = 16000").replace("height = 180", "height = 16000");
+    let err = parse(&text).unwrap_err().to_string();
+    assert!(err.contains("--max-pixels"), "{err}");
+    let err = parse(&BASE.replace("spp = 2", "spp = 0")).unwrap_err().to_string();
+    assert!(err.contains("at least 1") && err.starts_with("test.toml:5:7:"), "{err}");
+    let err = parse(&BASE.replace("spp = 2", "max_depth = 1000000000")).unwrap_err().to_string();
+    assert!(err.contains("over the limit of 64"), "{err}");
+    let err = parse(&BASE.replace("spp = 2", "width = 1000000000000")).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:"), "{err}");
+    let err = parse(&BASE.replace("spp = 2", "spp = -3")).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:5:7:"), "{err}");
+    // The limits are configurable.
+    let opts =
+        LoadOptions { limits: Limits { max_side: 20_000, ..Limits::default() }, ..LoadOptions::default() };
+    let text = BASE.replace("width = 320", "width = 20000").replace("height = 180", "height = 10");
+    assert!(parse_scene_str_with(&text, Path::new("."), Path::new("t.toml"), &opts).is_ok());
+}
+
+#[test]
+fn bad_cameras_are_refused() {
+    let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nup = [0, 1, 10]");
+    let err = parse(&text).unwrap_err().to_string();
+    assert!(err.contains("parallel to the view direction") && err.starts_with("test.toml:10:6:"), "{err}");
+    let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 2, 10]");
+    assert!(parse(&text).unwrap_err().to_string().contains("must differ"));
+    let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nfov = 180");
+    assert!(parse(&text).unwrap_err().to_string().contains("between 0 and 180"));
+}
+
+#[test]
+fn bad_fog_and_materials_are_refused() {
+    refused(&[
+        ("[fog]\nstart = 10\nend = 5\n", "fog end (5) must be greater than fog start (10)", None),
+        ("[fog]\nmode = \"exponential\"\n", "needs `density`", None),
+        ("[fog]\nmode = \"exponential\"\ndensity = 0.1\nend = 3\n", "belong to linear fog", None),
+        ("[fog]\nmode = \"fuzzy\"\n", "unknown variant `fuzzy`", None),
+        (
+            "[materials.m]\nreflectivity = 0.6\ntransparency = 0.6\n",
+            "must not exceed 1",
+            Some("[materials.m]"),
+        ),
+        ("[materials.m]\nreflectivity = 1.5\n", "between 0 and 1", Some("reflectivity")),
+        ("[materials.m]\nior = 0\n", "ior must be greater than 0", None),
+        ("[materials.m]\ncolor = [1, -1, 0]\n", ">= 0", None),
+    ]);
+}
+
+// ----- AOV keys --------------------------------------------------------
+
+#[test]
+fn aov_keys_list_passes_in_order() {
+    let text =
+        BASE.replace("spp = 2", "spp = 2\naov = [\"object_id\", \"depth\", \"all\"]\naov_preview = true");
+    let loaded = parse(&text).unwrap();
+    assert_eq!(
+        loaded.aovs,
+        [prism_shade::Aov::ObjectId, prism_shade::Aov::Depth, Aov::Normal, Aov::GeoNormal, Aov::Albedo]
+    );
+    assert!(loaded.aov_preview);
+    let loaded = parse(BASE).unwrap();
+    assert!(loaded.aovs.is_empty() && !loaded.aov_preview);
+}
+
+#[test]
+fn unknown_aov_names_are_refused_where_they_are() {
+    let text = BASE.replace("spp = 2", "spp = 2\naov = [\"depth\", \"dept\"]");
+    let err = parse(&text).unwrap_err().to_string();
+    // Line 6, column of the second string.
+    assert!(err.starts_with("test.toml:6:17: unknown AOV pass `dept`"), "{err}");
+    assert!(err.contains("depth, normal, geo_normal, albedo, object_id"), "{err}");
+    let text = BASE.replace("spp = 2", "spp = 2\naov = \"depth\"");
+    let err = parse(&text).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:6:7:") && err.contains("sequence"), "{err}");
+    let text = BASE.replace("spp = 2", "spp = 2\naov_preview = 1");
+    assert!(parse(&text).unwrap_err().to_string().starts_with("test.toml:6:"));
+}

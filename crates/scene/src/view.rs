@@ -1,0 +1,209 @@
+//! What a render looks through: the camera (the file's `[camera]` or a
+//! framing camera, with the camera overrides applied) and the `[fog]`
+//! table, checked.
+
+use crate::Overrides;
+use crate::check::{Ctx, Result};
+use crate::error::SceneError;
+use crate::format::{CameraDef, FogDef, FogModeDef};
+use prism_geometry::Aabb;
+use prism_geometry::glam::Vec3;
+use prism_shade::{Camera, Fog, FogMode};
+use std::ops::Range;
+use toml::Spanned;
+
+/// The camera a scene describes, before the overrides.
+pub(crate) enum CameraSource<'a> {
+    /// A scene file's `[camera]` table, checked here.
+    File(&'a Spanned<CameraDef>),
+    /// A camera computed by the loader (an OBJ file as a scene): finite,
+    /// `eye != look_at`, up +Y; not written in any file.
+    Framed { eye: Vec3, look_at: Vec3, fov: f32 },
+}
+
+/// The vertical field of view of a camera that does not give one.
+const DEFAULT_FOV: f32 = 45.0;
+
+/// The camera of `source` with the overrides of `ov` for an image of
+/// `width × height`. Errors in an override name its flag; errors in the
+/// file's values point at them.
+pub(crate) fn camera(
+    ctx: &Ctx,
+    source: &CameraSource,
+    ov: &Overrides,
+    width: u32,
+    height: u32,
+) -> Result<Camera> {
+    let flag_vec3 = |v: Vec3, flag: &'static str| {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(SceneError::Option { flag, message: format!("X,Y,Z must be finite numbers, got {v}") })
+        }
+    };
+    let file = match source {
+        CameraSource::File(c) => Some(c.get_ref()),
+        CameraSource::Framed { .. } => None,
+    };
+    let (position, look_at) = match source {
+        CameraSource::File(c) => {
+            let d = c.get_ref();
+            let position = match ov.camera_pos {
+                Some(p) => flag_vec3(p, "--camera-pos")?,
+                None => ctx.vec3(&d.position, "camera position")?,
+            };
+            let look_at = match ov.look_at {
+                Some(p) => flag_vec3(p, "--look-at")?,
+                None => ctx.vec3(&d.look_at, "camera look_at")?,
+            };
+            (position, look_at)
+        }
+        CameraSource::Framed { eye, look_at, .. } => (
+            ov.camera_pos.map_or(Ok(*eye), |p| flag_vec3(p, "--camera-pos"))?,
+            ov.look_at.map_or(Ok(*look_at), |p| flag_vec3(p, "--look-at"))?,
+        ),
+    };
+    let up = match (ov.up, file.and_then(|d| d.up.as_ref())) {
+        (Some(u), _) => flag_vec3(u, "--up")?,
+        (None, Some(u)) => ctx.vec3(u, "camera up")?,
+        (None, None) => Vec3::Y,
+    };
+    let fov = match (ov.fov, source) {
+        (Some(f), _) => {
+            if !(f.is_finite() && f > 0.0 && f < 180.0) {
+                return Err(SceneError::Option {
+                    flag: "--fov",
+                    message: format!(
+                        "the vertical field of view in degrees must be between 0 and 180 (exclusive), got {f}"
+                    ),
+                });
+            }
+            f
+        }
+        (None, CameraSource::Framed { fov, .. }) => *fov,
+        (None, CameraSource::File(c)) => match &c.get_ref().fov {
+            Some(n) => {
+                let f = ctx.finite(n, "camera fov")?;
+                if !(f > 0.0 && f < 180.0) {
+                    return Err(ctx.invalid(
+                        &n.span(),
+                        format!("camera fov is the vertical field of view in degrees and must be between 0 and 180 (exclusive), got {f}"),
+                    ));
+                }
+                f
+            }
+            None => DEFAULT_FOV,
+        },
+    };
+    // Where a problem of the file's camera is: the table (or a key of it);
+    // a framed camera is in no file.
+    let table: Option<Range<usize>> = match source {
+        CameraSource::File(c) => Some(c.span()),
+        CameraSource::Framed { .. } => None,
+    };
+    // The flag to blame when the direction or up is unusable: the one
+    // given, if any.
+    let moved = if ov.camera_pos.is_some() {
+        Some("--camera-pos")
+    } else if ov.look_at.is_some() {
+        Some("--look-at")
+    } else {
+        None
+    };
+    let forward = look_at - position;
+    if forward.length_squared() == 0.0 || !forward.is_finite() {
+        return Err(match moved {
+            Some(flag) => SceneError::Option {
+                flag,
+                message: format!(
+                    "the camera position {position} and the look-at point {look_at} must differ (and be less than 1e38 apart)"
+                ),
+            },
+            None => SceneError::Invalid {
+                location: ctx.place(file.map(|d| d.look_at.span()).as_ref()),
+                message: "camera look_at must differ from the camera position".into(),
+            },
+        });
+    }
+    let f = forward.normalize();
+    if up.length_squared() == 0.0 || f.cross(up.normalize()).length() < 1e-6 {
+        let message = format!(
+            "camera up {up} is zero or parallel to the view direction {f}; choose an up vector across it"
+        );
+        return Err(match (ov.up.map(|_| "--up").or(moved), file.and_then(|d| d.up.as_ref())) {
+            (Some(flag), _) => SceneError::Option {
+                flag,
+                message: if flag == "--up" { message } else { format!("{message} (with --up)") },
+            },
+            (None, Some(u)) => ctx.invalid(&u.span(), message),
+            (None, None) => SceneError::Invalid { location: ctx.place(table.as_ref()), message },
+        });
+    }
+    Camera::new(position, look_at, up, fov, width, height).map_err(|e| {
+        if ov.camera_pos.is_some() || ov.look_at.is_some() || ov.up.is_some() || ov.fov.is_some() {
+            SceneError::Option { flag: "--camera-pos/--look-at/--up/--fov", message: e.to_string() }
+        } else {
+            SceneError::Invalid { location: ctx.place(table.as_ref()), message: e.to_string() }
+        }
+    })
+}
+
+/// The fog of a `[fog]` table, checked.
+pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<Fog> {
+    let d = f.get_ref();
+    let mode = d.mode.as_ref().map_or(FogModeDef::Linear, |m| *m.get_ref());
+    let color = ctx.opt_color(d.color.as_ref(), "fog color", Vec3::ONE)?;
+    let mode = match mode {
+        FogModeDef::Linear => {
+            if let Some(n) = &d.density {
+                return Err(ctx.invalid(
+                    &n.span(),
+                    "`density` belongs to exponential fog; linear fog takes `start` and `end`",
+                ));
+            }
+            let start = ctx.opt_num(d.start.as_ref(), 0.0, |n| ctx.non_negative(n, "fog start"))?;
+            let Some(end_n) = &d.end else {
+                return Err(
+                    ctx.invalid(&f.span(), "linear fog needs `end`, the distance where the fog is total")
+                );
+            };
+            let end = ctx.finite(end_n, "fog end")?;
+            if !(end > start) {
+                return Err(ctx.invalid(
+                    &end_n.span(),
+                    format!("fog end ({end}) must be greater than fog start ({start})"),
+                ));
+            }
+            FogMode::Linear { start, end }
+        }
+        FogModeDef::Exponential | FogModeDef::ExponentialSquared => {
+            if let Some(n) = d.start.as_ref().or(d.end.as_ref()) {
+                return Err(ctx.invalid(
+                    &n.span(),
+                    "`start` and `end` belong to linear fog; exponential fog takes `density`",
+                ));
+            }
+            let Some(n) = &d.density else {
+                return Err(ctx.invalid(&f.span(), "exponential fog needs `density` (per scene unit)"));
+            };
+            let density = ctx.positive(n, "fog density")?;
+            if mode == FogModeDef::Exponential {
+                FogMode::Exponential { density }
+            } else {
+                FogMode::ExponentialSquared { density }
+            }
+        }
+    };
+    Ok(Fog { color, mode, enabled: d.enabled.unwrap_or(true) })
+}
+
+/// The end of the fog `--fog` adds to a scene without `[fog]`: 1.5 times
+/// the distance from `eye` to the farthest corner of `bounds` (100 where
+/// the bounds are empty or infinite).
+pub(crate) fn default_fog_end(eye: Vec3, bounds: Aabb) -> f32 {
+    if bounds.is_empty() || !bounds.is_finite() {
+        return 100.0;
+    }
+    let far = bounds.corners().iter().map(|c| c.distance(eye)).fold(0.0_f32, f32::max);
+    if far.is_finite() && far > 0.0 { 1.5 * far } else { 100.0 }
+}
