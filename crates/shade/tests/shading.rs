@@ -270,9 +270,7 @@ fn fogged_wall(d: f32, mode: prism_shade::FogMode, enabled: bool) -> Vec3 {
         cam,
     );
     s.fog = fog(Vec3::new(0.9, 0.8, 0.7), mode);
-    if let Some(f) = &mut s.fog {
-        f.enabled = enabled;
-    }
+    s.fog_on = enabled;
     px(&render(&s, 1, 1), 0, 0)
 }
 
