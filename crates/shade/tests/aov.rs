@@ -203,15 +203,7 @@ fn sheared_box_faces_report_inverse_transpose_normals() {
 
 #[test]
 fn textured_sphere_albedo_is_the_texture_lookup() {
-    let (tw, th) = (16u32, 8u32);
-    let texels = (0..tw * th)
-        .map(|k| {
-            Vec3::new((k % tw) as f32 / tw as f32, (k / tw) as f32 / th as f32, ((k * 7) % 11) as f32 / 11.0)
-        })
-        .collect();
-    let image = std::sync::Arc::new(
-        prism_shade::ImageTexture::from_linear(tw, th, texels, prism_shade::Wrap::Repeat).expect("valid"),
-    );
+    let image = distinct_texture();
     let tint = Vec3::new(1.0, 0.5, 0.25);
     let tex =
         Texture::Image { image: image.clone(), mapping: prism_shade::Mapping::Uv, scale: Vec2::ONE, tint };

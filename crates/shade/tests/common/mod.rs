@@ -92,6 +92,19 @@ pub fn glass(ior: f32) -> Material {
     }
 }
 
+/// A 16×8 repeating texture whose texels all differ.
+pub fn distinct_texture() -> std::sync::Arc<prism_shade::ImageTexture> {
+    let (w, h) = (16u32, 8u32);
+    let texels = (0..w * h)
+        .map(|k| {
+            Vec3::new((k % w) as f32 / w as f32, (k / w) as f32 / h as f32, ((k * 7) % 11) as f32 / 11.0)
+        })
+        .collect();
+    let image =
+        prism_shade::ImageTexture::from_linear(w, h, texels, prism_shade::Wrap::Repeat).expect("valid");
+    std::sync::Arc::new(image)
+}
+
 pub fn camera(position: Vec3, look_at: Vec3, up: Vec3, vfov: f32, w: u32, h: u32) -> Camera {
     Camera::new(position, look_at, up, vfov, w, h).expect("valid camera")
 }
