@@ -23,7 +23,7 @@
 
 mod info;
 mod interrupt;
-mod write;
+mod overwrite;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Args, Parser, Subcommand};
@@ -181,7 +181,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         None => default_output(&args.scene)?,
     };
     let format = OutputFormat::from_path(&output)?;
-    write::check_not_an_input(&output, &loaded.inputs)?;
+    overwrite::check_not_an_input(&output, &loaded.inputs)?;
     let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());
     let previews = args.aov_preview || loaded.aov_preview;
     if previews && aovs.is_empty() {
@@ -191,7 +191,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     for &a in &aovs {
         for ext in if previews { &["exr", "png"][..] } else { &["exr"][..] } {
-            write::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
+            overwrite::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
         }
     }
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
