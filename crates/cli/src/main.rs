@@ -200,7 +200,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
 
     let settings = &loaded.settings;
-    let (w, h) = (settings.camera.width(), settings.camera.height());
+    let (w, h) = settings.camera.size();
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(u64::from(h));

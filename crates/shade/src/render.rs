@@ -163,7 +163,7 @@ pub(crate) fn render_pixels<'a>(
 ) -> (Image, Vec<AovRow<'a>>, RenderStats) {
     let start = std::time::Instant::now();
     let cam = &settings.camera;
-    let (w, h) = (cam.width(), cam.height());
+    let (w, h) = cam.size();
     let spp = settings.spp.max(1);
     let pattern = SamplePattern::new(spp);
     let see_through = beauty && Tracer::scene_is_see_through(scene);

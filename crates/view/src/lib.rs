@@ -203,7 +203,7 @@ mod tests {
     fn the_loader_applies_the_overrides_once() {
         let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/seed.toml");
         let file = load_scene_file(&seed, &ViewOptions::new(&seed)).unwrap();
-        assert_eq!((file.settings.camera.width(), file.settings.camera.height()), (1280, 720));
+        assert_eq!(file.settings.camera.size(), (1280, 720));
         assert!(file.settings.fog && file.scene.fog.is_some(), "seed.toml has fog, on");
         let overrides = prism_scene::Overrides {
             width: Some(320),
@@ -214,7 +214,7 @@ mod tests {
         };
         let setup = load_scene_file(&seed, &ViewOptions { overrides, ..ViewOptions::new(&seed) }).unwrap();
         let s = &setup.settings;
-        assert_eq!((s.camera.width(), s.camera.height()), (320, 180), "--width alone keeps 16:9");
+        assert_eq!(s.camera.size(), (320, 180), "--width alone keeps 16:9");
         assert_eq!((s.spp, s.threads), (3, Some(1)));
         assert!(!s.fog, "--no-fog turns the fog off");
         assert!(setup.scene.fog.is_some(), "the fog's medium stays in the scene");

@@ -407,7 +407,8 @@ impl ViewerState {
 }
 
 fn camera_with(c: &Camera, position: Vec3, look_at: Vec3) -> Option<Camera> {
-    Camera::new(position, look_at, c.up(), c.vfov_deg(), c.width(), c.height()).ok()
+    let (w, h) = c.size();
+    Camera::new(position, look_at, c.up(), c.vfov_deg(), w, h).ok()
 }
 
 /// The camera orbited about its target; `None` if that would be degenerate.

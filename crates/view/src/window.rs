@@ -83,7 +83,7 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
     // The loader applied the overrides: the window has the image's size,
     // and keeps it through reloads.
     let SceneSetup { scene, settings } = setup;
-    let (w, h) = (settings.camera.width(), settings.camera.height());
+    let (w, h) = settings.camera.size();
     let threads = settings.threads;
     let mut state = ViewerState::new(settings, scene.fog.is_some());
     if opts.overrides.fog == Some(true) && !state.fog_available() {

@@ -228,7 +228,7 @@ impl Worker {
     /// Renders one view to the end, or until cancelled. `Err` when the
     /// receiver is gone.
     fn render_view(&mut self, view: &View) -> Result<(), mpsc::SendError<Frame>> {
-        let (w, h) = (view.settings.camera.width(), view.settings.camera.height());
+        let (w, h) = view.settings.camera.size();
         let hooks = RenderHooks { progress: None, cancel: Some(&self.shared.cancel) };
 
         // Inside our own pool already: a render must not build another.
