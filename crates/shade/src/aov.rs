@@ -195,7 +195,7 @@ impl AovImages {
 /// plus the pixel-centre ray for [`Aov::ObjectId`] when `spp > 1`).
 ///
 /// Definitions, exactly:
-/// - rays: the scene's pinhole camera ([`crate::Camera::ray`]) through the
+/// - rays: the render's pinhole camera, `settings.camera` ([`crate::Camera::ray`]), through the
 ///   sample positions of the beauty render, [`crate::sample_position`]
 ///   (with `settings.spp = 1`, the pixel centre `(i + 0.5, j + 0.5)` and no
 ///   jitter, so that a pass is an exact geometric measurement);
