@@ -77,7 +77,7 @@ impl Frame {
 /// A request to the render thread.
 struct Job {
     view: View,
-    scene: Option<Box<Scene>>,
+    scene: Option<Arc<Scene>>,
 }
 
 #[derive(Default)]
@@ -124,7 +124,7 @@ impl Renderer {
             cancel: AtomicBool::new(false),
         });
         let (tx, frames) = mpsc::channel();
-        let worker = Worker { shared: Arc::clone(&shared), tx, scene, coarse_factor: 0 };
+        let worker = Worker { shared: Arc::clone(&shared), tx, scene: Arc::new(scene), coarse_factor: 0 };
         let thread = std::thread::Builder::new()
             .name("prism-view-render".into())
             .spawn(move || pool.install(move || worker.run()))
@@ -140,7 +140,7 @@ impl Renderer {
     /// Renders `view` of a new `scene` from now on, cancelling whatever was
     /// in flight.
     pub fn submit_scene(&self, view: View, scene: Scene) {
-        self.send(Job { view, scene: Some(Box::new(scene)) });
+        self.send(Job { view, scene: Some(Arc::new(scene)) });
     }
 
     fn send(&self, job: Job) {
@@ -188,7 +188,8 @@ impl Drop for Renderer {
 struct Worker {
     shared: Arc<Shared>,
     tx: Sender<Frame>,
-    scene: Scene,
+    /// Shared and read-only: a view changes only its settings.
+    scene: Arc<Scene>,
     /// 0 until the first preview picks one.
     coarse_factor: u32,
 }
@@ -197,7 +198,7 @@ impl Worker {
     fn run(mut self) {
         while let Some(job) = self.next_job() {
             if let Some(scene) = job.scene {
-                self.scene = *scene;
+                self.scene = scene;
             }
             if self.render_view(&job.view).is_err() {
                 // The window is gone.
