@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod demo;
+mod motion;
 mod save;
 mod state;
 mod window;

@@ -5,7 +5,7 @@
 //! bumps the [generation](ViewerState::generation); frames of an older
 //! generation are stale and are dropped by [`ViewerState::accept`].
 
-use prism_geometry::glam::{Quat, Vec3};
+use crate::motion::{dolly, orbit, translate};
 use prism_shade::{Camera, RenderSettings};
 use std::ops::Range;
 use std::time::Instant;
@@ -17,9 +17,6 @@ pub const DRAG_ORBIT_PER_PIXEL: f32 = 0.25 * std::f32::consts::PI / 180.0;
 /// Move step of one W/A/D/X/PageUp/PageDown press, as a fraction of the
 /// eye's distance to the point looked at.
 pub const KEY_MOVE_FRACTION: f32 = 0.05;
-/// Closest the view direction may come to the up vector when orbiting
-/// (radians, 2°), so the camera never becomes degenerate.
-const MIN_POLAR: f32 = 2.0 * std::f32::consts::PI / 180.0;
 
 /// The keys the viewer understands, independent of the window crate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -406,56 +403,6 @@ impl ViewerState {
     }
 }
 
-fn camera_with(c: &Camera, position: Vec3, look_at: Vec3) -> Option<Camera> {
-    let (w, h) = c.size();
-    Camera::new(position, look_at, c.up(), c.vfov_deg(), w, h).ok()
-}
-
-/// The camera orbited about its target; `None` if that would be degenerate.
-fn orbit(c: &Camera, yaw: f32, pitch: f32) -> Option<Camera> {
-    if !(yaw.is_finite() && pitch.is_finite()) {
-        return None;
-    }
-    let up = c.up().try_normalize()?;
-    let target = c.look_at();
-    let offset = c.position() - target;
-    let radius = offset.length();
-    let dir = offset.try_normalize()?;
-    // Polar angle of the eye from the up axis, kept inside (MIN_POLAR, π − MIN_POLAR).
-    let polar = dir.dot(up).clamp(-1.0, 1.0).acos();
-    let new_polar = (polar - pitch).clamp(MIN_POLAR, std::f32::consts::PI - MIN_POLAR);
-    if yaw == 0.0 && (new_polar - polar).abs() < 1e-6 {
-        // At the limit already.
-        return None;
-    }
-    let yawed = Quat::from_axis_angle(up, yaw) * dir;
-    let axis = up.cross(yawed).try_normalize()?;
-    let pitched = Quat::from_axis_angle(axis, new_polar - polar) * yawed;
-    camera_with(c, target + pitched * radius, target)
-}
-
-fn translate(c: &Camera, forward: f32, right: f32, up: f32) -> Option<Camera> {
-    let dist = (c.look_at() - c.position()).length();
-    let f = c.forward();
-    let r = f.cross(c.up()).try_normalize()?;
-    let u = r.cross(f);
-    let delta = (forward * f + right * r + up * u) * dist;
-    if !delta.is_finite() {
-        return None;
-    }
-    camera_with(c, c.position() + delta, c.look_at() + delta)
-}
-
-fn dolly(c: &Camera, fraction: f32) -> Option<Camera> {
-    if !fraction.is_finite() {
-        return None;
-    }
-    // Never reach or pass the target.
-    let fraction = fraction.clamp(-1.0, 0.9);
-    let offset = c.look_at() - c.position();
-    camera_with(c, c.position() + offset * fraction, c.look_at())
-}
-
 /// Plans the sample ranges of the refinement passes: disjoint, in order,
 /// covering `0..spp` exactly, one sample each. Added in order to a zeroed
 /// buffer, one-sample passes give exactly the per-pixel sums that
@@ -492,6 +439,7 @@ impl Iterator for SamplePlan {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use prism_geometry::glam::Vec3;
 
     fn settings(spp: u32) -> RenderSettings {
         RenderSettings {
