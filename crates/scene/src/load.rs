@@ -335,9 +335,12 @@ impl<'a> Builder<'a> {
             ));
         }
 
-        let mut fog = match &file.fog {
-            Some(f) => Some(self.fog(f)?),
-            None => None,
+        let (mut fog, file_fog_on) = match &file.fog {
+            Some(f) => {
+                let (fog, on) = self.fog(f)?;
+                (Some(fog), on)
+            }
+            None => (None, false),
         };
 
         for (name, def) in &file.materials {
@@ -358,18 +361,13 @@ impl<'a> Builder<'a> {
             })?;
         let bounds = accel.bounds();
 
-        match (ov.fog, &mut fog) {
-            (Some(on), Some(f)) => f.enabled = on,
-            (Some(true), None) => {
-                let end = default_fog_end(camera.position(), bounds);
-                self.warnings.push(format!(
-                    "{}: the scene has no [fog]; --fog uses linear white fog from 0 to {end:.1}",
-                    self.file.display()
-                ));
-                fog =
-                    Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end }, enabled: true });
-            }
-            _ => {}
+        if ov.fog == Some(true) && fog.is_none() {
+            let end = default_fog_end(camera.position(), bounds);
+            self.warnings.push(format!(
+                "{}: the scene has no [fog]; --fog uses linear white fog from 0 to {end:.1}",
+                self.file.display()
+            ));
+            fog = Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end } });
         }
 
         let stats = accel.stats();
@@ -399,9 +397,15 @@ impl<'a> Builder<'a> {
             ambient,
             background,
             fog,
-            camera,
         };
-        let settings = RenderSettings { spp, max_depth, min_contribution, threads: None };
+        let settings = RenderSettings {
+            camera,
+            fog: ov.fog.unwrap_or(file_fog_on),
+            spp,
+            max_depth,
+            min_contribution,
+            threads: ov.threads,
+        };
         Ok(LoadedScene {
             scene,
             settings,
@@ -584,7 +588,8 @@ impl<'a> Builder<'a> {
         })
     }
 
-    fn fog(&self, f: &Spanned<crate::format::FogDef>) -> Result<Fog> {
+    /// The fog's medium and whether the file turns it on (`enabled`).
+    fn fog(&self, f: &Spanned<crate::format::FogDef>) -> Result<(Fog, bool)> {
         let d = f.get_ref();
         let mode = d.mode.as_ref().map_or(FogModeDef::Linear, |m| *m.get_ref());
         let color = match &d.color {
@@ -634,7 +639,7 @@ impl<'a> Builder<'a> {
                 }
             }
         };
-        Ok(Fog { color, mode, enabled: d.enabled.unwrap_or(true) })
+        Ok((Fog { color, mode }, d.enabled.unwrap_or(true)))
     }
 
     // ----- materials ---------------------------------------------------
