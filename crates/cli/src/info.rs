@@ -80,7 +80,7 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
                 s,
                 "fog        {mode}, colour {}, {}",
                 v(f.color),
-                if f.enabled { "on" } else { "off" }
+                if loaded.settings.fog { "on" } else { "off" }
             );
         }
     }

@@ -10,15 +10,15 @@
 //! SIGINT has its default effect and ends prism at once; nothing has been
 //! written then.
 //!
-//! Images are written to a temporary file `.prism-XXXXXX.tmp` in the
-//! output's own directory, synced and renamed over the output path; the
-//! temporary file exists only while the finished image is being encoded.
-//! A SIGKILL (which cannot be caught) during the render therefore leaves
-//! nothing; one during that short write can leave a `.prism-*.tmp` file,
-//! but never a truncated file at the output path.
+//! Images are written by `prism_shade::write_image` to a temporary file
+//! `.<name>.<pid>.<n>.tmp` in the output's own directory, synced and
+//! renamed over the output path; the temporary file exists only while the
+//! finished image is being encoded. A SIGKILL (which cannot be caught)
+//! during the render therefore leaves nothing; one during that short write
+//! can leave such a `.tmp` file, but never a truncated file at the output
+//! path.
 
-use crate::write;
-use prism_shade::Image;
+use prism_shade::{Image, OutputFormat, write_image};
 use signal_hook::consts::SIGINT;
 use std::fmt;
 use std::path::Path;
@@ -65,19 +65,13 @@ impl Interrupt {
 
     /// The error that ends an interrupted render: with `partial`, after
     /// writing `image` (the rows done so far) to `output`.
-    pub fn finish(
-        &self,
-        image: &Image,
-        output: &Path,
-        format: write::Format,
-        partial: bool,
-    ) -> anyhow::Error {
+    pub fn finish(&self, image: &Image, output: &Path, format: OutputFormat, partial: bool) -> anyhow::Error {
         let rows = self.rows.load(Ordering::Relaxed).min(image.height);
         let done = format!("interrupted (Ctrl-C) after {rows} of {} rows", image.height);
         let message = if !partial {
             format!("{done}; nothing was written (--partial writes the rows done)")
         } else {
-            match write::write_image(image, output, format) {
+            match write_image(output, image, format) {
                 Ok(()) => format!(
                     "{done}; wrote the partial image to {} (rows not rendered are black)",
                     output.display()

@@ -5,9 +5,12 @@
 //!                    [--threads N] [--max-depth N] [--quiet]
 //!                    [--aov LIST] [--aov-preview]
 //!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
-//! prism info SCENE
-//! prism view SCENE [--width W] [--height H] [--spp N] [--fog | --no-fog] [--threads N]
+//! prism info SCENE [the same overrides as render]
+//! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
 //! ```
+//!
+//! The overrides (`--width` … `--fov`) are one type, `prism_scene::Overrides`,
+//! flattened into each command; the loader applies them once.
 //!
 //! A SCENE is a TOML scene file or an OBJ mesh (`.obj`), which becomes a
 //! scene of its own (`prism_scene::load_obj_scene`: a camera framing it,
@@ -20,14 +23,13 @@
 
 mod info;
 mod interrupt;
-mod write;
+mod overwrite;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use prism_geometry::glam::Vec3;
 use prism_scene::{Limits, LoadOptions, Overrides, load_path};
-use prism_shade::{Aov, RenderHooks, render, render_with_aovs};
+use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_aovs, write_image};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -52,53 +54,12 @@ enum Command {
     View(ViewArgs),
 }
 
-/// Options shared by `render` and `view`.
-#[derive(Args)]
-struct CommonArgs {
-    /// Image width in pixels (alone: the height keeps the scene's aspect ratio).
-    #[arg(long, value_name = "W")]
-    width: Option<u32>,
-    /// Image height in pixels (alone: the width keeps the scene's aspect ratio).
-    #[arg(long, value_name = "H")]
-    height: Option<u32>,
-    /// Samples per pixel.
-    #[arg(long, value_name = "N")]
-    spp: Option<u32>,
-    /// Turn fog on (adds a default linear fog if the scene has none).
-    #[arg(long, conflicts_with = "no_fog")]
-    fog: bool,
-    /// Turn the scene's fog off.
-    #[arg(long)]
-    no_fog: bool,
-    /// Worker threads [default: every core].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
-    threads: Option<u32>,
-    /// Maximum recursion depth of reflection and refraction rays.
-    #[arg(long, value_name = "N")]
-    max_depth: Option<u32>,
-}
-
-impl CommonArgs {
-    /// `--fog` / `--no-fog` as an override of the scene's fog.
-    fn fog(&self) -> Option<bool> {
-        match (self.fog, self.no_fog) {
-            (true, _) => Some(true),
-            (_, true) => Some(false),
-            _ => None,
-        }
-    }
-
-    fn threads(&self) -> Option<usize> {
-        self.threads.map(|t| t as usize)
-    }
-}
-
 #[derive(Args)]
 struct ViewArgs {
     /// The scene file, or an OBJ mesh to look at.
     scene: PathBuf,
     #[command(flatten)]
-    common: CommonArgs,
+    overrides: Overrides,
     /// Where `s` saves snapshots [default: the current directory].
     #[arg(long, value_name = "DIR")]
     save_dir: Option<PathBuf>,
@@ -115,7 +76,7 @@ struct RenderArgs {
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
     #[command(flatten)]
-    common: CommonArgs,
+    overrides: Overrides,
     /// No progress bar and no closing statistics line.
     #[arg(short, long)]
     quiet: bool,
@@ -130,42 +91,15 @@ struct RenderArgs {
     #[arg(long)]
     aov_preview: bool,
     #[command(flatten)]
-    camera: CameraArgs,
-    #[command(flatten)]
     limits: LimitArgs,
-}
-
-/// Camera overrides (vertical field of view; row 0 at the top).
-#[derive(Args)]
-struct CameraArgs {
-    /// Camera position, replacing the scene's.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
-    camera_pos: Option<Vec3>,
-    /// The point at the centre of the image, replacing the scene's.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
-    look_at: Option<Vec3>,
-    /// The camera's up direction, replacing the scene's.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
-    up: Option<Vec3>,
-    /// Vertical field of view in degrees, strictly between 0 and 180.
-    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true)]
-    fov: Option<f32>,
-}
-
-/// `X,Y,Z`: three comma-separated numbers (checked to be finite by the loader).
-fn parse_vec3(s: &str) -> Result<Vec3, String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let [x, y, z] = parts.as_slice() else {
-        return Err(format!("expected three comma-separated numbers X,Y,Z, got {} values", parts.len()));
-    };
-    let num = |t: &str| t.parse::<f32>().map_err(|_| format!("`{t}` is not a number (expected X,Y,Z)"));
-    Ok(Vec3::new(num(x)?, num(y)?, num(z)?))
 }
 
 #[derive(Args)]
 struct InfoArgs {
     /// The scene file, or an OBJ mesh.
     scene: PathBuf,
+    #[command(flatten)]
+    overrides: Overrides,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -211,15 +145,9 @@ fn main() -> ExitCode {
 }
 
 fn view_command(args: ViewArgs) -> Result<()> {
-    let fog = args.common.fog();
     prism_view::run(prism_view::ViewOptions {
         scene: args.scene,
-        width: args.common.width,
-        height: args.common.height,
-        spp: args.common.spp,
-        threads: args.common.threads(),
-        max_depth: args.common.max_depth,
-        fog,
+        overrides: args.overrides,
         save_dir: args.save_dir,
         verbose: args.verbose,
     })?;
@@ -227,7 +155,7 @@ fn view_command(args: ViewArgs) -> Result<()> {
 }
 
 fn info_command(args: &InfoArgs) -> Result<()> {
-    let opts = LoadOptions { limits: args.limits.limits(), overrides: Overrides::default() };
+    let opts = LoadOptions { limits: args.limits.limits(), overrides: args.overrides };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -239,25 +167,11 @@ fn info_command(args: &InfoArgs) -> Result<()> {
 fn render_command(args: &RenderArgs) -> Result<()> {
     // An explicit output name is checked before the (possibly long) load.
     if let Some(o) = &args.output {
-        write::Format::from_path(o)?;
+        OutputFormat::from_path(o)?;
     }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
-    let fog = args.common.fog();
-    let opts = LoadOptions {
-        limits: args.limits.limits(),
-        overrides: Overrides {
-            width: args.common.width,
-            height: args.common.height,
-            spp: args.common.spp,
-            max_depth: args.common.max_depth,
-            fog,
-            camera_pos: args.camera.camera_pos,
-            look_at: args.camera.look_at,
-            up: args.camera.up,
-            fov: args.camera.fov,
-        },
-    };
+    let opts = LoadOptions { limits: args.limits.limits(), overrides: args.overrides };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -266,8 +180,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         Some(o) => o.clone(),
         None => default_output(&args.scene)?,
     };
-    let format = write::Format::from_path(&output)?;
-    write::check_not_an_input(&output, &loaded.inputs)?;
+    let format = OutputFormat::from_path(&output)?;
+    overwrite::check_not_an_input(&output, &loaded.inputs)?;
     let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());
     let previews = args.aov_preview || loaded.aov_preview;
     if previews && aovs.is_empty() {
@@ -277,7 +191,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     for &a in &aovs {
         for ext in if previews { &["exr", "png"][..] } else { &["exr"][..] } {
-            write::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
+            overwrite::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
         }
     }
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -285,9 +199,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     }
 
-    let mut settings = loaded.settings.clone();
-    settings.threads = args.common.threads();
-    let (w, h) = (loaded.info.width, loaded.info.height);
+    let settings = &loaded.settings;
+    let (w, h) = settings.camera.size();
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(u64::from(h));
@@ -311,10 +224,10 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let hooks = RenderHooks { progress: Some(&progress), cancel: Some(interrupt.flag()) };
     let start = Instant::now();
     let (image, passes, stats) = if aovs.is_empty() {
-        let (image, stats) = render(&loaded.scene, &settings, hooks);
+        let (image, stats) = render(&loaded.scene, settings, hooks);
         (image, None, stats)
     } else {
-        let (image, passes, stats) = render_with_aovs(&loaded.scene, &settings, &aovs, hooks);
+        let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, &aovs, hooks);
         (image, Some(passes), stats)
     };
     let wall = start.elapsed().as_secs_f64();
@@ -324,7 +237,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     if stats.cancelled {
         return Err(interrupt.finish(&image, &output, format, args.partial));
     }
-    write::write_image(&image, &output, format)?;
+    write_image(&output, &image, format)?;
     let written = match &passes {
         Some(p) => prism_shade::write_aov_files(&output, p, previews)?,
         None => Vec::new(),

@@ -337,7 +337,7 @@ impl<'a> Build<'a> {
         settings: Settings,
         camera: &CameraSource,
         lights: Vec<PointLight>,
-        fog: Option<Fog>,
+        fog: Option<(Fog, bool)>,
     ) -> Result<LoadedScene> {
         if self.objects.is_empty() {
             self.warn("the scene has no objects");
@@ -346,7 +346,8 @@ impl<'a> Build<'a> {
         let accel = Accel::build(std::mem::take(&mut self.meshes), std::mem::take(&mut self.objects))
             .map_err(|e| self.ctx.invalid_file(format!("internal error: {e}")))?;
         let bounds = accel.bounds();
-        let (camera, fog) = self.camera_and_fog(camera, fog, (settings.width, settings.height), bounds)?;
+        let (camera, fog, fog_on) =
+            self.camera_and_fog(camera, fog, (settings.width, settings.height), bounds)?;
         let stats = accel.stats();
         let Settings {
             width,
@@ -385,9 +386,15 @@ impl<'a> Build<'a> {
             ambient,
             background,
             fog,
-            camera,
         };
-        let settings = RenderSettings { spp, max_depth, min_contribution, threads: None };
+        let settings = RenderSettings {
+            camera,
+            fog: fog_on,
+            spp,
+            max_depth,
+            min_contribution,
+            threads: self.overrides.threads,
+        };
         Ok(LoadedScene {
             scene,
             settings,
@@ -399,30 +406,31 @@ impl<'a> Build<'a> {
         })
     }
 
-    /// The camera and the fog of the scene, with the overrides applied:
-    /// the camera overrides (see [`view::camera`]) and `--fog`/`--no-fog`,
-    /// which turns the scene's fog on or off, or (on, in a scene without
-    /// `[fog]`) adds linear white fog reaching total at 1.5 times the
-    /// distance to the farthest corner of `bounds`, with a warning.
+    /// The camera, the fog's medium and the fog on/off bit, with the
+    /// overrides applied: the camera overrides (see [`view::camera`]) and
+    /// `--fog`/`--no-fog`, which replace the file's `enabled`; on, in a
+    /// scene without `[fog]`, adds linear white fog reaching total at 1.5
+    /// times the distance to the farthest corner of `bounds`, with a
+    /// warning. `fog` is the file's medium and its `enabled`.
     fn camera_and_fog(
         &mut self,
         camera: &CameraSource,
-        mut fog: Option<Fog>,
+        fog: Option<(Fog, bool)>,
         (width, height): (u32, u32),
         bounds: Aabb,
-    ) -> Result<(Camera, Option<Fog>)> {
+    ) -> Result<(Camera, Option<Fog>, bool)> {
         let camera = view::camera(&self.ctx, camera, &self.overrides, width, height)?;
-        match (self.overrides.fog, &mut fog) {
-            (Some(on), Some(f)) => f.enabled = on,
-            (Some(true), None) => {
-                let end = view::default_fog_end(camera.position(), bounds);
-                self.warn(&format!("the scene has no [fog]; --fog uses linear white fog from 0 to {end:.1}"));
-                fog =
-                    Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end }, enabled: true });
-            }
-            _ => {}
+        let (mut medium, file_on) = match fog {
+            Some((f, on)) => (Some(f), on),
+            None => (None, false),
+        };
+        let on = self.overrides.fog.unwrap_or(file_on);
+        if on && medium.is_none() {
+            let end = view::default_fog_end(camera.position(), bounds);
+            self.warn(&format!("the scene has no [fog]; --fog uses linear white fog from 0 to {end:.1}"));
+            medium = Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end } });
         }
-        Ok((camera, fog))
+        Ok((camera, medium, on))
     }
 }
 

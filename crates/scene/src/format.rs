@@ -330,8 +330,7 @@ fn parse_hex(s: &str) -> Option<[f64; 3]> {
     let mut out = [0.0; 3];
     for (i, c) in out.iter_mut().enumerate() {
         let byte = u8::from_str_radix(hex.get(2 * i..2 * i + 2)?, 16).ok()?;
-        let s = f64::from(byte) / 255.0;
-        *c = if s <= 0.04045 { s / 12.92 } else { ((s + 0.055) / 1.055).powf(2.4) };
+        *c = f64::from(prism_shade::srgb8_to_linear(byte));
     }
     Some(out)
 }

@@ -57,15 +57,16 @@ mod format;
 mod material;
 mod obj;
 mod object;
+mod overrides;
 mod read;
 mod settings;
 mod view;
 
 pub use error::{Location, SceneError, line_col};
+pub use overrides::{Overrides, parse_vec3};
 pub use settings::fit_size;
 
 use prism_geometry::Aabb;
-use prism_geometry::glam::Vec3;
 use prism_shade::{Aov, Camera, Fog, PointLight, RenderSettings, Scene};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -94,37 +95,6 @@ impl Default for Limits {
             max_spp: 65_536,
         }
     }
-}
-
-/// Values given outside the scene file (on the command line) that replace
-/// the file's. Errors in them are reported as [`SceneError::Option`],
-/// naming the flag (`--width`, `--camera-pos`, ...).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Overrides {
-    /// Image width. If only one of width and height is given, the other
-    /// follows the scene's aspect ratio.
-    pub width: Option<u32>,
-    /// Image height.
-    pub height: Option<u32>,
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Maximum recursion depth.
-    pub max_depth: Option<u32>,
-    /// Fog on or off. On in a scene without `[fog]` adds a linear white
-    /// fog reaching total at 1.5 times the distance to the farthest corner
-    /// of the scene's bounds (with a warning).
-    pub fog: Option<bool>,
-    /// Camera position (`--camera-pos`); must be finite.
-    pub camera_pos: Option<Vec3>,
-    /// The point the camera looks at, at the centre of the image
-    /// (`--look-at`); must be finite and differ from the position.
-    pub look_at: Option<Vec3>,
-    /// The camera's up direction (`--up`); must be finite, non-zero and
-    /// not parallel to the view direction.
-    pub up: Option<Vec3>,
-    /// Vertical field of view in degrees (`--fov`), strictly between 0
-    /// and 180.
-    pub fov: Option<f32>,
 }
 
 /// How to load a scene.
@@ -190,9 +160,12 @@ pub struct SceneInfo {
 /// A loaded scene, ready to render.
 #[derive(Debug)]
 pub struct LoadedScene {
-    /// What the renderer needs.
+    /// The scene data (immutable while rendered; the fog's medium, if any,
+    /// is here).
     pub scene: Scene,
-    /// Render settings from the file and the overrides (`threads: None`).
+    /// The per-render choices: the file's camera (at the image size), fog
+    /// on/off (`[fog] enabled`), samples, depth and cut-off, with the
+    /// [`Overrides`] applied once (`threads` comes from them only).
     pub settings: RenderSettings,
     /// A description.
     pub info: SceneInfo,

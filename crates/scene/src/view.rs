@@ -149,7 +149,8 @@ pub(crate) fn camera(
 }
 
 /// The fog of a `[fog]` table, checked.
-pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<Fog> {
+/// The fog's medium, and whether the file turns it on (`enabled`, default on).
+pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Fog, bool)> {
     let d = f.get_ref();
     let mode = d.mode.as_ref().map_or(FogModeDef::Linear, |m| *m.get_ref());
     let color = ctx.opt_color(d.color.as_ref(), "fog color", Vec3::ONE)?;
@@ -194,7 +195,7 @@ pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<Fog> {
             }
         }
     };
-    Ok(Fog { color, mode, enabled: d.enabled.unwrap_or(true) })
+    Ok((Fog { color, mode }, d.enabled.unwrap_or(true)))
 }
 
 /// The end of the fog `--fog` adds to a scene without `[fog]`: 1.5 times

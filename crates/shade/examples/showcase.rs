@@ -121,18 +121,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         lights: vec![PointLight { position: Vec3::new(6.0, 10.0, 8.0), color: Vec3::ONE, intensity: 1.0 }],
         ambient: Vec3::splat(0.25),
         background: Vec3::new(0.05, 0.05, 0.1),
-        fog: Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 6.0, end: 40.0 }, enabled: true }),
-        camera: Camera::new(Vec3::new(0.0, 1.5, 8.0), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0, w, h)?,
+        fog: Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 6.0, end: 40.0 } }),
     };
     scene.validate()?;
     let settings = RenderSettings {
+        camera: Camera::new(Vec3::new(0.0, 1.5, 8.0), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0, w, h)?,
+        fog: true,
         spp,
         max_depth: 8,
         min_contribution: 1e-3,
         threads: (threads > 0).then_some(threads as usize),
     };
     let (img, stats) = prism_shade::render(&scene, &settings, RenderHooks::default());
-    image::save_buffer(&out, &img.to_srgb8(), img.width, img.height, image::ExtendedColorType::Rgb8)?;
+    prism_shade::write_image(
+        std::path::Path::new(&out),
+        &img,
+        prism_shade::OutputFormat::from_path(std::path::Path::new(&out))?,
+    )?;
     println!(
         "{out}: {w}×{h}, {spp} spp, {:.3} s, {} rays, {:.2} Mrays/s",
         stats.seconds,

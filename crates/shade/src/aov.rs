@@ -2,14 +2,12 @@
 //! the first surface each camera ray meets, as float images. The
 //! definitions are on [`render_aovs`] and in `docs/aov.md`.
 
-use crate::integrator::Tracer;
-use crate::render::{SamplePattern, in_pool};
-use crate::{Image, RenderHooks, RenderSettings, RenderStats, Scene};
+use crate::render::{render_pixels, scale_to_mean};
+use crate::{Camera, Image, RenderHooks, RenderSettings, RenderStats, Scene};
+use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
-use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// One kind of AOV pass. Names (for [`FromStr`], [`Aov::name`] and the
 /// file names of [`crate::write_aov_files`]): `depth`, `normal`,
@@ -197,7 +195,7 @@ impl AovImages {
 /// plus the pixel-centre ray for [`Aov::ObjectId`] when `spp > 1`).
 ///
 /// Definitions, exactly:
-/// - rays: the scene's pinhole camera ([`crate::Camera::ray`]) through the
+/// - rays: the render's pinhole camera, `settings.camera` ([`crate::Camera::ray`]), through the
 ///   sample positions of the beauty render, [`crate::sample_position`]
 ///   (with `settings.spp = 1`, the pixel centre `(i + 0.5, j + 0.5)` and no
 ///   jitter, so that a pass is an exact geometric measurement);
@@ -227,22 +225,52 @@ pub fn render_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (AovImages, RenderStats) {
-    let (_, images, stats) = render_impl(scene, settings, aovs, false, hooks);
+    let (_, images, stats) = render_passes(scene, settings, aovs, false, hooks);
     (images, stats)
 }
 
 /// The beauty image and the AOV passes `aovs` in one pass over the pixels.
 ///
 /// The image is the same, bit for bit, as [`crate::render`]'s with the same
-/// settings, and the passes as [`render_aovs`]'s; `stats.rays` counts the
-/// rays of both (the passes trace their own primary rays).
+/// settings (it is the same sample loop), and the passes as
+/// [`render_aovs`]'s; `stats.rays` counts the rays of both (the passes
+/// trace their own primary rays).
 pub fn render_with_aovs(
     scene: &Scene,
     settings: &RenderSettings,
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (Image, AovImages, RenderStats) {
-    render_impl(scene, settings, aovs, true, hooks)
+    render_passes(scene, settings, aovs, true, hooks)
+}
+
+fn render_passes(
+    scene: &Scene,
+    settings: &RenderSettings,
+    aovs: &[Aov],
+    beauty: bool,
+    hooks: RenderHooks<'_>,
+) -> (Image, AovImages, RenderStats) {
+    let mut wanted: Vec<Aov> = Vec::with_capacity(aovs.len());
+    for &a in aovs {
+        if !wanted.contains(&a) {
+            wanted.push(a);
+        }
+    }
+    let spp = settings.spp.max(1);
+    let (mut image, rows, stats) = render_pixels(scene, settings, 0..spp, beauty, &wanted, hooks);
+    scale_to_mean(&mut image, spp);
+    let (w, h) = (image.width, image.height);
+    let n = w as usize * h as usize;
+    let mut data: Vec<Vec<f32>> = wanted.iter().map(|a| Vec::with_capacity(n * a.channels())).collect();
+    for row in rows {
+        for (d, p) in data.iter_mut().zip(&row.passes) {
+            d.extend_from_slice(p);
+        }
+    }
+    let passes =
+        wanted.iter().zip(data).map(|(&aov, data)| AovImage { aov, width: w, height: h, data }).collect();
+    (image, AovImages { width: w, height: h, passes }, stats)
 }
 
 /// Per-pixel sums of the averaged passes.
@@ -254,148 +282,97 @@ struct Sums {
     albedo: Vec3,
 }
 
-/// One rendered row.
-struct Row {
-    beauty: Vec<Vec3>,
+impl Sums {
+    const ZERO: Sums = Sums { depth: 0.0, normal: Vec3::ZERO, geo: Vec3::ZERO, albedo: Vec3::ZERO };
+}
+
+/// The AOV sink of one image row in the sample loop
+/// ([`crate::render::render_pixels`]): it sees every camera ray of a pixel
+/// ([`AovRow::sample`]), then stores the pixel's values
+/// ([`AovRow::end_pixel`]). Its passes start at the miss values, so a row
+/// skipped by a cancel reads as "nothing hit".
+pub(crate) struct AovRow<'a> {
+    wanted: &'a [Aov],
+    spp: u32,
+    want_averaged: bool,
+    want_id: bool,
+    /// One buffer per wanted pass, `width · channels` values.
     passes: Vec<Vec<f32>>,
-    rays: u64,
-    nonfinite: u64,
+    sums: Sums,
+    centre_id: Option<f32>,
+    /// Rays traced for the passes.
+    pub(crate) rays: u64,
 }
 
 fn finite_or_zero(v: Vec3) -> Vec3 {
     if v.is_finite() { v } else { Vec3::ZERO }
 }
 
-fn render_impl(
-    scene: &Scene,
-    settings: &RenderSettings,
-    aovs: &[Aov],
-    beauty: bool,
-    hooks: RenderHooks<'_>,
-) -> (Image, AovImages, RenderStats) {
-    let start = std::time::Instant::now();
-    let mut wanted: Vec<Aov> = Vec::with_capacity(aovs.len());
-    for &a in aovs {
-        if !wanted.contains(&a) {
-            wanted.push(a);
+impl<'a> AovRow<'a> {
+    /// A row of `width` pixels of the passes `wanted` (no repeats), for a
+    /// render of `spp` samples per pixel.
+    pub(crate) fn new(wanted: &'a [Aov], width: u32, spp: u32) -> Self {
+        Self {
+            wanted,
+            spp: spp.max(1),
+            want_averaged: wanted.iter().any(|&a| a != Aov::ObjectId),
+            want_id: wanted.contains(&Aov::ObjectId),
+            passes: wanted.iter().map(|a| vec![a.miss_value(); width as usize * a.channels()]).collect(),
+            sums: Sums::ZERO,
+            centre_id: None,
+            rays: 0,
         }
     }
-    let cam = &scene.camera;
-    let (w, h) = (cam.width(), cam.height());
-    let spp = settings.spp.max(1);
-    let inv = 1.0 / spp as f32;
-    let pattern = SamplePattern::new(spp);
-    let see_through = beauty && Tracer::scene_is_see_through(scene);
-    let want_averaged = wanted.iter().any(|&a| a != Aov::ObjectId);
-    let want_id = wanted.contains(&Aov::ObjectId);
-    let rows_done = AtomicU64::new(0);
 
-    let miss_row = |row_len: usize| Row {
-        beauty: if beauty { vec![Vec3::ZERO; row_len] } else { Vec::new() },
-        passes: wanted.iter().map(|a| vec![a.miss_value(); row_len * a.channels()]).collect(),
-        rays: 0,
-        nonfinite: 0,
-    };
-
-    let render_row = |j: u32| -> Row {
-        let mut row = miss_row(w as usize);
-        if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-            return row;
+    /// One sample's camera ray of the current pixel.
+    #[inline]
+    pub(crate) fn sample(&mut self, scene: &Scene, ray: &Ray) {
+        if !(self.want_averaged || (self.want_id && self.spp == 1)) {
+            return;
         }
-        let mut tracer = Tracer::new(scene, settings, see_through);
-        let mut aov_rays = 0u64;
-        let row_start = u64::from(j) * u64::from(w);
-        for i in 0..w {
-            let index = row_start + u64::from(i);
-            let mut sum = Vec3::ZERO;
-            let mut sums = Sums { depth: 0.0, normal: Vec3::ZERO, geo: Vec3::ZERO, albedo: Vec3::ZERO };
-            let mut centre_id: Option<f32> = None;
-            for s in 0..spp {
-                let (dx, dy) = pattern.offset(index, s);
-                let ray = cam.ray(i as f32 + dx, j as f32 + dy);
-                if beauty {
-                    let l = tracer.trace_camera(&ray);
-                    if l.is_finite() {
-                        sum += l;
-                    } else {
-                        row.nonfinite += 1;
-                    }
-                }
-                if want_averaged || (want_id && spp == 1) {
-                    aov_rays += 1;
-                    let hit = scene.accel.closest_hit(&ray);
-                    match &hit {
-                        Some(hit) => {
-                            let d = hit.hit.t * ray.dir.length();
-                            sums.depth += if d.is_nan() { f32::INFINITY } else { d };
-                            sums.normal += finite_or_zero(hit.hit.normal);
-                            sums.geo += finite_or_zero(hit.hit.geo_normal);
-                            sums.albedo += finite_or_zero(scene.albedo_at(hit));
-                        }
-                        None => sums.depth = f32::INFINITY,
-                    }
-                    if spp == 1 {
-                        centre_id = Some(hit.map_or(-1.0, |h| h.object as f32));
-                    }
-                }
+        self.rays += 1;
+        let hit = scene.accel.closest_hit(ray);
+        let sums = &mut self.sums;
+        match &hit {
+            Some(hit) => {
+                let d = hit.hit.t * ray.dir.length();
+                sums.depth += if d.is_nan() { f32::INFINITY } else { d };
+                sums.normal += finite_or_zero(hit.hit.normal);
+                sums.geo += finite_or_zero(hit.hit.geo_normal);
+                sums.albedo += finite_or_zero(scene.albedo_at(hit));
             }
-            if want_id && centre_id.is_none() {
-                aov_rays += 1;
-                let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
-                centre_id = Some(scene.accel.closest_hit(&ray).map_or(-1.0, |h| h.object as f32));
-            }
-            let i = i as usize;
-            if beauty {
-                row.beauty[i] = sum * inv;
-            }
-            for (a, buf) in wanted.iter().zip(&mut row.passes) {
-                match a {
-                    Aov::Depth => buf[i] = sums.depth * inv,
-                    Aov::ObjectId => buf[i] = centre_id.unwrap_or(-1.0),
-                    Aov::Normal | Aov::GeoNormal | Aov::Albedo => {
-                        let v = match a {
-                            Aov::Normal => sums.normal,
-                            Aov::GeoNormal => sums.geo,
-                            _ => sums.albedo,
-                        } * inv;
-                        buf[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
-                    }
-                }
-            }
+            None => sums.depth = f32::INFINITY,
         }
-        row.rays = tracer.rays + aov_rays;
-        let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-        if let Some(p) = hooks.progress {
-            p(done as u32, h);
+        if self.spp == 1 {
+            self.centre_id = Some(hit.map_or(-1.0, |h| h.object as f32));
         }
-        row
-    };
-
-    let rows: Vec<Row> = in_pool(settings.threads, || (0..h).into_par_iter().map(render_row).collect());
-
-    let n = w as usize * h as usize;
-    let mut pixels = Vec::with_capacity(if beauty { n } else { 0 });
-    let mut data: Vec<Vec<f32>> = wanted.iter().map(|a| Vec::with_capacity(n * a.channels())).collect();
-    let (mut rays, mut nonfinite) = (0u64, 0u64);
-    for row in rows {
-        pixels.extend_from_slice(&row.beauty);
-        for (d, p) in data.iter_mut().zip(&row.passes) {
-            d.extend_from_slice(p);
-        }
-        rays += row.rays;
-        nonfinite += row.nonfinite;
     }
-    let passes =
-        wanted.iter().zip(data).map(|(&aov, data)| AovImage { aov, width: w, height: h, data }).collect();
-    let stats = RenderStats {
-        seconds: start.elapsed().as_secs_f64(),
-        rays,
-        cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
-        nonfinite_samples: nonfinite,
-    };
-    (
-        Image { width: w, height: h, pixels: if beauty { pixels } else { Vec::new() } },
-        AovImages { width: w, height: h, passes },
-        stats,
-    )
+
+    /// Stores pixel `(i, j)` (after all its samples) and starts the next.
+    pub(crate) fn end_pixel(&mut self, scene: &Scene, camera: &Camera, i: u32, j: u32) {
+        if self.want_id && self.centre_id.is_none() {
+            self.rays += 1;
+            let ray = camera.ray(i as f32 + 0.5, j as f32 + 0.5);
+            self.centre_id = Some(scene.accel.closest_hit(&ray).map_or(-1.0, |h| h.object as f32));
+        }
+        let inv = 1.0 / self.spp as f32;
+        let (sums, id) = (self.sums, self.centre_id.unwrap_or(-1.0));
+        let i = i as usize;
+        for (a, buf) in self.wanted.iter().zip(&mut self.passes) {
+            match a {
+                Aov::Depth => buf[i] = sums.depth * inv,
+                Aov::ObjectId => buf[i] = id,
+                Aov::Normal | Aov::GeoNormal | Aov::Albedo => {
+                    let v = match a {
+                        Aov::Normal => sums.normal,
+                        Aov::GeoNormal => sums.geo,
+                        _ => sums.albedo,
+                    } * inv;
+                    buf[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
+                }
+            }
+        }
+        self.sums = Sums::ZERO;
+        self.centre_id = None;
+    }
 }

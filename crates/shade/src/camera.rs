@@ -13,8 +13,8 @@ pub struct Camera {
     look_at: Vec3,
     up: Vec3,
     vfov_deg: f32,
-    width: u32,
-    height: u32,
+    /// Image width and height in pixels.
+    size: (u32, u32),
     forward: Vec3,
     right: Vec3,
     true_up: Vec3,
@@ -60,8 +60,7 @@ impl Camera {
             look_at,
             up,
             vfov_deg,
-            width,
-            height,
+            size: (width, height),
             forward,
             right,
             true_up,
@@ -101,16 +100,10 @@ impl Camera {
         self.vfov_deg
     }
 
-    /// Image width in pixels.
+    /// Image size in pixels, `(width, height)`.
     #[must_use]
-    pub fn width(&self) -> u32 {
-        self.width
-    }
-
-    /// Image height in pixels.
-    #[must_use]
-    pub fn height(&self) -> u32 {
-        self.height
+    pub fn size(&self) -> (u32, u32) {
+        self.size
     }
 
     /// Unit view direction.
@@ -125,7 +118,7 @@ impl Camera {
     #[inline]
     #[must_use]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let (w, h) = (self.width as f32, self.height as f32);
+        let (w, h) = (self.size.0 as f32, self.size.1 as f32);
         let sx = (2.0 * x / w - 1.0) * self.tan_half * w / h;
         let sy = (1.0 - 2.0 * y / h) * self.tan_half;
         let dir = (self.forward + sx * self.right + sy * self.true_up).normalize();

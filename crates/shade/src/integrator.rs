@@ -61,7 +61,7 @@ impl<'a> Tracer<'a> {
             scene,
             max_depth: settings.max_depth.min(MAX_DEPTH_LIMIT),
             min_contribution,
-            fog: scene.fog.filter(|f| f.enabled).map(|f| (f.mode, f.color)),
+            fog: scene.fog.filter(|_| settings.fog).map(|f| (f.mode, f.color)),
             see_through,
             rays: 0,
         }

@@ -1,8 +1,9 @@
 //! Whitted-style shading for prism: the camera, materials, textures,
 //! lights, fog, and the parallel, deterministic renderer.
 //!
-//! A [`Scene`] is plain data over a [`prism_bvh::Accel`]; [`render`] turns
-//! it into a linear-radiance [`Image`]. The shading model is documented on
+//! A [`Scene`] is plain, immutable data over a [`prism_bvh::Accel`];
+//! [`render`] turns it into a linear-radiance [`Image`] as the per-render
+//! [`RenderSettings`] say (camera, fog on/off, samples, depth, threads). The shading model is documented on
 //! [`Material`], fog on [`Fog`], sampling on [`render`] (a 1-spp
 //! render samples pixel centres exactly; more samples are stratified and
 //! the same for any number of threads).
@@ -32,10 +33,16 @@
 //!     ambient: Vec3::ONE,
 //!     background: Vec3::ZERO,
 //!     fog: None,
-//!     camera: Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1)?,
 //! };
 //! scene.validate()?;
-//! let settings = RenderSettings { spp: 1, max_depth: 4, min_contribution: 1e-3, threads: None };
+//! let settings = RenderSettings {
+//!     camera: Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1)?,
+//!     fog: false,
+//!     spp: 1,
+//!     max_depth: 4,
+//!     min_contribution: 1e-3,
+//!     threads: None,
+//! };
 //! let (image, stats) = prism_shade::render(&scene, &settings, RenderHooks::default());
 //! // The light is straight behind the eye: ambient 0.1 + Lambert 0.9 · cos 0.
 //! assert!((image.pixels[0] - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5);
@@ -60,8 +67,8 @@ pub use camera::Camera;
 pub use integrator::MAX_DEPTH_LIMIT;
 pub use material::Material;
 pub use output::{
-    OutputError, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
-    write_aov_preview_png, write_exr_rgb, write_image_exr, write_png_rgb8,
+    OutputError, OutputFormat, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
+    write_aov_preview_png, write_exr_rgb, write_image, write_image_exr, write_png_rgb8,
 };
 pub use render::{
     Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples, sample_position,

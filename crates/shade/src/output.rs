@@ -1,11 +1,19 @@
-//! Writing renders and AOV passes to disk: 32-bit float OpenEXR and 8-bit
-//! PNG previews, each written atomically (a temporary file in the same
-//! directory, renamed over the target once complete).
+//! Writing renders and AOV passes to disk, the one image writer of prism
+//! (the CLI's output and the viewer's snapshots use it too): 8-bit sRGB
+//! PNG and 32-bit float linear OpenEXR, each written atomically (a
+//! temporary file `.<name>.<pid>.<n>.tmp` in the same directory, synced,
+//! then renamed over the target; removed on any error, so a reader never
+//! sees a partial file and a failed write leaves the target as it was).
+//!
+//! Non-finite values, one policy for every file:
+//! - PNG: a non-finite channel is black (as [`linear_to_srgb8`] encodes it);
+//! - OpenEXR: `+∞` and `−∞` are stored as they are (the depth pass marks
+//!   misses with `+∞`, `docs/aov.md`), and NaN is stored as 0: no render
+//!   or pass produces one (non-finite samples count as black), and a NaN
+//!   in a file spreads through every filter that reads it.
 
 use crate::{Aov, AovImage, AovImages, Image, linear_to_srgb8};
-use image::codecs::openexr::OpenExrEncoder;
-use image::codecs::png::PngEncoder;
-use image::{ImageBuffer, Rgb};
+use image::{ImageBuffer, ImageFormat, Rgb};
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -60,6 +68,46 @@ fn check_len(path: &Path, width: u32, height: u32, got: usize, per_pixel: usize)
     Ok(())
 }
 
+/// The image formats prism writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// 32-bit float linear OpenEXR.
+    Exr,
+}
+
+impl OutputFormat {
+    /// The format named by `path`'s extension (`png` or `exr`, any case).
+    ///
+    /// # Errors
+    /// [`OutputError::Invalid`] for another extension or none.
+    pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("png") => Ok(Self::Png),
+            Some("exr") => Ok(Self::Exr),
+            Some(other) => {
+                Err(invalid(path, format!("cannot write .{other} images; use a .png or .exr output name")))
+            }
+            None => Err(invalid(path, "the output name needs a .png or .exr extension")),
+        }
+    }
+}
+
+/// Writes a linear [`Image`] to `path` as `format`, atomically: PNG as
+/// 8-bit sRGB ([`Image::to_srgb8`]), EXR as linear floats
+/// ([`write_image_exr`]).
+///
+/// # Errors
+/// As [`write_exr_rgb`].
+pub fn write_image(path: &Path, image: &Image, format: OutputFormat) -> Result<(), OutputError> {
+    match format {
+        OutputFormat::Png => write_png_rgb8(path, image.width, image.height, &image.to_srgb8()),
+        OutputFormat::Exr => write_image_exr(path, image),
+    }
+}
+
 /// Writes `path` atomically: `encode` fills a new temporary file next to
 /// it, which then replaces `path`; on any error the temporary file is
 /// removed and `path` is left as it was.
@@ -97,19 +145,40 @@ fn write_atomic(
 
 /// Writes a 32-bit float RGB OpenEXR file (channels `R`, `G`, `B`, no
 /// alpha, row 0 at the top) from `width · height · 3` interleaved floats,
-/// atomically. Every float is stored as is, `+∞` included.
+/// atomically. Floats are stored as they are, `±∞` included; NaN is
+/// stored as 0 (the module's policy).
 ///
 /// # Errors
 /// [`OutputError::Invalid`] for an empty image or a buffer of the wrong
 /// length, [`OutputError::Io`] or [`OutputError::Image`] if writing fails
 /// (the target is then untouched and no temporary file is left).
 pub fn write_exr_rgb(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), OutputError> {
+    if rgb.iter().any(|v| v.is_nan()) {
+        let clean: Vec<f32> = rgb.iter().map(|&v| if v.is_nan() { 0.0 } else { v }).collect();
+        return write_rgb::<f32>(path, width, height, &clean, ImageFormat::OpenExr);
+    }
+    write_rgb::<f32>(path, width, height, rgb, ImageFormat::OpenExr)
+}
+
+/// Writes `width · height · 3` interleaved RGB values as `format`, atomically.
+fn write_rgb<T>(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[T],
+    format: ImageFormat,
+) -> Result<(), OutputError>
+where
+    Rgb<T>: image::PixelWithColorType<Subpixel = T>,
+    T: image::Primitive,
+    [T]: image::EncodableLayout,
+{
     check_len(path, width, height, rgb.len(), 3)?;
-    let buffer: ImageBuffer<Rgb<f32>, &[f32]> =
+    let buffer: ImageBuffer<Rgb<T>, &[T]> =
         ImageBuffer::from_raw(width, height, rgb).ok_or_else(|| invalid(path, "buffer too small"))?;
     write_atomic(path, |w| {
         buffer
-            .write_with_encoder(OpenExrEncoder::new(w))
+            .write_to(w, format)
             .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
     })
 }
@@ -275,14 +344,7 @@ fn id_color(id: f32) -> [u8; 3] {
 /// # Errors
 /// As [`write_exr_rgb`].
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
-    check_len(path, width, height, rgb.len(), 3)?;
-    let buffer: ImageBuffer<Rgb<u8>, &[u8]> =
-        ImageBuffer::from_raw(width, height, rgb).ok_or_else(|| invalid(path, "buffer too small"))?;
-    write_atomic(path, |w| {
-        buffer
-            .write_with_encoder(PngEncoder::new(w))
-            .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
-    })
+    write_rgb::<u8>(path, width, height, rgb, ImageFormat::Png)
 }
 
 /// Writes the preview of a pass ([`aov_preview_rgb8`]) as a PNG file,
@@ -293,4 +355,73 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
 pub fn write_aov_preview_png(path: &Path, pass: &AovImage) -> Result<(), OutputError> {
     check_len(path, pass.width, pass.height, pass.data.len(), pass.channels())?;
     write_png_rgb8(path, pass.width, pass.height, &aov_preview_rgb8(pass))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prism_geometry::glam::Vec3;
+
+    fn listing(dir: &Path) -> Vec<std::ffi::OsString> {
+        let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn formats_follow_the_extension() {
+        assert_eq!(OutputFormat::from_path(Path::new("a/b.PNG")).unwrap(), OutputFormat::Png);
+        assert_eq!(OutputFormat::from_path(Path::new("b.exr")).unwrap(), OutputFormat::Exr);
+        let e = OutputFormat::from_path(Path::new("b.jpg")).unwrap_err().to_string();
+        assert_eq!(e, "b.jpg: cannot write .jpg images; use a .png or .exr output name");
+        assert!(matches!(OutputFormat::from_path(Path::new("b")), Err(OutputError::Invalid { .. })));
+    }
+
+    #[test]
+    fn exr_keeps_infinities_and_stores_nan_as_zero() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = Image {
+            width: 3,
+            height: 1,
+            pixels: vec![
+                Vec3::new(0.25, 2.5, 0.0),
+                Vec3::new(f32::NAN, 1.0, 7.0),
+                Vec3::new(f32::INFINITY, f32::NEG_INFINITY, -0.5),
+            ],
+        };
+        let p = dir.path().join("x.exr");
+        write_image(&p, &img, OutputFormat::Exr).unwrap();
+        let (w, h, back) = read_exr_rgb(&p).unwrap();
+        assert_eq!((w, h), (3, 1));
+        assert_eq!(back[..6], [0.25, 2.5, 0.0, 0.0, 1.0, 7.0]);
+        assert_eq!(back[6..], [f32::INFINITY, f32::NEG_INFINITY, -0.5]);
+        assert_eq!(listing(dir.path()), ["x.exr"], "no temporary file is left");
+    }
+
+    #[test]
+    fn png_is_the_srgb_encoding_with_non_finite_as_black() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = Image { width: 2, height: 1, pixels: vec![Vec3::new(1.0, 0.5, f32::NAN), Vec3::INFINITY] };
+        let p = dir.path().join("x.png");
+        write_image(&p, &img, OutputFormat::Png).unwrap();
+        let back = image::open(&p).unwrap().to_rgb8();
+        assert_eq!(back.get_pixel(0, 0).0, [255, linear_to_srgb8(0.5), 0]);
+        assert_eq!(back.get_pixel(1, 0).0, [0, 0, 0]);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_target_and_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = Image { width: 1, height: 1, pixels: vec![Vec3::ONE] };
+        // The target is a non-empty directory: the rename fails, the temporary file goes.
+        let target = dir.path().join("busy.png");
+        std::fs::create_dir(&target).unwrap();
+        std::fs::write(target.join("f"), b"x").unwrap();
+        assert!(matches!(write_image(&target, &img, OutputFormat::Png), Err(OutputError::Io { .. })));
+        assert_eq!(listing(dir.path()), ["busy.png"]);
+        // A missing directory: nothing is created.
+        let missing = dir.path().join("no-such-dir").join("x.exr");
+        assert!(matches!(write_image(&missing, &img, OutputFormat::Exr), Err(OutputError::Io { .. })));
+        assert_eq!(listing(dir.path()), ["busy.png"]);
+    }
 }

@@ -1,15 +1,29 @@
 //! The renderer: rows in parallel, deterministic per-pixel samples.
 
-use crate::Scene;
+use crate::aov::{Aov, AovRow};
 use crate::integrator::Tracer;
+use crate::{Camera, Scene};
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-/// How to render. No `Default`: every caller states its settings.
+/// The per-render choices: everything a render (or one view of the
+/// viewer) may choose without changing the scene. A [`Scene`] is immutable
+/// scene data (geometry, materials, lights, the fog's medium); the camera,
+/// whether the fog is applied, and the sampling live here, so that two
+/// renders of one scene, or a viewer's changing views, share it as `&Scene`.
+///
+/// `prism_scene` fills one with the scene file's values and the command
+/// line's overrides applied once (`LoadedScene::settings`). No `Default`:
+/// every caller states its settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
+    /// The camera, which also fixes the image size.
+    pub camera: Camera,
+    /// Whether the scene's fog ([`Scene::fog`]) is applied; without fog in
+    /// the scene this changes nothing.
+    pub fog: bool,
     /// Samples per pixel (stratified), at least 1.
     pub spp: u32,
     /// Maximum recursion depth of reflection/refraction/transparency rays:
@@ -22,6 +36,17 @@ pub struct RenderSettings {
     pub min_contribution: f32,
     /// Worker threads; `None` uses every core.
     pub threads: Option<usize>,
+}
+
+impl RenderSettings {
+    /// The same settings with the camera at another image size (the
+    /// viewer's window, its coarse preview).
+    ///
+    /// # Errors
+    /// As [`Camera::with_size`].
+    pub fn with_size(&self, width: u32, height: u32) -> Result<Self, crate::ShadeError> {
+        Ok(Self { camera: self.camera.with_size(width, height)?, ..self.clone() })
+    }
 }
 
 /// Callbacks and cancellation for a render in progress.
@@ -88,11 +113,16 @@ pub struct RenderStats {
 /// exactly.
 pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) -> (Image, RenderStats) {
     let (mut image, stats) = render_samples(scene, settings, 0..settings.spp.max(1), hooks);
-    let inv = 1.0 / settings.spp.max(1) as f32;
+    scale_to_mean(&mut image, settings.spp);
+    (image, stats)
+}
+
+/// Turns per-pixel sums of `spp` samples into means (times `1 / spp`).
+pub(crate) fn scale_to_mean(image: &mut Image, spp: u32) {
+    let inv = 1.0 / spp.max(1) as f32;
     for p in &mut image.pixels {
         *p *= inv;
     }
-    (image, stats)
 }
 
 /// Renders samples `samples` (of `settings.spp` per pixel) and returns the
@@ -111,29 +141,52 @@ pub fn render_samples(
     samples: Range<u32>,
     hooks: RenderHooks<'_>,
 ) -> (Image, RenderStats) {
+    let (image, _, stats) = render_pixels(scene, settings, samples, true, &[], hooks);
+    (image, stats)
+}
+
+/// The one per-pixel sample loop behind every render: rows in parallel;
+/// in each pixel, samples `samples` in increasing order, each camera ray
+/// traced for the beauty sum (if `beauty`) and handed to the row's AOV
+/// sink (if `aovs` is not empty; it then sees every sample, `samples`
+/// being `0..spp`). Returns the per-pixel beauty *sums* (an empty image
+/// without `beauty`), one AOV row per image row (empty without `aovs`),
+/// and the statistics. Rows skipped after a cancel hold zero sums and the
+/// AOV miss values.
+pub(crate) fn render_pixels<'a>(
+    scene: &Scene,
+    settings: &RenderSettings,
+    samples: Range<u32>,
+    beauty: bool,
+    aovs: &'a [Aov],
+    hooks: RenderHooks<'_>,
+) -> (Image, Vec<AovRow<'a>>, RenderStats) {
     let start = std::time::Instant::now();
-    let cam = &scene.camera;
-    let (w, h) = (cam.width(), cam.height());
-    let pattern = SamplePattern::new(settings.spp);
-    let see_through = Tracer::scene_is_see_through(scene);
+    let cam = &settings.camera;
+    let (w, h) = cam.size();
+    let spp = settings.spp.max(1);
+    let pattern = SamplePattern::new(spp);
+    let see_through = beauty && Tracer::scene_is_see_through(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
-    let mut pixels = vec![Vec3::ZERO; w as usize * h as usize];
-    let work = |pixels: &mut [Vec3]| {
-        pixels.par_chunks_mut(w as usize).enumerate().for_each(|(j, row)| {
-            if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-                return;
-            }
-            let mut tracer = Tracer::new(scene, settings, see_through);
-            let mut bad = 0u64;
-            let row_start = j as u64 * u64::from(w);
-            for (i, px) in row.iter_mut().enumerate() {
-                let index = row_start + i as u64;
-                let mut sum = Vec3::ZERO;
-                for s in samples.clone() {
-                    let (dx, dy) = pattern.offset(index, s);
-                    let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+    let mut pixels = vec![Vec3::ZERO; if beauty { w as usize * h as usize } else { 0 }];
+    let mut aov_rows: Vec<AovRow<'a>> =
+        if aovs.is_empty() { Vec::new() } else { (0..h).map(|_| AovRow::new(aovs, w, spp)).collect() };
+    let render_row = |j: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>| {
+        if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return;
+        }
+        let mut tracer = Tracer::new(scene, settings, see_through);
+        let mut bad = 0u64;
+        let row_start = j as u64 * u64::from(w);
+        for i in 0..w as usize {
+            let index = row_start + i as u64;
+            let mut sum = Vec3::ZERO;
+            for s in samples.clone() {
+                let (dx, dy) = pattern.offset(index, s);
+                let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+                if beauty {
                     let l = tracer.trace_camera(&ray);
                     if l.is_finite() {
                         sum += l;
@@ -141,28 +194,50 @@ pub fn render_samples(
                         bad += 1;
                     }
                 }
+                if let Some(sink) = sink.as_deref_mut() {
+                    sink.sample(scene, &ray);
+                }
+            }
+            if let Some(px) = row.get_mut(i) {
                 *px = sum;
             }
-            rays.fetch_add(tracer.rays, Ordering::Relaxed);
-            if bad > 0 {
-                nonfinite.fetch_add(bad, Ordering::Relaxed);
+            if let Some(sink) = sink.as_deref_mut() {
+                sink.end_pixel(scene, cam, i as u32, j as u32);
             }
-            let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
-            if let Some(p) = hooks.progress {
-                p(done as u32, h);
-            }
-        });
+        }
+        let aov_rays = sink.map_or(0, |s| s.rays);
+        rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);
+        if bad > 0 {
+            nonfinite.fetch_add(bad, Ordering::Relaxed);
+        }
+        let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(p) = hooks.progress {
+            p(done as u32, h);
+        }
     };
-    in_pool(settings.threads, || work(&mut pixels));
-    let cancelled = hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
-    let nonfinite_samples = nonfinite.into_inner();
+    let row_len = w as usize;
+    in_pool(settings.threads, || match (beauty, aov_rows.is_empty()) {
+        (true, true) => {
+            pixels.par_chunks_mut(row_len).enumerate().for_each(|(j, row)| render_row(j, row, None));
+        }
+        (true, false) => pixels
+            .par_chunks_mut(row_len)
+            .zip(aov_rows.par_iter_mut())
+            .enumerate()
+            .for_each(|(j, (row, sink))| render_row(j, row, Some(sink))),
+        (false, false) => {
+            aov_rows.par_iter_mut().enumerate().for_each(|(j, sink)| render_row(j, &mut [], Some(sink)));
+        }
+        // Nothing asked for.
+        (false, true) => {}
+    });
     let stats = RenderStats {
         seconds: start.elapsed().as_secs_f64(),
         rays: rays.into_inner(),
-        cancelled,
-        nonfinite_samples,
+        cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
+        nonfinite_samples: nonfinite.into_inner(),
     };
-    (Image { width: w, height: h, pixels }, stats)
+    (Image { width: w, height: h, pixels }, aov_rows, stats)
 }
 
 /// Runs `f` on a pool of `threads` workers (`None`: the global pool, every

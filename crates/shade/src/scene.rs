@@ -1,6 +1,8 @@
-//! A renderable scene: geometry, materials, lights, camera, fog.
+//! A renderable scene: geometry, materials, lights, the fog's medium.
+//! Per-render choices (camera, fog on/off, sampling) are not here but in
+//! [`crate::RenderSettings`].
 
-use crate::{Camera, Material, ShadeError};
+use crate::{Material, ShadeError};
 use prism_bvh::{Accel, Object, SceneHit};
 use prism_geometry::glam::{Affine3A, Vec3};
 
@@ -104,14 +106,15 @@ impl FogMode {
 /// primary ray this is the report's blend by `weight(d)`; along a path of
 /// reflections and refractions the blends compose to `weight` of the whole
 /// path length. Rays that hit nothing are at infinite distance (all fog).
+///
+/// This is the scene's medium; whether a render applies it is the render's
+/// choice, [`crate::RenderSettings::fog`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fog {
     /// Linear RGB fog colour.
     pub color: Vec3,
     /// Thickening law.
     pub mode: FogMode,
-    /// Whether the fog is applied (toggled by `--fog`/`--no-fog` and keys).
-    pub enabled: bool,
 }
 
 impl Fog {
@@ -145,7 +148,9 @@ impl Fog {
     }
 }
 
-/// Everything the renderer needs.
+/// The scene data a render reads: immutable while rendered, shared by
+/// every render and view of it (the camera and the other per-render
+/// choices are [`crate::RenderSettings`]).
 #[derive(Debug)]
 pub struct Scene {
     /// The geometry.
@@ -160,10 +165,9 @@ pub struct Scene {
     pub ambient: Vec3,
     /// Colour of rays that hit nothing.
     pub background: Vec3,
-    /// Fog, if the scene has one.
+    /// The fog's medium, if the scene has one (applied when
+    /// [`crate::RenderSettings::fog`] is set).
     pub fog: Option<Fog>,
-    /// The camera.
-    pub camera: Camera,
 }
 
 /// Drawn where an object names a material that does not exist (magenta),
@@ -315,7 +319,7 @@ mod tests {
 
     #[test]
     fn fog_validation() {
-        let ok = Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 1.0, end: 2.0 }, enabled: true };
+        let ok = Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 1.0, end: 2.0 } };
         assert!(ok.validate().is_ok());
         for mode in [
             FogMode::Linear { start: 2.0, end: 2.0 },

@@ -5,7 +5,7 @@ use common::*;
 use prism_geometry::glam::{Vec2, Vec3};
 use prism_geometry::{Cuboid, Plane, Shear, Sphere, Transform};
 use prism_shade::{
-    Aov, AovImages, AovParseError, Material, RenderHooks, RenderSettings, Scene, Texture, render_aovs,
+    Aov, AovImages, AovParseError, Material, RenderHooks, RenderSettings, Texture, render_aovs,
 };
 use std::f32::consts::PI;
 
@@ -19,8 +19,8 @@ fn plane(p: Vec3, n: Vec3) -> prism_geometry::Shape {
 
 const I: Transform = Transform::IDENTITY;
 
-fn aovs(s: &Scene, spp: u32) -> AovImages {
-    render_aovs(s, &settings(spp, 0), &Aov::ALL, RenderHooks::default()).0
+fn aovs(s: &Shot, spp: u32) -> AovImages {
+    render_aovs(s, &s.settings(spp, 0), &Aov::ALL, RenderHooks::default()).0
 }
 
 fn get(a: &AovImages, aov: Aov, i: u32, j: u32) -> Vec3 {
@@ -203,15 +203,7 @@ fn sheared_box_faces_report_inverse_transpose_normals() {
 
 #[test]
 fn textured_sphere_albedo_is_the_texture_lookup() {
-    let (tw, th) = (16u32, 8u32);
-    let texels = (0..tw * th)
-        .map(|k| {
-            Vec3::new((k % tw) as f32 / tw as f32, (k / tw) as f32 / th as f32, ((k * 7) % 11) as f32 / 11.0)
-        })
-        .collect();
-    let image = std::sync::Arc::new(
-        prism_shade::ImageTexture::from_linear(tw, th, texels, prism_shade::Wrap::Repeat).expect("valid"),
-    );
+    let image = distinct_texture();
     let tint = Vec3::new(1.0, 0.5, 0.25);
     let tex =
         Texture::Image { image: image.clone(), mapping: prism_shade::Mapping::Uv, scale: Vec2::ONE, tint };
@@ -359,7 +351,7 @@ fn beauty_is_unchanged_and_threads_do_not_matter() {
     );
     s.background = Vec3::new(0.1, 0.2, 0.3);
     for spp in [1, 5] {
-        let set = RenderSettings { threads: Some(1), ..settings(spp, 4) };
+        let set = RenderSettings { threads: Some(1), ..s.settings(spp, 4) };
         let (beauty, _) = prism_shade::render(&s, &set, RenderHooks::default());
         let (b2, passes, stats) = prism_shade::render_with_aovs(&s, &set, &Aov::ALL, RenderHooks::default());
         assert_eq!(beauty, b2, "spp {spp}");
@@ -375,14 +367,18 @@ fn beauty_is_unchanged_and_threads_do_not_matter() {
         assert_eq!(passes3, passes);
     }
     // Only what was asked, in that order, repeats dropped.
-    let (p, _) =
-        render_aovs(&s, &settings(1, 0), &[Aov::ObjectId, Aov::Depth, Aov::ObjectId], RenderHooks::default());
+    let (p, _) = render_aovs(
+        &s,
+        &s.settings(1, 0),
+        &[Aov::ObjectId, Aov::Depth, Aov::ObjectId],
+        RenderHooks::default(),
+    );
     assert_eq!(p.passes.iter().map(|p| p.aov).collect::<Vec<_>>(), [Aov::ObjectId, Aov::Depth]);
     assert_eq!(p.passes[0].data.len(), 40 * 30);
     // Cancelled before the start: every pixel holds the miss values.
     let stop = std::sync::atomic::AtomicBool::new(true);
     let hooks = RenderHooks { cancel: Some(&stop), ..RenderHooks::default() };
-    let (p, stats) = render_aovs(&s, &settings(1, 0), &[Aov::Depth, Aov::Normal], hooks);
+    let (p, stats) = render_aovs(&s, &s.settings(1, 0), &[Aov::Depth, Aov::Normal], hooks);
     assert!(stats.cancelled);
     assert!(p.passes[0].data.iter().all(|&d| d == f32::INFINITY));
     assert!(p.passes[1].data.iter().all(|&d| d == 0.0));
@@ -415,7 +411,7 @@ fn exr_round_trip_keeps_every_value() {
         vec![light(Vec3::new(0.0, 3.0, 5.0))],
         cam,
     );
-    let set = settings(2, 2);
+    let set = s.settings(2, 2);
     let (beauty, passes, _) = prism_shade::render_with_aovs(&s, &set, &Aov::ALL, RenderHooks::default());
     let dir = temp_dir("roundtrip");
     let base = dir.join("out.exr");

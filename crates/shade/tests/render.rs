@@ -13,7 +13,7 @@ use std::sync::Arc;
 const I: Transform = Transform::IDENTITY;
 
 /// Every feature at once: the report's scene in miniature.
-fn busy_scene(w: u32, h: u32) -> prism_shade::Scene {
+fn busy_scene(w: u32, h: u32) -> Shot {
     let planet = ImageTexture::from_linear(
         4,
         2,
@@ -108,8 +108,8 @@ impl WithTexture for Material {
     }
 }
 
-fn settings_t(spp: u32, threads: usize) -> RenderSettings {
-    RenderSettings { spp, max_depth: 6, min_contribution: 1e-3, threads: Some(threads) }
+fn settings_t(s: &Shot, spp: u32, threads: usize) -> RenderSettings {
+    RenderSettings { min_contribution: 1e-3, threads: Some(threads), ..s.settings(spp, 6) }
 }
 
 #[test]
@@ -120,9 +120,9 @@ fn busy_scene_validates() {
 #[test]
 fn one_and_two_threads_give_the_same_image_bit_for_bit() {
     let s = busy_scene(48, 32);
-    let (a, sa) = prism_shade::render(&s, &settings_t(5, 1), RenderHooks::default());
-    let (b, sb) = prism_shade::render(&s, &settings_t(5, 2), RenderHooks::default());
-    let (c, _) = prism_shade::render(&s, &settings_t(5, 3), RenderHooks::default());
+    let (a, sa) = prism_shade::render(&s, &settings_t(&s, 5, 1), RenderHooks::default());
+    let (b, sb) = prism_shade::render(&s, &settings_t(&s, 5, 2), RenderHooks::default());
+    let (c, _) = prism_shade::render(&s, &settings_t(&s, 5, 3), RenderHooks::default());
     assert!(
         a.pixels
             .iter()
@@ -141,7 +141,7 @@ fn one_and_two_threads_give_the_same_image_bit_for_bit() {
 #[test]
 fn render_is_the_sum_of_sample_passes() {
     let s = busy_scene(24, 16);
-    let set = settings_t(4, 2);
+    let set = settings_t(&s, 4, 2);
     let (full, full_stats) = prism_shade::render(&s, &set, RenderHooks::default());
     // One-sample passes, added in order to a zeroed buffer: exact.
     let mut acc = vec![Vec3::ZERO; full.pixels.len()];
@@ -194,7 +194,7 @@ fn degenerate_inputs_never_make_nan() {
     ] {
         s.fog = fog(Vec3::splat(0.5), mode);
         for (max_depth, min_contribution) in [(u32::MAX, 0.0), (3, f32::NAN), (2, f32::INFINITY), (1, -1.0)] {
-            let set = RenderSettings { spp: 2, max_depth, min_contribution, threads: Some(2) };
+            let set = RenderSettings { min_contribution, threads: Some(2), ..s.settings(2, max_depth) };
             let (img, stats) = prism_shade::render(&s, &set, RenderHooks::default());
             assert!(img.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0), "{mode:?}");
             assert_eq!(stats.nonfinite_samples, 0);
@@ -204,14 +204,14 @@ fn degenerate_inputs_never_make_nan() {
     s.camera = camera(Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, -1.0), Vec3::Y, 90.0, 8, 8);
     s.object_materials[5] = 99;
     assert!(s.validate().is_err());
-    let (img, _) = prism_shade::render(&s, &settings_t(3, 1), RenderHooks::default());
+    let (img, _) = prism_shade::render(&s, &settings_t(&s, 3, 1), RenderHooks::default());
     assert!(img.pixels.iter().all(|p| p.is_finite()));
     // spp 0 acts as 1.
-    let (img, _) = prism_shade::render(&s, &settings_t(0, 1), RenderHooks::default());
+    let (img, _) = prism_shade::render(&s, &settings_t(&s, 0, 1), RenderHooks::default());
     assert!(img.pixels.iter().all(|p| p.is_finite()));
 }
 
-fn wall_scene(material: Material, lights: Vec<PointLight>, w: u32, h: u32) -> prism_shade::Scene {
+fn wall_scene(material: Material, lights: Vec<PointLight>, w: u32, h: u32) -> Shot {
     scene(
         vec![(Plane::new(Vec3::ZERO, Vec3::Z).expect("ok").into(), I, material)],
         lights,
@@ -219,8 +219,8 @@ fn wall_scene(material: Material, lights: Vec<PointLight>, w: u32, h: u32) -> pr
     )
 }
 
-fn rays(s: &prism_shade::Scene, spp: u32, max_depth: u32) -> u64 {
-    prism_shade::render(s, &settings(spp, max_depth), RenderHooks::default()).1.rays
+fn rays(s: &Shot, spp: u32, max_depth: u32) -> u64 {
+    prism_shade::render(s, &s.settings(spp, max_depth), RenderHooks::default()).1.rays
 }
 
 #[test]
@@ -263,13 +263,16 @@ fn cancel_and_progress() {
         assert!(done <= all && all == 8);
         seen.fetch_max(done, std::sync::atomic::Ordering::Relaxed);
     };
-    let (_, stats) =
-        prism_shade::render(&s, &settings_t(1, 2), RenderHooks { progress: Some(&progress), cancel: None });
+    let (_, stats) = prism_shade::render(
+        &s,
+        &settings_t(&s, 1, 2),
+        RenderHooks { progress: Some(&progress), cancel: None },
+    );
     assert_eq!(seen.into_inner(), 8);
     assert!(!stats.cancelled);
     let cancel = std::sync::atomic::AtomicBool::new(true);
     let (img, stats) =
-        prism_shade::render(&s, &settings_t(1, 2), RenderHooks { progress: None, cancel: Some(&cancel) });
+        prism_shade::render(&s, &settings_t(&s, 1, 2), RenderHooks { progress: None, cancel: Some(&cancel) });
     assert!(stats.cancelled);
     assert_eq!(stats.rays, 0);
     assert!(img.pixels.iter().all(|p| *p == Vec3::ZERO));

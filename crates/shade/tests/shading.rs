@@ -270,9 +270,7 @@ fn fogged_wall(d: f32, mode: prism_shade::FogMode, enabled: bool) -> Vec3 {
         cam,
     );
     s.fog = fog(Vec3::new(0.9, 0.8, 0.7), mode);
-    if let Some(f) = &mut s.fog {
-        f.enabled = enabled;
-    }
+    s.fog_on = enabled;
     px(&render(&s, 1, 1), 0, 0)
 }
 
@@ -335,16 +333,7 @@ fn fog_covers_misses_and_reflected_segments() {
 
 #[test]
 fn sphere_texture_follows_the_reports_formula() {
-    // A 16×8 texture of distinct colours.
-    let (w, h) = (16u32, 8u32);
-    let texels = (0..w * h)
-        .map(|k| {
-            Vec3::new((k % w) as f32 / w as f32, (k / w) as f32 / h as f32, ((k * 7) % 11) as f32 / 11.0)
-        })
-        .collect();
-    let image = std::sync::Arc::new(
-        prism_shade::ImageTexture::from_linear(w, h, texels, prism_shade::Wrap::Repeat).expect("valid"),
-    );
+    let image = distinct_texture();
     let tex = |mapping| Texture::Image {
         image: image.clone(),
         mapping,

@@ -1,6 +1,6 @@
 //! A small built-in scene (a chequered floor, a mirror sphere, two matte
-//! spheres, one light, the report's linear fog), for the viewer's tests and
-//! `prism-view --demo`, with no scene file.
+//! spheres, one light, the report's linear fog), for the viewer's tests,
+//! with no scene file.
 
 use crate::{SceneSetup, ViewError};
 use prism_bvh::{Accel, Object};
@@ -49,11 +49,17 @@ pub fn demo_scene(width: u32, height: u32) -> Result<SceneSetup, ViewError> {
         lights: vec![PointLight { position: Vec3::new(8.0, 12.0, 4.0), color: Vec3::ONE, intensity: 1.0 }],
         ambient: Vec3::splat(0.3),
         background: Vec3::new(0.05, 0.05, 0.1),
-        fog: Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 2.0, end: 40.0 }, enabled: true }),
-        camera,
+        fog: Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 2.0, end: 40.0 } }),
     };
     Ok(SceneSetup {
         scene,
-        settings: RenderSettings { spp: 4, max_depth: 5, min_contribution: 1e-3, threads: None },
+        settings: RenderSettings {
+            camera,
+            fog: true,
+            spp: 4,
+            max_depth: 5,
+            min_contribution: 1e-3,
+            threads: None,
+        },
     })
 }

@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod demo;
+mod motion;
 mod save;
 mod state;
 mod window;
@@ -67,14 +68,9 @@ pub enum ViewError {
     /// The render threads could not start.
     #[error("cannot start render threads: {0}")]
     Threads(String),
-    /// A snapshot could not be saved.
-    #[error("cannot save {}: {reason}", path.display())]
-    Save {
-        /// The PNG file.
-        path: PathBuf,
-        /// Why.
-        reason: String,
-    },
+    /// A snapshot could not be saved (the error names the file).
+    #[error("cannot save a snapshot: {0}")]
+    Save(#[from] prism_shade::OutputError),
 }
 
 /// The loader's message, prefixed with the file unless it names it already.
@@ -87,25 +83,15 @@ fn scene_message(path: &Path, message: &str) -> String {
     }
 }
 
-/// How to view a scene. Every `Option` left `None` takes the scene file's
-/// value.
+/// How to view a scene.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ViewOptions {
     /// The scene file.
     pub scene: PathBuf,
-    /// Window width in pixels (only one of width/height given keeps the
-    /// scene's aspect ratio).
-    pub width: Option<u32>,
-    /// Window height in pixels.
-    pub height: Option<u32>,
-    /// Samples per pixel to refine toward.
-    pub spp: Option<u32>,
-    /// Render threads (`None`: every core).
-    pub threads: Option<usize>,
-    /// Maximum recursion depth of reflection and refraction rays.
-    pub max_depth: Option<u32>,
-    /// Fog at start: `Some(true)` on, `Some(false)` off.
-    pub fog: Option<bool>,
+    /// The command line's replacements of the file's values (window size,
+    /// samples, depth, threads, fog at start, camera), applied once by the
+    /// loader, on every load.
+    pub overrides: prism_scene::Overrides,
     /// Where `s` saves snapshots (`None`: the current directory).
     pub save_dir: Option<PathBuf>,
     /// Print timings (key-to-frame latency, every frame) to stderr.
@@ -120,12 +106,13 @@ impl ViewOptions {
     }
 }
 
-/// A loaded scene and the render settings its file asks for.
+/// A loaded scene and the per-render choices to view it with.
 #[derive(Debug)]
 pub struct SceneSetup {
-    /// The scene (its camera carries the file's image size).
+    /// The scene (never changed by the viewer).
     pub scene: Scene,
-    /// The file's render settings.
+    /// The file's render settings with the overrides applied: camera (at
+    /// the window size), fog on/off, samples, depth, threads.
     pub settings: RenderSettings,
 }
 
@@ -134,23 +121,16 @@ pub struct SceneSetup {
 pub type SceneLoader = dyn Fn(&Path) -> Result<SceneSetup, String> + Send + Sync;
 
 /// Loads a scene file (TOML, or an OBJ mesh as a scene of its own:
-/// [`prism_scene::load_path`]) with the prism scene loader, with the size, sample
-/// and fog overrides of `opts` (checked against the loader's limits, as
-/// `prism render` does; `--fog` on a scene without fog adds the loader's
-/// default fog). Warnings go to stderr.
+/// [`prism_scene::load_path`]) with the prism scene loader and the
+/// overrides of `opts` (checked against the loader's limits, as `prism
+/// render` does; `--fog` on a scene without fog adds the loader's default
+/// fog). Warnings go to stderr.
 ///
 /// # Errors
 /// The loader's message (file, line and column).
 pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, String> {
-    let overrides = prism_scene::Overrides {
-        width: opts.width,
-        height: opts.height,
-        spp: opts.spp,
-        max_depth: opts.max_depth,
-        fog: opts.fog,
-        ..prism_scene::Overrides::default()
-    };
-    let options = prism_scene::LoadOptions { overrides, ..prism_scene::LoadOptions::default() };
+    let options =
+        prism_scene::LoadOptions { overrides: opts.overrides, ..prism_scene::LoadOptions::default() };
     // A TOML scene, or an OBJ mesh as a scene of its own.
     let loaded = prism_scene::load_path(path, &options).map_err(|e| e.to_string())?;
     for w in &loaded.warnings {
@@ -201,64 +181,9 @@ pub fn check_display() -> Result<(), ViewError> {
     }
 }
 
-/// The window size for a scene of `scene_w × scene_h` given the overrides:
-/// one override alone keeps the aspect ratio.
-#[must_use]
-pub fn window_size(scene_w: u32, scene_h: u32, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
-    let aspect = |num: u32, a: u32, b: u32| {
-        ((u64::from(num) * u64::from(a) + u64::from(b) / 2) / u64::from(b.max(1))).max(1)
-    };
-    match (width, height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, u32::try_from(aspect(w, scene_h, scene_w)).unwrap_or(u32::MAX)),
-        (None, Some(h)) => (u32::try_from(aspect(h, scene_w, scene_h)).unwrap_or(u32::MAX), h),
-        (None, None) => (scene_w, scene_h),
-    }
-}
-
-/// Applies the options to a freshly loaded scene: window size, samples,
-/// depth, threads and, at start, fog (for loaders that do not apply them
-/// themselves; applying them twice changes nothing). Returns the scene (camera at `size`) and the
-/// effective settings.
-///
-/// # Errors
-/// [`ViewError::Camera`] if the size is empty.
-pub fn prepare(
-    setup: SceneSetup,
-    opts: &ViewOptions,
-    size: (u32, u32),
-    initial_fog: bool,
-) -> Result<(Scene, RenderSettings), ViewError> {
-    let SceneSetup { mut scene, mut settings } = setup;
-    scene.camera = scene.camera.with_size(size.0, size.1)?;
-    if let Some(spp) = opts.spp {
-        settings.spp = spp;
-    }
-    settings.spp = settings.spp.max(1);
-    if let Some(depth) = opts.max_depth {
-        settings.max_depth = depth;
-    }
-    if opts.threads.is_some() {
-        settings.threads = opts.threads;
-    }
-    if initial_fog && let (Some(fog), Some(on)) = (scene.fog.as_mut(), opts.fog) {
-        fog.enabled = on;
-    }
-    Ok((scene, settings))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn window_size_keeps_aspect_with_one_override() {
-        assert_eq!(window_size(800, 600, None, None), (800, 600));
-        assert_eq!(window_size(800, 600, Some(400), None), (400, 300));
-        assert_eq!(window_size(800, 600, None, Some(300)), (400, 300));
-        assert_eq!(window_size(800, 600, Some(10), Some(20)), (10, 20));
-        assert_eq!(window_size(800, 600, Some(1), None), (1, 1));
-    }
 
     #[test]
     fn scene_errors_name_the_file_once() {
@@ -276,22 +201,26 @@ mod tests {
     }
 
     #[test]
-    fn prepare_applies_overrides() {
-        let setup = demo::demo_scene(64, 48).unwrap();
-        let opts = ViewOptions {
+    fn the_loader_applies_the_overrides_once() {
+        let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/seed.toml");
+        let file = load_scene_file(&seed, &ViewOptions::new(&seed)).unwrap();
+        assert_eq!(file.settings.camera.size(), (1280, 720));
+        assert!(file.settings.fog && file.scene.fog.is_some(), "seed.toml has fog, on");
+        let overrides = prism_scene::Overrides {
+            width: Some(320),
             spp: Some(3),
             threads: Some(1),
             fog: Some(false),
-            max_depth: Some(2),
-            ..ViewOptions::new("x")
+            ..prism_scene::Overrides::default()
         };
-        let (scene, settings) = prepare(setup, &opts, (32, 24), true).unwrap();
-        assert_eq!((scene.camera.width(), scene.camera.height()), (32, 24));
-        assert_eq!(settings.spp, 3);
-        assert_eq!(settings.threads, Some(1));
-        assert_eq!(settings.max_depth, 2);
-        assert!(!scene.fog.unwrap().enabled);
-        let bad = prepare(demo::demo_scene(64, 48).unwrap(), &opts, (0, 24), true);
-        assert!(matches!(bad, Err(ViewError::Camera(_))));
+        let setup = load_scene_file(&seed, &ViewOptions { overrides, ..ViewOptions::new(&seed) }).unwrap();
+        let s = &setup.settings;
+        assert_eq!(s.camera.size(), (320, 180), "--width alone keeps 16:9");
+        assert_eq!((s.spp, s.threads), (3, Some(1)));
+        assert!(!s.fog, "--no-fog turns the fog off");
+        assert!(setup.scene.fog.is_some(), "the fog's medium stays in the scene");
+        let bad = prism_scene::Overrides { width: Some(0), ..prism_scene::Overrides::default() };
+        let err = load_scene_file(&seed, &ViewOptions { overrides: bad, ..ViewOptions::new(&seed) });
+        assert!(err.is_err_and(|e| e.contains("--width")));
     }
 }

@@ -1,11 +1,7 @@
-//! Atomic PNG snapshots.
+//! PNG snapshots: numbered names, written atomically.
 
 use crate::ViewError;
 use crate::worker::pixels_to_rgb8;
-use image::ImageEncoder;
-use image::codecs::png::PngEncoder;
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// The first free path `dir/{stem}-view-NNN.png` with `NNN >= from`
@@ -23,37 +19,14 @@ pub fn next_snapshot_path(dir: &Path, stem: &str, from: u32) -> (PathBuf, u32) {
     }
 }
 
-/// Writes `0x00RRGGBB` pixels as an 8-bit RGB PNG at `path`, atomically:
-/// to a temporary file beside it, synced, then renamed over `path`. A
-/// reader never sees a partial file; on error no temporary file is left.
+/// Writes `0x00RRGGBB` pixels as an 8-bit RGB PNG at `path`, atomically,
+/// with the one image writer ([`prism_shade::write_png_rgb8`]): a reader
+/// never sees a partial file; on error no temporary file is left.
 ///
 /// # Errors
 /// [`ViewError::Save`] if the file cannot be written or renamed.
 pub fn save_png_atomic(path: &Path, width: u32, height: u32, pixels: &[u32]) -> Result<(), ViewError> {
-    let err = |reason: String| ViewError::Save { path: path.to_path_buf(), reason };
-    if pixels.len() != width as usize * height as usize {
-        return Err(err(format!("{} pixels for a {width}×{height} image", pixels.len())));
-    }
-    let name = path.file_name().ok_or_else(|| err("not a file name".into()))?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".tmp{}", std::process::id()));
-    let tmp = path.with_file_name(tmp_name);
-    let write = || -> Result<(), String> {
-        let file = File::create(&tmp).map_err(|e| format!("cannot create {}: {e}", tmp.display()))?;
-        let mut out = BufWriter::new(file);
-        PngEncoder::new(&mut out)
-            .write_image(&pixels_to_rgb8(pixels), width, height, image::ExtendedColorType::Rgb8)
-            .map_err(|e| format!("cannot encode PNG: {e}"))?;
-        out.flush().map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
-        let file = out.into_inner().map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
-        file.sync_all().map_err(|e| format!("cannot sync {}: {e}", tmp.display()))?;
-        std::fs::rename(&tmp, path).map_err(|e| format!("cannot rename {} to it: {e}", tmp.display()))
-    };
-    write().map_err(|reason| {
-        let _ = std::fs::remove_file(&tmp);
-        err(reason)
-    })
+    Ok(prism_shade::write_png_rgb8(path, width, height, &pixels_to_rgb8(pixels))?)
 }
 
 #[cfg(test)]
@@ -76,9 +49,9 @@ mod tests {
         assert!(next_snapshot_path(&dir, "scene", 5).0.ends_with("scene-view-005.png"));
         let names: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 1, "{names:?}");
-        assert!(matches!(save_png_atomic(&p, 3, 1, &[0; 2]), Err(ViewError::Save { .. })));
+        assert!(matches!(save_png_atomic(&p, 3, 1, &[0; 2]), Err(ViewError::Save(_))));
         let missing = dir.join("no-such-dir").join("x.png");
-        assert!(matches!(save_png_atomic(&missing, 1, 1, &[0]), Err(ViewError::Save { .. })));
+        assert!(matches!(save_png_atomic(&missing, 1, 1, &[0]), Err(ViewError::Save(_))));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -5,7 +5,7 @@
 //! bumps the [generation](ViewerState::generation); frames of an older
 //! generation are stale and are dropped by [`ViewerState::accept`].
 
-use prism_geometry::glam::{Quat, Vec3};
+use crate::motion::{dolly, orbit, translate};
 use prism_shade::{Camera, RenderSettings};
 use std::ops::Range;
 use std::time::Instant;
@@ -17,9 +17,6 @@ pub const DRAG_ORBIT_PER_PIXEL: f32 = 0.25 * std::f32::consts::PI / 180.0;
 /// Move step of one W/A/D/X/PageUp/PageDown press, as a fraction of the
 /// eye's distance to the point looked at.
 pub const KEY_MOVE_FRACTION: f32 = 0.05;
-/// Closest the view direction may come to the up vector when orbiting
-/// (radians, 2°), so the camera never becomes degenerate.
-const MIN_POLAR: f32 = 2.0 * std::f32::consts::PI / 180.0;
 
 /// The keys the viewer understands, independent of the window crate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -152,22 +149,20 @@ pub enum Outcome {
 pub struct View {
     /// The generation this view belongs to.
     pub generation: u64,
-    /// The camera, at window size.
-    pub camera: Camera,
-    /// Whether fog is applied (ignored by scenes without fog).
-    pub fog: bool,
-    /// The render settings (samples per pixel, depth, cut-off).
+    /// The render's choices: the camera (at window size), fog on/off,
+    /// samples per pixel, depth, cut-off. The scene itself is never
+    /// changed by a view.
     pub settings: RenderSettings,
 }
 
 /// The viewer's state.
 #[derive(Clone, Debug)]
 pub struct ViewerState {
-    camera: Camera,
+    /// The user's current choices: camera, fog on/off (only ever on when
+    /// the scene has fog), samples.
+    settings: RenderSettings,
     file_camera: Camera,
     fog_available: bool,
-    fog_on: bool,
-    settings: RenderSettings,
     generation: u64,
     changed_at: Option<Instant>,
     samples_done: u32,
@@ -178,17 +173,15 @@ pub struct ViewerState {
 }
 
 impl ViewerState {
-    /// A fresh state for a scene whose camera (already at window size) is
-    /// `camera`; `fog` is `None` for a scene without fog, else whether it
-    /// starts enabled.
+    /// A fresh state for a scene loaded with `settings` (its camera
+    /// already at window size, its fog flag the file's or the command
+    /// line's); `fog_available` says whether the scene has fog at all.
     #[must_use]
-    pub fn new(camera: Camera, fog: Option<bool>, settings: RenderSettings) -> Self {
+    pub fn new(settings: RenderSettings, fog_available: bool) -> Self {
         Self {
-            camera,
-            file_camera: camera,
-            fog_available: fog.is_some(),
-            fog_on: fog.unwrap_or(false),
-            settings,
+            file_camera: settings.camera,
+            settings: RenderSettings { fog: settings.fog && fog_available, ..settings },
+            fog_available,
             generation: 1,
             changed_at: None,
             samples_done: 0,
@@ -202,13 +195,13 @@ impl ViewerState {
     /// The current camera.
     #[must_use]
     pub fn camera(&self) -> Camera {
-        self.camera
+        self.settings.camera
     }
 
     /// Whether fog is on (always false for a scene without fog).
     #[must_use]
     pub fn fog_on(&self) -> bool {
-        self.fog_available && self.fog_on
+        self.settings.fog
     }
 
     /// Whether the scene has fog to toggle.
@@ -217,7 +210,7 @@ impl ViewerState {
         self.fog_available
     }
 
-    /// The render settings.
+    /// The render settings (camera and fog included).
     #[must_use]
     pub fn settings(&self) -> &RenderSettings {
         &self.settings
@@ -268,12 +261,7 @@ impl ViewerState {
     /// What to render now.
     #[must_use]
     pub fn view(&self) -> View {
-        View {
-            generation: self.generation,
-            camera: self.camera,
-            fog: self.fog_on(),
-            settings: self.settings.clone(),
-        }
+        View { generation: self.generation, settings: self.settings.clone() }
     }
 
     /// When the current generation began, if it began by a change that has
@@ -307,55 +295,52 @@ impl ViewerState {
                     self.message = Some("this scene has no fog".into());
                     return Outcome::Nothing;
                 }
-                if self.fog_on == on {
+                if self.settings.fog == on {
                     return Outcome::Nothing;
                 }
-                self.fog_on = on;
+                self.settings.fog = on;
                 self.restart(at)
             }
             Action::Save => Outcome::Save,
             Action::Reload => Outcome::Reload,
             Action::Quit => Outcome::Quit,
-            Action::Orbit { yaw, pitch } => self.set_camera(orbit(&self.camera, yaw, pitch), at),
+            Action::Orbit { yaw, pitch } => self.set_camera(orbit(&self.settings.camera, yaw, pitch), at),
             Action::Move { forward, right, up } => {
-                self.set_camera(translate(&self.camera, forward, right, up), at)
+                self.set_camera(translate(&self.settings.camera, forward, right, up), at)
             }
-            Action::Dolly(f) => self.set_camera(dolly(&self.camera, f), at),
+            Action::Dolly(f) => self.set_camera(dolly(&self.settings.camera, f), at),
             Action::ResetCamera => self.set_camera(Some(self.file_camera), at),
         }
     }
 
     fn set_camera(&mut self, camera: Option<Camera>, at: Instant) -> Outcome {
         match camera {
-            Some(c) if c != self.camera => {
-                self.camera = c;
+            Some(c) if c != self.settings.camera => {
+                self.settings.camera = c;
                 self.restart(at)
             }
             _ => Outcome::Nothing,
         }
     }
 
-    /// A scene was (re)loaded: its camera (at window size), fog (`None`:
-    /// none; else enabled in the file) and settings. The user's camera is
-    /// kept unless the file's camera changed; the fog toggle is kept if the
-    /// scene had fog before. Always starts a new generation.
-    pub fn scene_reloaded(&mut self, camera: Camera, fog: Option<bool>, settings: RenderSettings) -> Outcome {
-        if camera != self.file_camera {
-            self.camera = camera;
-            self.file_camera = camera;
+    /// A scene was (re)loaded with `settings` (camera at window size, the
+    /// file's fog flag and samples); `fog_available` says whether it has
+    /// fog. The user's camera is kept unless the file's camera changed;
+    /// the fog toggle is kept if the scene had fog before. Always starts a
+    /// new generation.
+    pub fn scene_reloaded(&mut self, settings: RenderSettings, fog_available: bool) -> Outcome {
+        let mut camera = self.settings.camera;
+        if settings.camera != self.file_camera {
+            camera = settings.camera;
+            self.file_camera = settings.camera;
         }
-        match fog {
-            Some(enabled) if !self.fog_available => {
-                self.fog_available = true;
-                self.fog_on = enabled;
-            }
-            Some(_) => {}
-            None => {
-                self.fog_available = false;
-                self.fog_on = false;
-            }
-        }
-        self.settings = settings;
+        let fog = match (fog_available, self.fog_available) {
+            (false, _) => false,
+            (true, false) => settings.fog,
+            (true, true) => self.settings.fog,
+        };
+        self.fog_available = fog_available;
+        self.settings = RenderSettings { camera, fog, ..settings };
         self.restart(Instant::now())
     }
 
@@ -404,7 +389,7 @@ impl ViewerState {
             self.pass_rate,
             if !self.fog_available {
                 "none"
-            } else if self.fog_on {
+            } else if self.settings.fog {
                 "on"
             } else {
                 "off"
@@ -416,55 +401,6 @@ impl ViewerState {
         }
         t
     }
-}
-
-fn camera_with(c: &Camera, position: Vec3, look_at: Vec3) -> Option<Camera> {
-    Camera::new(position, look_at, c.up(), c.vfov_deg(), c.width(), c.height()).ok()
-}
-
-/// The camera orbited about its target; `None` if that would be degenerate.
-fn orbit(c: &Camera, yaw: f32, pitch: f32) -> Option<Camera> {
-    if !(yaw.is_finite() && pitch.is_finite()) {
-        return None;
-    }
-    let up = c.up().try_normalize()?;
-    let target = c.look_at();
-    let offset = c.position() - target;
-    let radius = offset.length();
-    let dir = offset.try_normalize()?;
-    // Polar angle of the eye from the up axis, kept inside (MIN_POLAR, π − MIN_POLAR).
-    let polar = dir.dot(up).clamp(-1.0, 1.0).acos();
-    let new_polar = (polar - pitch).clamp(MIN_POLAR, std::f32::consts::PI - MIN_POLAR);
-    if yaw == 0.0 && (new_polar - polar).abs() < 1e-6 {
-        // At the limit already.
-        return None;
-    }
-    let yawed = Quat::from_axis_angle(up, yaw) * dir;
-    let axis = up.cross(yawed).try_normalize()?;
-    let pitched = Quat::from_axis_angle(axis, new_polar - polar) * yawed;
-    camera_with(c, target + pitched * radius, target)
-}
-
-fn translate(c: &Camera, forward: f32, right: f32, up: f32) -> Option<Camera> {
-    let dist = (c.look_at() - c.position()).length();
-    let f = c.forward();
-    let r = f.cross(c.up()).try_normalize()?;
-    let u = r.cross(f);
-    let delta = (forward * f + right * r + up * u) * dist;
-    if !delta.is_finite() {
-        return None;
-    }
-    camera_with(c, c.position() + delta, c.look_at() + delta)
-}
-
-fn dolly(c: &Camera, fraction: f32) -> Option<Camera> {
-    if !fraction.is_finite() {
-        return None;
-    }
-    // Never reach or pass the target.
-    let fraction = fraction.clamp(-1.0, 0.9);
-    let offset = c.look_at() - c.position();
-    camera_with(c, c.position() + offset * fraction, c.look_at())
 }
 
 /// Plans the sample ranges of the refinement passes: disjoint, in order,
@@ -503,9 +439,17 @@ impl Iterator for SamplePlan {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use prism_geometry::glam::Vec3;
 
     fn settings(spp: u32) -> RenderSettings {
-        RenderSettings { spp, max_depth: 5, min_contribution: 0.0, threads: Some(1) }
+        RenderSettings {
+            camera: camera(),
+            fog: false,
+            spp,
+            max_depth: 5,
+            min_contribution: 0.0,
+            threads: Some(1),
+        }
     }
 
     fn camera() -> Camera {
@@ -513,7 +457,7 @@ mod tests {
     }
 
     fn state() -> ViewerState {
-        ViewerState::new(camera(), Some(false), settings(4))
+        ViewerState::new(settings(4), true)
     }
 
     #[test]
@@ -526,7 +470,7 @@ mod tests {
         assert_eq!(s.apply(key_action(Key::F).unwrap()), Outcome::Restart);
         assert!(s.fog_on());
         assert_eq!(s.generation(), g + 1);
-        assert!(s.view().fog);
+        assert!(s.view().settings.fog);
         assert_eq!(s.apply(key_action(Key::F).unwrap()), Outcome::Nothing, "f with fog on");
         assert_eq!(s.apply(key_action(Key::C).unwrap()), Outcome::Restart);
         assert!(!s.fog_on());
@@ -535,7 +479,7 @@ mod tests {
 
     #[test]
     fn fog_keys_without_fog_say_so() {
-        let mut s = ViewerState::new(camera(), None, settings(4));
+        let mut s = ViewerState::new(RenderSettings { fog: true, ..settings(4) }, false);
         let g = s.generation();
         assert_eq!(s.apply(Action::FogOn), Outcome::Nothing);
         assert!(!s.fog_on());
@@ -666,13 +610,13 @@ mod tests {
         s.apply(Action::FogOn);
         let moved = s.camera();
         let g = s.generation();
-        assert_eq!(s.scene_reloaded(camera(), Some(false), settings(8)), Outcome::Restart);
+        assert_eq!(s.scene_reloaded(settings(8), true), Outcome::Restart);
         assert_eq!(s.generation(), g + 1);
         assert_eq!(s.camera(), moved);
         assert!(s.fog_on(), "the toggle survives a reload");
         assert_eq!(s.settings().spp, 8);
         let other = Camera::new(Vec3::new(5.0, 5.0, 5.0), Vec3::ZERO, Vec3::Y, 30.0, 80, 60).unwrap();
-        s.scene_reloaded(other, None, settings(8));
+        s.scene_reloaded(RenderSettings { camera: other, fog: true, ..settings(8) }, false);
         assert_eq!(s.camera(), other);
         assert!(!s.fog_available() && !s.fog_on());
     }

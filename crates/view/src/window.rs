@@ -4,7 +4,7 @@
 
 use crate::state::{Action, Key, Outcome, ViewerState, drag_action, key_action};
 use crate::worker::{FrameKind, Renderer};
-use crate::{SceneLoader, SceneSetup, ViewError, ViewOptions, prepare, save_png_atomic, window_size};
+use crate::{SceneLoader, SceneSetup, ViewError, ViewOptions, save_png_atomic};
 use minifb::{InputCallback, MouseButton, MouseMode, Window, WindowOptions};
 use std::path::PathBuf;
 use std::sync::mpsc::{self, Sender};
@@ -80,11 +80,13 @@ fn window_error(e: &minifb::Error) -> ViewError {
 }
 
 pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup) -> Result<(), ViewError> {
-    let file_cam = setup.scene.camera;
-    let (w, h) = window_size(file_cam.width(), file_cam.height(), opts.width, opts.height);
-    let (scene, settings) = prepare(setup, &opts, (w, h), true)?;
-    let mut state = ViewerState::new(scene.camera, scene.fog.map(|f| f.enabled), settings.clone());
-    if opts.fog == Some(true) && !state.fog_available() {
+    // The loader applied the overrides: the window has the image's size,
+    // and keeps it through reloads.
+    let SceneSetup { scene, settings } = setup;
+    let (w, h) = settings.camera.size();
+    let threads = settings.threads;
+    let mut state = ViewerState::new(settings, scene.fog.is_some());
+    if opts.overrides.fog == Some(true) && !state.fog_available() {
         state.set_message(Some("this scene has no fog".into()));
     }
     let name = opts.scene.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
@@ -97,7 +99,7 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
     window.set_target_fps(0);
     let keys = KeyQueue::default();
     window.set_input_callback(Box::new(keys.clone()));
-    let renderer = Renderer::new(scene, settings.threads)?;
+    let renderer = Renderer::new(scene, threads)?;
     let started = Instant::now();
     renderer.submit(state.view());
 
@@ -177,11 +179,13 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                 }
                 Event::Loaded(result) => {
                     reloading = false;
-                    let prepared = result
-                        .and_then(|setup| prepare(*setup, &opts, (w, h), false).map_err(|e| e.to_string()));
+                    let prepared = result.and_then(|setup| {
+                        let settings = setup.settings.with_size(w, h).map_err(|e| e.to_string())?;
+                        Ok((setup.scene, settings))
+                    });
                     match prepared {
                         Ok((scene, settings)) => {
-                            state.scene_reloaded(scene.camera, scene.fog.map(|f| f.enabled), settings);
+                            state.scene_reloaded(settings, scene.fog.is_some());
                             renderer.submit_scene(state.view(), scene);
                             println!("reloaded {}", opts.scene.display());
                             state.set_message(None);

@@ -2,7 +2,9 @@
 //! refinement passes, and sends [`Frame`]s back. It never blocks the caller.
 //!
 //! A new view (or scene) cancels the passes in flight through the shared
-//! cancel flag, which `render_samples` checks at every row.
+//! cancel flag, which `render_samples` checks at every row. The scene is
+//! only read: a view's camera, fog flag and samples are its
+//! [`RenderSettings`].
 
 use crate::ViewError;
 use crate::state::{SamplePlan, View};
@@ -75,7 +77,7 @@ impl Frame {
 /// A request to the render thread.
 struct Job {
     view: View,
-    scene: Option<Box<Scene>>,
+    scene: Option<Arc<Scene>>,
 }
 
 #[derive(Default)]
@@ -122,7 +124,7 @@ impl Renderer {
             cancel: AtomicBool::new(false),
         });
         let (tx, frames) = mpsc::channel();
-        let worker = Worker { shared: Arc::clone(&shared), tx, scene, coarse_factor: 0 };
+        let worker = Worker { shared: Arc::clone(&shared), tx, scene: Arc::new(scene), coarse_factor: 0 };
         let thread = std::thread::Builder::new()
             .name("prism-view-render".into())
             .spawn(move || pool.install(move || worker.run()))
@@ -138,7 +140,7 @@ impl Renderer {
     /// Renders `view` of a new `scene` from now on, cancelling whatever was
     /// in flight.
     pub fn submit_scene(&self, view: View, scene: Scene) {
-        self.send(Job { view, scene: Some(Box::new(scene)) });
+        self.send(Job { view, scene: Some(Arc::new(scene)) });
     }
 
     fn send(&self, job: Job) {
@@ -186,7 +188,8 @@ impl Drop for Renderer {
 struct Worker {
     shared: Arc<Shared>,
     tx: Sender<Frame>,
-    scene: Scene,
+    /// Shared and read-only: a view changes only its settings.
+    scene: Arc<Scene>,
     /// 0 until the first preview picks one.
     coarse_factor: u32,
 }
@@ -195,7 +198,7 @@ impl Worker {
     fn run(mut self) {
         while let Some(job) = self.next_job() {
             if let Some(scene) = job.scene {
-                self.scene = *scene;
+                self.scene = scene;
             }
             if self.render_view(&job.view).is_err() {
                 // The window is gone.
@@ -226,11 +229,7 @@ impl Worker {
     /// Renders one view to the end, or until cancelled. `Err` when the
     /// receiver is gone.
     fn render_view(&mut self, view: &View) -> Result<(), mpsc::SendError<Frame>> {
-        let camera = view.camera;
-        let (w, h) = (camera.width(), camera.height());
-        if let Some(fog) = self.scene.fog.as_mut() {
-            fog.enabled = view.fog;
-        }
+        let (w, h) = view.settings.camera.size();
         let hooks = RenderHooks { progress: None, cancel: Some(&self.shared.cancel) };
 
         // Inside our own pool already: a render must not build another.
@@ -243,9 +242,8 @@ impl Worker {
         let factor = self.coarse_factor;
         if factor > 1 {
             let (cw, ch) = (w.div_ceil(factor), h.div_ceil(factor));
-            if let Ok(small) = camera.with_size(cw, ch) {
-                self.scene.camera = small;
-                let one = RenderSettings { spp: 1, ..settings.clone() };
+            if let Ok(small) = settings.with_size(cw, ch) {
+                let one = RenderSettings { spp: 1, ..small };
                 let (image, stats) = render_samples(&self.scene, &one, 0..1, hooks);
                 if stats.cancelled || self.cancelled() {
                     return Ok(());
@@ -266,7 +264,6 @@ impl Worker {
         }
 
         // Refinement passes at full size, one sample each.
-        self.scene.camera = camera;
         let spp = settings.spp.max(1);
         let mut acc = Accumulator::new(w, h);
         let mut since = Instant::now();
@@ -415,8 +412,8 @@ mod tests {
 
     fn small_view(generation: u64, fog: bool, spp: u32) -> (Scene, View) {
         let setup = demo_scene(64, 48).unwrap();
-        let settings = RenderSettings { spp, threads: Some(2), ..setup.settings };
-        let view = View { generation, camera: setup.scene.camera, fog, settings };
+        let settings = RenderSettings { spp, fog, threads: Some(2), ..setup.settings };
+        let view = View { generation, settings };
         (setup.scene, view)
     }
 
@@ -436,8 +433,7 @@ mod tests {
     #[test]
     fn passes_sum_to_the_full_render() {
         for spp in [1, 3, 4, 13] {
-            let (mut scene, view) = small_view(1, true, spp);
-            scene.fog = scene.fog.map(|f| Fog { enabled: true, ..f });
+            let (scene, view) = small_view(1, true, spp);
             let (full, _) = render(&scene, &view.settings, RenderHooks::default());
             let mut acc = Accumulator::new(64, 48);
             for range in SamplePlan::new(spp) {
@@ -452,14 +448,11 @@ mod tests {
         }
     }
 
-    use prism_shade::Fog;
-
     #[test]
     fn renderer_previews_then_converges_to_render() {
         let spp = 4;
         let (scene, view) = small_view(7, true, spp);
-        let mut reference_scene = small_view(7, true, spp).0;
-        reference_scene.camera = view.camera;
+        let reference_scene = small_view(7, true, spp).0;
         let (full, _) = render(&reference_scene, &view.settings, RenderHooks::default());
         let r = Renderer::new(scene, Some(2)).unwrap();
         r.submit(view);
@@ -484,8 +477,8 @@ mod tests {
     #[test]
     fn a_large_view_gets_a_coarse_preview_first() {
         let setup = demo_scene(320, 240).unwrap();
-        let settings = RenderSettings { spp: 1, threads: Some(2), ..setup.settings };
-        let view = View { generation: 1, camera: setup.scene.camera, fog: false, settings };
+        let settings = RenderSettings { spp: 1, fog: false, threads: Some(2), ..setup.settings };
+        let view = View { generation: 1, settings };
         let r = Renderer::new(setup.scene, Some(2)).unwrap();
         r.submit(view);
         let frames = until_final(&r, 1, 1);
@@ -498,17 +491,11 @@ mod tests {
     fn a_new_view_cancels_the_stale_one() {
         // A view that would take very long, then a change.
         let (scene, slow) = small_view(1, true, 100_000);
-        let camera = slow.camera;
         let r = Renderer::new(scene, Some(2)).unwrap();
         r.submit(slow);
         let first = r.frame_timeout(WAIT).expect("a first frame");
         assert_eq!(first.generation, 1);
-        let fast = View {
-            generation: 2,
-            camera,
-            fog: false,
-            settings: RenderSettings { spp: 2, ..small_view(0, false, 2).1.settings },
-        };
+        let fast = View { generation: 2, settings: small_view(0, false, 2).1.settings };
         r.submit(fast);
         let frames = until_final(&r, 2, 2);
         let mut seen_new = false;
@@ -530,7 +517,7 @@ mod tests {
         let r = Renderer::new(scene, Some(2)).unwrap();
         r.submit(on.clone());
         let with_fog = until_final(&r, 1, 1).pop().unwrap();
-        r.submit(View { generation: 2, fog: false, ..on.clone() });
+        r.submit(View { generation: 2, settings: RenderSettings { fog: false, ..on.settings.clone() } });
         let without = until_final(&r, 2, 1).pop().unwrap();
         let (other, _) = small_view(0, true, 1);
         r.submit_scene(View { generation: 3, ..on }, other);
@@ -547,16 +534,19 @@ mod tests {
     fn change_to_first_frame_latency_at_800x600() {
         let seed = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/seed.toml");
         let (setup, name) = if seed.is_file() {
-            let opts =
-                crate::ViewOptions { width: Some(800), height: Some(600), ..crate::ViewOptions::new(&seed) };
+            let overrides = prism_scene::Overrides {
+                width: Some(800),
+                height: Some(600),
+                ..prism_scene::Overrides::default()
+            };
+            let opts = crate::ViewOptions { overrides, ..crate::ViewOptions::new(&seed) };
             (crate::load_scene_file(&seed, &opts).unwrap(), "seed.toml")
         } else {
             (demo_scene(800, 600).unwrap(), "built-in scene")
         };
-        let settings = RenderSettings { spp: 64, threads: None, ..setup.settings };
-        let camera = setup.scene.camera;
+        let settings = RenderSettings { spp: 64, fog: true, threads: None, ..setup.settings };
         let r = Renderer::new(setup.scene, None).unwrap();
-        r.submit(View { generation: 1, camera, fog: true, settings: settings.clone() });
+        r.submit(View { generation: 1, settings: settings.clone() });
         let mut times = Vec::new();
         for generation in 2..=5u64 {
             // Let a full-size pass get going, then toggle the fog.
@@ -567,7 +557,10 @@ mod tests {
             }
             std::thread::sleep(Duration::from_millis(20));
             let t = Instant::now();
-            r.submit(View { generation, camera, fog: generation % 2 == 1, settings: settings.clone() });
+            r.submit(View {
+                generation,
+                settings: RenderSettings { fog: generation % 2 == 1, ..settings.clone() },
+            });
             let first = loop {
                 let f = r.frame_timeout(WAIT).expect("a frame");
                 if f.generation == generation {

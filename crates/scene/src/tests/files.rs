@@ -2,6 +2,7 @@
 //! meshes read once and instanced, MTL materials, textures, malformed files.
 
 use super::*;
+use prism_geometry::glam::Vec3;
 use prism_shade::{Mapping, Texture};
 
 #[test]

@@ -18,7 +18,7 @@ fn camera_overrides_replace_the_file() {
         ..Overrides::default()
     })
     .unwrap();
-    let c = &loaded.scene.camera;
+    let c = &loaded.settings.camera;
     assert_eq!(c.position(), Vec3::new(1.0, 2.0, 3.0));
     assert_eq!(c.look_at(), Vec3::new(0.0, 1.0, 0.0), "look_at stays the file's");
     assert!((c.vfov_deg() - 30.0).abs() < 1e-5);
@@ -86,7 +86,7 @@ fn an_obj_file_is_a_framed_scene() {
     assert!((c.vfov_deg() - 40.0).abs() < 1e-5);
     assert!((info.lights[0].position - r * Vec3::new(1.0, 2.0, 1.5)).length() < 1e-4);
     // The mesh is in frame: the centre ray hits it, the corners miss.
-    let cam = &loaded.scene.camera;
+    let cam = &loaded.settings.camera;
     assert!(loaded.scene.accel.closest_hit(&cam.ray(320.0, 240.0)).is_some());
     assert!(loaded.scene.accel.closest_hit(&cam.ray(0.5, 0.5)).is_none());
     // Inputs: the OBJ, its MTL, the texture.

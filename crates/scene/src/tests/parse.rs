@@ -81,7 +81,7 @@ name = "a label"
     assert!(matches!(scene.materials[0].texture, Texture::Checker { size: 2.0, world: true, .. }));
     assert_eq!(scene.materials[1].transmission, 0.9);
     let fog = scene.fog.unwrap();
-    assert!(fog.enabled);
+    assert!(loaded.settings.fog, "a scene's fog is on unless it says `enabled = false`");
     assert!(matches!(fog.mode, FogMode::Exponential { density } if (density - 0.05).abs() < 1e-7));
     assert!((fog.color - Vec3::ONE).abs().max_element() < 1e-6);
     // The box rotated 45° and moved: its transform maps the origin to (2, 0.5, 0).
@@ -115,10 +115,10 @@ fn overrides_replace_the_file_and_keep_the_aspect() {
     let text = format!("{BASE}[[objects]]\ntype = \"sphere\"\nradius = 1\n");
     let loaded = parse_scene_str_with(&text, Path::new("."), Path::new("t.toml"), &opts).unwrap();
     assert_eq!((loaded.info.width, loaded.info.height), (160, 90));
-    assert_eq!(loaded.scene.camera.width(), 160);
+    assert_eq!(loaded.settings.camera.size().0, 160);
     assert_eq!(loaded.settings.spp, 1);
     // --fog on a scene without fog adds one, with a warning.
-    assert!(loaded.scene.fog.is_some_and(|f| f.enabled));
+    assert!(loaded.scene.fog.is_some() && loaded.settings.fog);
     assert!(loaded.warnings.iter().any(|w| w.contains("no [fog]")));
 
     let opts = LoadOptions {

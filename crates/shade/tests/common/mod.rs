@@ -6,8 +6,45 @@ use prism_geometry::glam::Vec3;
 use prism_geometry::{Instance, Shape, Transform};
 use prism_shade::{Camera, Fog, Image, Material, PointLight, RenderHooks, RenderSettings, Scene, Texture};
 
-/// A scene of `objects` (each with its own material), lit by `lights`.
-pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>, camera: Camera) -> Scene {
+/// A scene and the per-render choices the tests vary: the camera and
+/// whether the fog is on (it derefs to the scene).
+pub struct Shot {
+    pub scene: Scene,
+    pub camera: Camera,
+    pub fog_on: bool,
+}
+
+impl std::ops::Deref for Shot {
+    type Target = Scene;
+    fn deref(&self) -> &Scene {
+        &self.scene
+    }
+}
+
+impl std::ops::DerefMut for Shot {
+    fn deref_mut(&mut self) -> &mut Scene {
+        &mut self.scene
+    }
+}
+
+impl Shot {
+    /// Settings for `spp` samples and recursion `max_depth`, one thread,
+    /// no contribution cut-off.
+    pub fn settings(&self, spp: u32, max_depth: u32) -> RenderSettings {
+        RenderSettings {
+            camera: self.camera,
+            fog: self.fog_on,
+            spp,
+            max_depth,
+            min_contribution: 0.0,
+            threads: Some(1),
+        }
+    }
+}
+
+/// A scene of `objects` (each with its own material), lit by `lights`,
+/// seen by `camera`, fog (if any) on.
+pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>, camera: Camera) -> Shot {
     let mut objs = Vec::new();
     let mut materials = Vec::new();
     let mut object_materials = Vec::new();
@@ -16,7 +53,7 @@ pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>
         materials.push(m);
         object_materials.push(i as u32);
     }
-    Scene {
+    let scene = Scene {
         accel: Accel::build(Vec::new(), objs).expect("no meshes to miss"),
         object_materials,
         materials,
@@ -24,8 +61,8 @@ pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>
         ambient: Vec3::ONE,
         background: Vec3::ZERO,
         fog: None,
-        camera,
-    }
+    };
+    Shot { scene, camera, fog_on: true }
 }
 
 pub fn light(position: Vec3) -> PointLight {
@@ -55,16 +92,25 @@ pub fn glass(ior: f32) -> Material {
     }
 }
 
+/// A 16×8 repeating texture whose texels all differ.
+pub fn distinct_texture() -> std::sync::Arc<prism_shade::ImageTexture> {
+    let (w, h) = (16u32, 8u32);
+    let texels = (0..w * h)
+        .map(|k| {
+            Vec3::new((k % w) as f32 / w as f32, (k / w) as f32 / h as f32, ((k * 7) % 11) as f32 / 11.0)
+        })
+        .collect();
+    let image =
+        prism_shade::ImageTexture::from_linear(w, h, texels, prism_shade::Wrap::Repeat).expect("valid");
+    std::sync::Arc::new(image)
+}
+
 pub fn camera(position: Vec3, look_at: Vec3, up: Vec3, vfov: f32, w: u32, h: u32) -> Camera {
     Camera::new(position, look_at, up, vfov, w, h).expect("valid camera")
 }
 
-pub fn settings(spp: u32, max_depth: u32) -> RenderSettings {
-    RenderSettings { spp, max_depth, min_contribution: 0.0, threads: Some(1) }
-}
-
-pub fn render(scene: &Scene, spp: u32, max_depth: u32) -> Image {
-    prism_shade::render(scene, &settings(spp, max_depth), RenderHooks::default()).0
+pub fn render(shot: &Shot, spp: u32, max_depth: u32) -> Image {
+    prism_shade::render(shot, &shot.settings(spp, max_depth), RenderHooks::default()).0
 }
 
 pub fn px(img: &Image, i: u32, j: u32) -> Vec3 {
@@ -93,5 +139,5 @@ pub fn sphere_t(o: Vec3, d: Vec3, c: Vec3, r: f32) -> Option<f32> {
 }
 
 pub fn fog(color: Vec3, mode: prism_shade::FogMode) -> Option<Fog> {
-    Some(Fog { color, mode, enabled: true })
+    Some(Fog { color, mode })
 }

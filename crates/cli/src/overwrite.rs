@@ -1,0 +1,34 @@
+//! The CLI's rule for output paths: never over an input of the render.
+//! Writing itself (PNG or EXR by extension, atomically) is
+//! `prism_shade::write_image`.
+
+use anyhow::{Result, bail};
+use std::path::{Path, PathBuf};
+
+/// Refuses an output path that is (or will replace) one of `inputs`, or
+/// that is a directory.
+pub fn check_not_an_input(output: &Path, inputs: &[PathBuf]) -> Result<()> {
+    if output.is_dir() {
+        bail!("{}: the output is a directory; give a file name ending in .png or .exr", output.display());
+    }
+    let target = match std::fs::canonicalize(output) {
+        Ok(p) => Some(p),
+        Err(_) => {
+            // Not there yet: its directory (if it exists) plus its name.
+            let dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            match (std::fs::canonicalize(dir), output.file_name()) {
+                (Ok(d), Some(name)) => Some(d.join(name)),
+                _ => None,
+            }
+        }
+    };
+    if let Some(t) = target
+        && inputs.contains(&t)
+    {
+        bail!(
+            "{}: refusing to write the image over an input of this render (the scene, a mesh, a material library or a texture)",
+            output.display()
+        );
+    }
+    Ok(())
+}

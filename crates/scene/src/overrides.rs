@@ -1,0 +1,215 @@
+//! [`Overrides`]: the values given outside a scene file (on the command
+//! line) that replace the file's, and, with the `clap` feature, their
+//! command-line flags, shared by `prism render`, `prism view` and
+//! `prism info`.
+
+use prism_geometry::glam::Vec3;
+
+/// Values given outside the scene file (on the command line) that replace
+/// the file's. The loader applies them once, to
+/// [`crate::LoadedScene::settings`]; errors in them are reported as
+/// [`crate::SceneError::Option`], naming the flag (`--width`,
+/// `--camera-pos`, ...).
+///
+/// With the `clap` feature this is also the flags' definition
+/// (`#[command(flatten)]`): `--width W`, `--height H`, `--spp N`,
+/// `--max-depth N`, `--threads N`, `--fog` / `--no-fog`,
+/// `--camera-pos X,Y,Z`, `--look-at X,Y,Z`, `--up X,Y,Z`, `--fov DEGREES`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// Image width. If only one of width and height is given, the other
+    /// follows the scene's aspect ratio.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Maximum recursion depth.
+    pub max_depth: Option<u32>,
+    /// Worker threads (`None`: every core).
+    pub threads: Option<usize>,
+    /// Fog on or off. On in a scene without `[fog]` adds a linear white
+    /// fog reaching total at 1.5 times the distance to the farthest corner
+    /// of the scene's bounds (with a warning).
+    pub fog: Option<bool>,
+    /// Camera position (`--camera-pos`); must be finite.
+    pub camera_pos: Option<Vec3>,
+    /// The point the camera looks at, at the centre of the image
+    /// (`--look-at`); must be finite and differ from the position.
+    pub look_at: Option<Vec3>,
+    /// The camera's up direction (`--up`); must be finite, non-zero and
+    /// not parallel to the view direction.
+    pub up: Option<Vec3>,
+    /// Vertical field of view in degrees (`--fov`), strictly between 0
+    /// and 180.
+    pub fov: Option<f32>,
+}
+
+/// `X,Y,Z`: three comma-separated numbers (checked to be finite by the
+/// loader), the form of `--camera-pos`, `--look-at` and `--up`.
+///
+/// # Errors
+/// A message naming what is wrong.
+pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [x, y, z] = parts.as_slice() else {
+        return Err(format!("expected three comma-separated numbers X,Y,Z, got {} values", parts.len()));
+    };
+    let num = |t: &str| t.parse::<f32>().map_err(|_| format!("`{t}` is not a number (expected X,Y,Z)"));
+    Ok(Vec3::new(num(x)?, num(y)?, num(z)?))
+}
+
+#[cfg(feature = "clap")]
+mod cli {
+    use super::{Overrides, parse_vec3};
+    use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches, value_parser};
+
+    /// `--fog` and `--no-fog` are two flags of the one field
+    /// [`Overrides::fog`], so the flags are declared here rather than derived.
+    impl Args for Overrides {
+        fn augment_args(cmd: Command) -> Command {
+            let vec3 = |id: &'static str, help: &'static str| {
+                Arg::new(id)
+                    .long(id)
+                    .value_name("X,Y,Z")
+                    .value_parser(parse_vec3)
+                    .allow_hyphen_values(true)
+                    .help(help)
+            };
+            cmd.arg(
+                Arg::new("width")
+                    .long("width")
+                    .value_name("W")
+                    .value_parser(value_parser!(u32))
+                    .help("Image width in pixels (alone: the height keeps the scene's aspect ratio)"),
+            )
+            .arg(
+                Arg::new("height")
+                    .long("height")
+                    .value_name("H")
+                    .value_parser(value_parser!(u32))
+                    .help("Image height in pixels (alone: the width keeps the scene's aspect ratio)"),
+            )
+            .arg(
+                Arg::new("spp")
+                    .long("spp")
+                    .value_name("N")
+                    .value_parser(value_parser!(u32))
+                    .help("Samples per pixel"),
+            )
+            .arg(
+                Arg::new("fog")
+                    .long("fog")
+                    .action(ArgAction::SetTrue)
+                    .conflicts_with("no-fog")
+                    .help("Turn fog on (adds a default linear fog if the scene has none)"),
+            )
+            .arg(
+                Arg::new("no-fog").long("no-fog").action(ArgAction::SetTrue).help("Turn the scene's fog off"),
+            )
+            .arg(
+                Arg::new("threads")
+                    .long("threads")
+                    .value_name("N")
+                    .value_parser(value_parser!(u16).range(1..=4096))
+                    .help("Worker threads [default: every core]"),
+            )
+            .arg(
+                Arg::new("max-depth")
+                    .long("max-depth")
+                    .value_name("N")
+                    .value_parser(value_parser!(u32))
+                    .help("Maximum recursion depth of reflection and refraction rays"),
+            )
+            .arg(vec3("camera-pos", "Camera position, replacing the scene's"))
+            .arg(vec3("look-at", "The point at the centre of the image, replacing the scene's"))
+            .arg(vec3("up", "The camera's up direction, replacing the scene's"))
+            .arg(
+                Arg::new("fov")
+                    .long("fov")
+                    .value_name("DEGREES")
+                    .value_parser(value_parser!(f32))
+                    .allow_hyphen_values(true)
+                    .help("Vertical field of view in degrees, strictly between 0 and 180"),
+            )
+        }
+
+        fn augment_args_for_update(cmd: Command) -> Command {
+            Self::augment_args(cmd)
+        }
+    }
+
+    impl FromArgMatches for Overrides {
+        fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+            Ok(Self {
+                width: m.get_one("width").copied(),
+                height: m.get_one("height").copied(),
+                spp: m.get_one("spp").copied(),
+                max_depth: m.get_one("max-depth").copied(),
+                threads: m.get_one::<u16>("threads").map(|&t| usize::from(t)),
+                fog: match (m.get_flag("fog"), m.get_flag("no-fog")) {
+                    (true, _) => Some(true),
+                    (_, true) => Some(false),
+                    _ => None,
+                },
+                camera_pos: m.get_one("camera-pos").copied(),
+                look_at: m.get_one("look-at").copied(),
+                up: m.get_one("up").copied(),
+                fov: m.get_one("fov").copied(),
+            })
+        }
+
+        fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+            *self = Self::from_arg_matches(m)?;
+            Ok(())
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use prism_geometry::glam::Vec3;
+
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            overrides: Overrides,
+        }
+
+        fn parse(args: &[&str]) -> Result<Overrides, clap::Error> {
+            use clap::Parser;
+            Cli::try_parse_from(std::iter::once("prism").chain(args.iter().copied())).map(|c| c.overrides)
+        }
+
+        #[test]
+        fn flags_fill_the_overrides() {
+            assert_eq!(parse(&[]).unwrap(), Overrides::default());
+            let o = parse(&[
+                "--width",
+                "40",
+                "--spp",
+                "3",
+                "--no-fog",
+                "--threads",
+                "2",
+                "--camera-pos",
+                "-1,2.5,3",
+                "--fov",
+                "-5",
+            ])
+            .unwrap();
+            assert_eq!(o.width, Some(40));
+            assert_eq!(o.height, None);
+            assert_eq!(o.spp, Some(3));
+            assert_eq!(o.fog, Some(false));
+            assert_eq!(o.threads, Some(2));
+            assert_eq!(o.camera_pos, Some(Vec3::new(-1.0, 2.5, 3.0)));
+            assert_eq!(o.fov, Some(-5.0), "range checks are the loader's, naming the flag");
+            assert_eq!(parse(&["--fog"]).unwrap().fog, Some(true));
+            assert!(parse(&["--fog", "--no-fog"]).is_err());
+            assert!(parse(&["--threads", "0"]).is_err());
+            assert!(parse(&["--up", "1,2"]).is_err());
+            assert!(parse(&["--width", "-3"]).is_err());
+        }
+    }
+}
