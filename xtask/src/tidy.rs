@@ -62,7 +62,6 @@ const MAY_PRINT: &[(&str, &str)] = &[
         "the viewer prints the warnings of a scene it (re)loads while its window runs; \
          candidate to move to the caller",
     ),
-    ("crates/view/src/bin/", "the `prism-view` binary (issue 10 removes it in favour of `prism view`)"),
 ];
 
 /// Where `unsafe` may appear at all (each still needs its `// SAFETY:`
