@@ -25,6 +25,7 @@ pub mod rng;
 pub use obj::{ObjError, load_obj};
 pub use rng::Rng;
 
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Whether we run under CI: the environment variable `CI` is set to
@@ -37,13 +38,15 @@ pub fn in_ci() -> bool {
 /// Reports that a test cannot run because `reason` (what is missing, and
 /// where it was looked for). Outside CI it prints `skipped: REASON` and
 /// returns, and the caller returns early; under CI it panics, failing the
-/// test.
+/// test. The line goes straight to the process's standard error, not
+/// through `eprintln!`, which the test harness captures and hides for a
+/// passing test: a skip must be seen in a plain `cargo test`.
 ///
 /// # Panics
 /// Under CI, always: a test whose tools or data are missing must fail there.
 pub fn skip(reason: &str) {
     assert!(!in_ci(), "CI is set but {reason}: CI must provide it (see .ci/run)");
-    eprintln!("skipped: {reason}");
+    let _ = writeln!(std::io::stderr(), "skipped: {reason}");
 }
 
 /// `<workspace root>/../shared/data`, the shared test meshes, if present;
