@@ -24,6 +24,7 @@
 mod info;
 mod interrupt;
 mod overwrite;
+mod writable;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Args, Parser, Subcommand};
@@ -168,6 +169,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     // An explicit output name is checked before the (possibly long) load.
     if let Some(o) = &args.output {
         OutputFormat::from_path(o)?;
+        writable::check_writable(o)?;
     }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
@@ -181,6 +183,9 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         None => default_output(&args.scene)?,
     };
     let format = OutputFormat::from_path(&output)?;
+    if args.output.is_none() {
+        writable::check_writable(&output)?;
+    }
     overwrite::check_not_an_input(&output, &loaded.inputs)?;
     let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());
     let previews = args.aov_preview || loaded.aov_preview;

@@ -128,3 +128,60 @@ fn bad_options_and_files_fail_cleanly() {
     let out = prism(dir.path(), &["render", "s.toml", "--fog", "--no-fog"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn a_missing_scene_file_is_named_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = prism(dir.path(), &["render", "none.toml", "-o", "x.png"]);
+    let err = text(&out.stderr);
+    assert_eq!(err.trim_end(), "error: none.toml: cannot read scene file: no such file");
+    assert_eq!(err.matches("none.toml").count(), 1, "{err}");
+}
+
+#[test]
+fn an_unwritable_output_fails_before_the_scene_is_read_or_rendered() {
+    let dir = tempfile::tempdir().unwrap();
+    // The scene is broken: had it been read first, its error would show.
+    fs::write(dir.path().join("s.toml"), GOOD.replace("radius = 1", "radius = -1")).unwrap();
+    let ro = dir.path().join("ro");
+    fs::create_dir(&ro).unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        fs::set_permissions(&ro, fs::Permissions::from_mode(0o555)).unwrap();
+    }
+    // Root may write anywhere; then a directory no one can create files in.
+    let ro_target = if fs::write(ro.join("probe"), b"").is_ok() {
+        fs::remove_file(ro.join("probe")).unwrap();
+        "/proc/prism-no-such-dir/img.png".to_owned()
+    } else {
+        "ro/sub/img.png".to_owned()
+    };
+    for (target, words) in [
+        (ro_target.as_str(), "cannot write the image: no file can be created in"),
+        ("s.toml/img.png", "s.toml is a file, not a directory"),
+    ] {
+        let out = prism(dir.path(), &["render", "s.toml", "-o", target]);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{target}: {err}");
+        assert!(err.starts_with(&format!("error: {target}: ")) && err.contains(words), "{target}: {err}");
+        assert!(!err.contains("radius") && !err.contains("rendering"), "{target}: {err}");
+    }
+    assert!(!ro.join("sub").exists());
+}
+
+#[test]
+fn eight_bit_colours_warn_and_samples_aliases_work() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD.replace("[0.8, 0.1, 0.1]", "[255, 0, 0]")).unwrap();
+    for flag in ["--samples", "-s", "--spp"] {
+        let out = prism(dir.path(), &["render", "s.toml", "-o", "img.png", flag, "2"]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let err = text(&out.stderr);
+        assert!(
+            err.contains("warning: s.toml:14:9: color [255, 0, 0] looks like 8-bit values: colour components are 0–1 (or \"#ff0000\")"),
+            "{err}"
+        );
+        assert!(text(&out.stdout).contains("32×18, 2 spp"), "{flag}: {}", text(&out.stdout));
+    }
+}

@@ -131,23 +131,87 @@ fn cases() -> Vec<Case> {
 
     // Wrong types.
     let s = with("radius = 1", "radius = \"one\"");
-    v.push(Case::new("type: string for a number", s.clone(), at(&s, "\"one\""), "expected f64"));
+    v.push(Case::new(
+        "type: string for a number",
+        s.clone(),
+        at(&s, "\"one\""),
+        "expected a number, got the string \"one\"",
+    ));
     let s = with("width = 32", "width = -32");
-    v.push(Case::new("type: negative width", s.clone(), at(&s, "-32"), "expected u64"));
+    v.push(Case::new(
+        "type: negative width",
+        s.clone(),
+        at(&s, "-32"),
+        "expected a whole number (0 or more), got the number -32",
+    ));
     let s = with("spp = 1", "spp = 1.5");
-    v.push(Case::new("type: fractional spp", s.clone(), at(&s, "1.5"), "invalid type"));
+    v.push(Case::new("type: fractional spp", s.clone(), at(&s, "1.5"), "expected a whole number"));
     let s = with("center = [0, 1, 0]", "center = [0, 1]");
-    v.push(Case::new("type: two numbers for a point", s.clone(), at(&s, "[0, 1]"), "invalid length 2"));
+    v.push(Case::new(
+        "type: two numbers for a point",
+        s.clone(),
+        at(&s, "[0, 1]"),
+        "expected an array of 3 numbers, got 2 values",
+    ));
     let s = with("type = \"sphere\"", "type = \"torus\"");
-    v.push(Case::new("type: unknown object type", s.clone(), at(&s, "\"torus\""), "unknown variant `torus`"));
+    v.push(Case::new("type: unknown object type", s.clone(), at(&s, "\"torus\""), "unknown name `torus`"));
 
     // Unknown keys.
     let s = with("radius = 1", "radius = 1\nradios = 2");
-    v.push(Case::new("unknown key in an object", s.clone(), at(&s, "radios"), "unknown field `radios`"));
+    v.push(Case::new("unknown key in an object", s.clone(), at(&s, "radios"), "unknown key `radios` in a sphere; did you mean `radius`? (a sphere takes: center, radius, plus type, material, transform, name)"));
     let s = format!("{GOOD}[rendr]\nwidth = 3\n");
-    v.push(Case::new("unknown table", s.clone(), at(&s, "rendr"), "unknown field `rendr`"));
+    v.push(Case::new(
+        "unknown table",
+        s.clone(),
+        at(&s, "rendr"),
+        "unknown key `rendr`; did you mean `render`?",
+    ));
     let s = with("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nfov_deg = 40");
-    v.push(Case::new("unknown camera key", s.clone(), at(&s, "fov_deg"), "unknown field `fov_deg`"));
+    v.push(Case::new(
+        "unknown camera key",
+        s.clone(),
+        at(&s, "fov_deg"),
+        "unknown key `fov_deg`; did you mean `fov`?",
+    ));
+
+    // Messages in scene terms, with suggestions (issue 15).
+    let s = with("width = 32", "width = 640.0");
+    v.push(Case::new(
+        "type: fractional width",
+        s.clone(),
+        at(&s, "640.0"),
+        "expected a whole number (0 or more), got the number 640.0",
+    ));
+    let s = with("radius = 1", "radius = \"1\"");
+    v.push(Case::new(
+        "type: quoted number",
+        s.clone(),
+        at(&s, "\"1\""),
+        "expected a number, got the string \"1\"",
+    ));
+    let s = format!("{GOOD}[[objects]]\ntype = \"cylinder\"\nradius = 1\nhieght = 2\n");
+    v.push(Case::new(
+        "misspelt cylinder key",
+        s.clone(),
+        at(&s, "hieght"),
+        "did you mean `height`? (a cylinder takes: base, radius, height, plus",
+    ));
+    let s = with("[camera]", "[camra]");
+    v.push(Case::new(
+        "misspelt table",
+        s.clone(),
+        at(&s, "camra"),
+        "unknown key `camra`; did you mean `camera`?",
+    ));
+    let s = with("radius = 1", "radius = 1\ntransform = [{ rotate = [0, 30, 0] }]");
+    v.push(Case::new(
+        "rotate with three angles",
+        s.clone(),
+        at(&s, "[0, 30, 0]"),
+        "`rotate = { axis = [x, y, z], degrees = D }`",
+    ));
+    let s = with("radius = 1", "radius = 1\ntransform = [{ rotate_y = \"30\" }]");
+    v.push(Case::new("quoted rotation angle", s.clone(), at(&s, "\"30\""), "expected a number"));
 
     // Missing required keys.
     let s = with("radius = 1\n", "");
@@ -342,6 +406,28 @@ fn cases() -> Vec<Case> {
     );
     v.push(Case::new("flag: not a number", GOOD, "--spp", "invalid digit").flags(&["--spp", "many"]).code(2));
     v.push(Case::new("flag: unknown output format", GOOD, "x.jpg", ".png or .exr").flags(&["-o", "x.jpg"]));
+    v.push(
+        Case::new("flag: misspelt --samples", GOOD, "--smaples", "--samples")
+            .flags(&["--smaples", "3"])
+            .code(2),
+    );
+    v.push(
+        Case::new("missing scene file", GOOD, "none.toml: cannot read scene file: no such file", "none.toml")
+            .arg("none.toml"),
+    );
+    v.push(
+        Case::new("output under a file", GOOD, "s.toml/img.png", "s.toml is a file, not a directory")
+            .flags(&["-o", "s.toml/img.png"]),
+    );
+    v.push(
+        Case::new(
+            "output under a file, deeper",
+            GOOD,
+            "s.toml/a/b/img.png",
+            "s.toml is a file, not a directory",
+        )
+        .flags(&["-o", "s.toml/a/b/img.png"]),
+    );
     v
 }
 

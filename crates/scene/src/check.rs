@@ -6,6 +6,7 @@ use crate::error::{Location, SceneError};
 use crate::format::{Color, Num, V3};
 use prism_geometry::GeometryError;
 use prism_geometry::glam::Vec3;
+use std::cell::RefCell;
 use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
@@ -19,11 +20,26 @@ pub(crate) type Result<T> = std::result::Result<T, SceneError>;
 pub(crate) struct Ctx<'a> {
     pub file: &'a Path,
     pub text: &'a str,
+    /// Where checks put warnings about values they accept (colours that
+    /// look like 8-bit values), if anywhere.
+    notes: Option<&'a RefCell<Vec<String>>>,
 }
 
 impl<'a> Ctx<'a> {
     pub fn new(file: &'a Path, text: &'a str) -> Self {
-        Self { file, text }
+        Self { file, text, notes: None }
+    }
+
+    /// This context, putting warnings into `notes`.
+    pub fn noting(self, notes: &'a RefCell<Vec<String>>) -> Self {
+        Self { notes: Some(notes), ..self }
+    }
+
+    /// Adds the warning `message` about `span`.
+    fn note(&self, span: &Range<usize>, message: &str) {
+        if let Some(notes) = self.notes {
+            notes.borrow_mut().push(format!("{}: {message}", self.loc(span)));
+        }
     }
 
     /// Where `span` is, or the file alone for `None`.
@@ -96,7 +112,18 @@ impl<'a> Ctx<'a> {
 
     pub fn color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
         match vec3_of(&c.get_ref().0) {
-            Some(v) if v.min_element() >= 0.0 => Ok(v),
+            Some(v) if v.min_element() >= 0.0 => {
+                if looks_8bit(&c.get_ref().0) {
+                    let [r, g, b] = c.get_ref().0.map(|x| x as u8);
+                    self.note(
+                        &c.span(),
+                        &format!(
+                            "{what} {v} looks like 8-bit values: colour components are 0–1 (or \"#{r:02x}{g:02x}{b:02x}\")"
+                        ),
+                    );
+                }
+                Ok(v)
+            }
             _ => Err(self.invalid(
                 &c.span(),
                 format!("{what} must be three finite numbers >= 0, got {:?}", c.get_ref().0),
@@ -118,6 +145,13 @@ impl<'a> Ctx<'a> {
     ) -> Result<f32> {
         n.map_or(Ok(default), check)
     }
+}
+
+/// Whether a colour looks like 8-bit values written by mistake for 0–1
+/// ones: whole numbers from 0 to 255, at least one of them above 1
+/// (`[255, 0, 0]`, `[128, 128, 128]`).
+pub(crate) fn looks_8bit(c: &[f64; 3]) -> bool {
+    c.iter().all(|&x| x.fract() == 0.0 && (0.0..=255.0).contains(&x)) && c.iter().any(|&x| x > 1.0)
 }
 
 /// Three finite `f32`s, or `None`.

@@ -77,7 +77,7 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
 pub enum SceneError {
     /// A file could not be read (the scene itself, or a mesh, material
     /// library or texture it names; `location` is where it was named).
-    #[error("{location}: cannot read {what} {}: {reason}", path.display())]
+    #[error("{}", read_message(location, what, path, reason))]
     Read {
         /// Where the file was named (the scene file itself: no position).
         location: Location,
@@ -128,6 +128,17 @@ pub enum SceneError {
         /// What was wrong.
         message: String,
     },
+}
+
+/// `location: cannot read WHAT PATH: reason`, or, where the location is
+/// the file itself (a scene file given on the command line), the path
+/// once: `PATH: cannot read WHAT: reason`.
+fn read_message(location: &Location, what: &str, path: &Path, reason: &str) -> String {
+    if location.line.is_none() && location.file == path {
+        format!("{location}: cannot read {what}: {reason}")
+    } else {
+        format!("{location}: cannot read {what} {}: {reason}", path.display())
+    }
 }
 
 impl SceneError {

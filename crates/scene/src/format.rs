@@ -44,18 +44,21 @@ impl SceneFile {
                 Some(span) => Location::at_span(file_name, text, &span),
                 None => Location::file(file_name),
             };
-            SceneError::Syntax { location, message: syntax_message(e.message()) }
+            let object = e.span().and_then(|s| crate::suggest::object_at(text, s.start, e.message()));
+            SceneError::Syntax { location, message: syntax_message(e.message(), object) }
         })
     }
 }
 
-/// toml's messages, made to say what was expected in scene terms.
-fn syntax_message(m: &str) -> String {
+/// toml's messages, made to say what was expected in scene terms
+/// (`object`: the type of the object the message is about, if any).
+fn syntax_message(m: &str, object: Option<ObjectKind>) -> String {
     let m = m.trim();
     if m.starts_with("missing field `camera`") {
         return "missing [camera] table (position and look_at are required)".into();
     }
-    m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value")
+    let m = m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value");
+    crate::suggest::friendly(&m, object)
 }
 
 #[derive(Deserialize, Default)]
@@ -275,11 +278,39 @@ pub enum Step {
     Matrix([[f64; 4]; 4]),
 }
 
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug)]
 pub struct AxisAngle {
     pub axis: [f64; 3],
     pub degrees: f64,
+}
+
+/// `rotate` as written: a table, explained when it is not one (such as
+/// `rotate = [0, 30, 0]`).
+impl<'de> Deserialize<'de> for AxisAngle {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Fields {
+            axis: [f64; 3],
+            degrees: f64,
+        }
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = AxisAngle;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "`rotate = { axis = [x, y, z], degrees = D }` (a rotation about an axis; \
+                     to turn about X, Y or Z use the steps `rotate_x = D`, `rotate_y = D`, `rotate_z = D`, \
+                     e.g. `transform = [{ rotate_y = 30 }]`)",
+                )
+            }
+            fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<AxisAngle, A::Error> {
+                let f = Fields::deserialize(de::value::MapAccessDeserializer::new(map))?;
+                Ok(AxisAngle { axis: f.axis, degrees: f.degrees })
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 #[derive(Deserialize, Debug, Default)]

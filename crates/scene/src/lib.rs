@@ -60,6 +60,7 @@ mod object;
 mod overrides;
 mod read;
 mod settings;
+mod suggest;
 mod view;
 
 pub use error::{Location, SceneError, line_col};
@@ -279,7 +280,11 @@ pub fn parse_scene_str_with(
 ) -> Result<LoadedScene, SceneError> {
     let file = format::SceneFile::parse(text, file_name)?;
     let res = read::read_resources(&file, base_dir);
-    build::build_scene(check::Ctx::new(file_name, text), &file, &res, options)
+    let notes = std::cell::RefCell::new(Vec::new());
+    let mut loaded =
+        build::build_scene(check::Ctx::new(file_name, text).noting(&notes), &file, &res, options)?;
+    loaded.warnings.extend(notes.into_inner());
+    Ok(loaded)
 }
 
 #[cfg(test)]

@@ -97,15 +97,7 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
         ("path", span_of(&d.path)),
         ("normals", span_of(&d.normals)),
     ];
-    let allowed: &[&str] = match kind {
-        ObjectKind::Sphere => &["center", "radius"],
-        ObjectKind::Plane => &["point", "normal"],
-        ObjectKind::Cuboid => &["center", "size", "min", "max"],
-        ObjectKind::Cylinder | ObjectKind::Cone => &["base", "radius", "height"],
-        ObjectKind::Disk => &["center", "normal", "radius"],
-        ObjectKind::Triangle => &["vertices"],
-        ObjectKind::Mesh => &["path", "normals"],
-    };
+    let allowed = shape_keys(kind);
     match first_foreign(&present, allowed) {
         Some((key, span)) => Err(ctx.invalid(
             &span,
@@ -116,6 +108,20 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
             ),
         )),
         None => Ok(()),
+    }
+}
+
+/// The keys of its own that an object of `kind` takes (besides `type`,
+/// `material`, `transform` and `name`).
+pub(crate) fn shape_keys(kind: ObjectKind) -> &'static [&'static str] {
+    match kind {
+        ObjectKind::Sphere => &["center", "radius"],
+        ObjectKind::Plane => &["point", "normal"],
+        ObjectKind::Cuboid => &["center", "size", "min", "max"],
+        ObjectKind::Cylinder | ObjectKind::Cone => &["base", "radius", "height"],
+        ObjectKind::Disk => &["center", "normal", "radius"],
+        ObjectKind::Triangle => &["vertices"],
+        ObjectKind::Mesh => &["path", "normals"],
     }
 }
 

@@ -12,7 +12,7 @@ use prism_geometry::glam::Vec3;
 /// `--camera-pos`, ...).
 ///
 /// With the `clap` feature this is also the flags' definition
-/// (`#[command(flatten)]`): `--width W`, `--height H`, `--spp N`,
+/// (`#[command(flatten)]`): `--width W`, `--height H`, `--spp N` (also `-s N`, `--samples N`),
 /// `--max-depth N`, `--threads N`, `--fog` / `--no-fog`,
 /// `--camera-pos X,Y,Z`, `--look-at X,Y,Z`, `--up X,Y,Z`, `--fov DEGREES`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -93,6 +93,8 @@ mod cli {
             .arg(
                 Arg::new("spp")
                     .long("spp")
+                    .short('s')
+                    .visible_alias("samples")
                     .value_name("N")
                     .value_parser(value_parser!(u32))
                     .help("Samples per pixel"),
@@ -206,6 +208,8 @@ mod cli {
             assert_eq!(o.camera_pos, Some(Vec3::new(-1.0, 2.5, 3.0)));
             assert_eq!(o.fov, Some(-5.0), "range checks are the loader's, naming the flag");
             assert_eq!(parse(&["--fog"]).unwrap().fog, Some(true));
+            assert_eq!(parse(&["--samples", "7"]).unwrap().spp, Some(7));
+            assert_eq!(parse(&["-s", "9"]).unwrap().spp, Some(9));
             assert!(parse(&["--fog", "--no-fog"]).is_err());
             assert!(parse(&["--threads", "0"]).is_err());
             assert!(parse(&["--up", "1,2"]).is_err());

@@ -8,6 +8,7 @@ use std::fs;
 
 mod build;
 mod files;
+mod messages;
 mod overrides;
 mod parse;
 

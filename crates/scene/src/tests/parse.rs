@@ -140,25 +140,36 @@ fn unknown_keys_are_rejected_where_they_are() {
     refused(&[
         (
             "[[objects]]\ntype = \"sphere\"\nradius = 1\nradios = 2\n",
-            "unknown field `radios`",
+            "unknown key `radios` in a sphere; did you mean `radius`? (a sphere takes: center, radius, plus",
             Some("radios"),
         ),
-        ("[materials.x]\ncolour = [1, 0, 0]\n", "unknown field `colour`", Some("colour")),
+        (
+            "[materials.x]\ncolour = [1, 0, 0]\n",
+            "unknown key `colour`; did you mean `color`?",
+            Some("colour"),
+        ),
     ]);
     let err = parse(&BASE.replace("spp = 2", "widht = 3")).unwrap_err().to_string();
-    assert!(err.starts_with("test.toml:5:1:") && err.contains("unknown field `widht`"), "{err}");
+    assert!(
+        err.starts_with("test.toml:5:1:") && err.contains("unknown key `widht`; did you mean `width`?"),
+        "{err}"
+    );
 }
 
 #[test]
 fn wrong_types_say_what_was_expected() {
     refused(&[
-        ("[[objects]]\ntype = \"sphere\"\nradius = \"big\"\n", "expected f64", Some("radius")),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = \"big\"\n",
+            "expected a number, got the string \"big\"",
+            Some("radius"),
+        ),
         (
             "[[objects]]\ntype = \"sphere\"\nradius = 1\ncenter = [1, 2]\n",
-            "expected an array of length 3",
+            "expected an array of 3 numbers, got 2 values",
             Some("center"),
         ),
-        ("[[objects]]\ntype = \"blob\"\n", "unknown variant `blob`", Some("blob")),
+        ("[[objects]]\ntype = \"blob\"\n", "unknown name `blob`", Some("blob")),
         ("[materials.x]\ncolor = \"red\"\n", "#rrggbb", Some("\"red\"")),
     ]);
 }
@@ -246,7 +257,7 @@ fn singular_transforms_are_refused_at_the_step() {
         ),
         (
             "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ spin = 3 }]\n",
-            "unknown variant `spin`",
+            "unknown name `spin`",
             None,
         ),
     ]);
@@ -314,7 +325,7 @@ fn bad_fog_and_materials_are_refused() {
         ("[fog]\nstart = 10\nend = 5\n", "fog end (5) must be greater than fog start (10)", None),
         ("[fog]\nmode = \"exponential\"\n", "needs `density`", None),
         ("[fog]\nmode = \"exponential\"\ndensity = 0.1\nend = 3\n", "belong to linear fog", None),
-        ("[fog]\nmode = \"fuzzy\"\n", "unknown variant `fuzzy`", None),
+        ("[fog]\nmode = \"fuzzy\"\n", "unknown name `fuzzy`", None),
         (
             "[materials.m]\nreflectivity = 0.6\ntransparency = 0.6\n",
             "must not exceed 1",
@@ -351,7 +362,7 @@ fn unknown_aov_names_are_refused_where_they_are() {
     assert!(err.contains("depth, normal, geo_normal, albedo, object_id"), "{err}");
     let text = BASE.replace("spp = 2", "spp = 2\naov = \"depth\"");
     let err = parse(&text).unwrap_err().to_string();
-    assert!(err.starts_with("test.toml:6:7:") && err.contains("sequence"), "{err}");
+    assert!(err.starts_with("test.toml:6:7:") && err.contains("expected an array"), "{err}");
     let text = BASE.replace("spp = 2", "spp = 2\naov_preview = 1");
     assert!(parse(&text).unwrap_err().to_string().starts_with("test.toml:6:"));
 }

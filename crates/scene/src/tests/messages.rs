@@ -1,0 +1,90 @@
+//! Messages in scene terms (issue 15): no Rust types, "did you mean …?"
+//! with the keys of the shape at hand, the `rotate` form explained, and a
+//! warning for colours that look like 8-bit values.
+
+use super::*;
+
+#[test]
+fn messages_name_no_rust_types() {
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = \"1\"\n",
+            "expected a number, got the string \"1\"",
+            Some("radius"),
+        ),
+        ("[[objects]]\ntype = \"sphere\"\nradius = true\n", "expected a number, got true", Some("radius")),
+    ]);
+    let err = parse(&BASE.replace("width = 320", "width = 640.0")).unwrap_err().to_string();
+    assert!(err.contains("expected a whole number (0 or more), got the number 640.0"), "{err}");
+    let err = parse(&BASE.replace("spp = 2", "spp = -1")).unwrap_err().to_string();
+    assert!(err.contains("expected a whole number (0 or more), got the number -1"), "{err}");
+    for err in [&err, &parse(&BASE.replace("width = 320", "width = 640.0")).unwrap_err().to_string()] {
+        for rust in ["f64", "u64", "u32", "usize", "struct", "sequence"] {
+            assert!(!err.contains(rust), "{err} names {rust}");
+        }
+    }
+}
+
+#[test]
+fn a_misspelt_key_gets_a_suggestion_and_the_keys_of_its_shape() {
+    let err = expect_err("[[objects]]\ntype = \"cylinder\"\nradius = 1\nhieght = 2\n", "");
+    assert!(err.contains("unknown key `hieght` in a cylinder; did you mean `height`?"), "{err}");
+    assert!(
+        err.contains("a cylinder takes: base, radius, height, plus type, material, transform, name"),
+        "{err}"
+    );
+    // Only the cylinder's keys, not every shape's.
+    assert!(!err.contains("vertices") && !err.contains("normals"), "{err}");
+    // No suggestion for a word that is nothing like a key.
+    let err = expect_err(
+        "[[objects]]\ntype = \"plane\"\nxyzzy = 1\n",
+        "unknown key `xyzzy` in a plane (a plane takes: point, normal",
+    );
+    assert!(!err.contains("did you mean"), "{err}");
+    // Other tables: the keys serde lists, from the struct itself.
+    let err =
+        parse(&BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nfvo = 3")).unwrap_err().to_string();
+    assert!(err.contains("unknown key `fvo`; did you mean `fov`?"), "{err}");
+    assert!(err.contains("expected one of: position, look_at, up, fov"), "{err}");
+    expect_err("[[lights]]\nposition = [0, 1, 0]\nintensty = 2\n", "did you mean `intensity`?");
+    expect_err("[[objects]]\ntype = \"spere\"\n", "unknown name `spere`; did you mean `sphere`?");
+    expect_err(
+        "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ rotatey = 3 }]\n",
+        "did you mean `rotate_y`?",
+    );
+}
+
+#[test]
+fn rotate_with_three_angles_explains_the_form() {
+    let extra = "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ rotate = [0, 30, 0] }]\n";
+    let err = expect_err(extra, "`rotate = { axis = [x, y, z], degrees = D }`");
+    assert!(err.contains("rotate_y = D") && !err.contains("length 3"), "{err}");
+    assert_at(&err, extra, "rotate");
+    // The table form still works, and still checks its keys.
+    expect_err(
+        "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ rotate = { axis = [0, 1, 0], degres = 3 } }]\n",
+        "did you mean `degrees`?",
+    );
+    let ok = format!(
+        "{BASE}[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{{ rotate = {{ axis = [0, 1, 0], degrees = 30 }} }}]\n"
+    );
+    parse(&ok).unwrap();
+}
+
+#[test]
+fn colours_that_look_8_bit_warn_and_hex_is_offered() {
+    let text = BASE.replace("color = [0.8, 0.1, 0.1]", "color = [255, 0, 0]");
+    let loaded = parse(&text).unwrap();
+    let line = text.lines().position(|l| l.contains("[255, 0, 0]")).unwrap() + 1;
+    let w: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("8-bit")).collect();
+    assert_eq!(w.len(), 1, "{:?}", loaded.warnings);
+    assert!(w[0].starts_with(&format!("test.toml:{line}:9: color [255, 0, 0] looks like 8-bit")), "{}", w[0]);
+    assert!(w[0].contains("colour components are 0–1 (or \"#ff0000\")"), "{}", w[0]);
+    // The hex form it offers is accepted, and 0–1 colours (or HDR ones that are not whole numbers) say nothing.
+    for c in ["\"#ff0000\"", "[1, 0, 0]", "[0.8, 0.1, 0.1]", "[2.5, 2.5, 2.5]"] {
+        let loaded = parse(&BASE.replace("[0.8, 0.1, 0.1]", c)).unwrap();
+        assert!(loaded.warnings.iter().all(|w| !w.contains("8-bit")), "{c}: {:?}", loaded.warnings);
+    }
+    let bg = BASE.replace("spp = 2", "spp = 2\nbackground = [128, 128, 128]");
+    assert!(parse(&bg).unwrap().warnings.iter().any(|w| w.contains("background") && w.contains("#808080")));
+}
