@@ -71,13 +71,18 @@ struct ViewArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// The scene file (TOML, see docs/scene-format.md), or an OBJ mesh to look at.
+    /// The scene file (TOML, see docs/scene-format.md), `-` for a scene on standard input,
+    /// or an OBJ mesh to look at.
     scene: PathBuf,
     /// Output image, .png or .exr [default: out/NAME.png for a scene NAME.toml].
     #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
     #[command(flatten)]
     overrides: Overrides,
+    /// Replace a scene value by its dotted path, before the scene is checked (repeatable):
+    /// --set render.spp=16 --set fog.enabled=false --set objects.0.radius=2.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// No progress bar and no closing statistics line.
     #[arg(short, long)]
     quiet: bool,
@@ -97,10 +102,14 @@ struct RenderArgs {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// The scene file, or an OBJ mesh.
+    /// The scene file, `-` for standard input, or an OBJ mesh.
     scene: PathBuf,
     #[command(flatten)]
     overrides: Overrides,
+    /// Replace a scene value by its dotted path, before the scene is checked (repeatable):
+    /// --set render.spp=16 --set fog.enabled=false --set objects.0.radius=2.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -156,7 +165,8 @@ fn view_command(args: ViewArgs) -> Result<()> {
 }
 
 fn info_command(args: &InfoArgs) -> Result<()> {
-    let opts = LoadOptions { limits: args.limits.limits(), overrides: args.overrides };
+    let opts =
+        LoadOptions { limits: args.limits.limits(), overrides: args.overrides, sets: args.set.clone() };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -173,7 +183,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
-    let opts = LoadOptions { limits: args.limits.limits(), overrides: args.overrides };
+    let opts =
+        LoadOptions { limits: args.limits.limits(), overrides: args.overrides, sets: args.set.clone() };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -262,8 +273,12 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// `out/<scene stem>.png`, relative to the working directory.
+/// `out/<scene stem>.png`, relative to the working directory
+/// (`out/stdin.png` for a scene read from standard input).
 fn default_output(scene: &Path) -> Result<PathBuf> {
+    if prism_scene::is_stdin_path(scene) {
+        return Ok(Path::new("out").join("stdin.png"));
+    }
     let stem = scene.file_stem().filter(|s| !s.is_empty()).with_context(|| {
         format!("cannot name an output image after {}; give one with -o", scene.display())
     })?;

@@ -407,6 +407,17 @@ fn cases() -> Vec<Case> {
     v.push(Case::new("flag: not a number", GOOD, "--spp", "invalid digit").flags(&["--spp", "many"]).code(2));
     v.push(Case::new("flag: unknown output format", GOOD, "x.jpg", ".png or .exr").flags(&["-o", "x.jpg"]));
     v.push(
+        Case::new("flag: --set zero samples", GOOD, "--set: render.spp=0", "at least 1")
+            .flags(&["--set", "render.spp=0"]),
+    );
+    v.push(
+        Case::new("flag: --set misspelt key", GOOD, "--set: render.sp=2", "did you mean `spp`?")
+            .flags(&["--set", "render.sp=2"]),
+    );
+    v.push(
+        Case::new("flag: --set without =", GOOD, "--set: spp", "expected KEY=VALUE").flags(&["--set", "spp"]),
+    );
+    v.push(
         Case::new("flag: misspelt --samples", GOOD, "--smaples", "--samples")
             .flags(&["--smaples", "3"])
             .code(2),

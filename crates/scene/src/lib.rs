@@ -59,6 +59,7 @@ mod obj;
 mod object;
 mod overrides;
 mod read;
+mod set;
 mod settings;
 mod suggest;
 mod view;
@@ -99,12 +100,20 @@ impl Default for Limits {
 }
 
 /// How to load a scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// Size limits.
     pub limits: Limits,
     /// Command-line replacements.
     pub overrides: Overrides,
+    /// Scene values replaced by their dotted path, each `KEY=VALUE`
+    /// (`render.spp=16`, `fog.enabled=false`, `objects.1.radius=2`), in
+    /// order, applied to the scene text before it is parsed, so that they
+    /// reach every key and are checked like the file's own (`prism render
+    /// --set`). A problem in a set value is a [`SceneError::Option`] naming
+    /// `--set`; other places keep the file's own lines. Scene files only:
+    /// an OBJ file as a scene refuses them.
+    pub sets: Vec<String>,
 }
 
 /// One OBJ file used by the scene (stored once however many objects use it).
@@ -212,14 +221,43 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
 /// `prism render <(generate-scene)`, is read like a file.)
 pub const MAX_SCENE_BYTES: u64 = 256 << 20;
 
-/// Loads a scene from `path`, whatever its kind: an OBJ mesh (extension
+/// Loads a scene from `path`, whatever its kind: `-` is a TOML scene read
+/// from standard input ([`load_scene_from_reader`]); an OBJ mesh (extension
 /// `.obj`, any case) becomes a scene of its own ([`load_obj_scene`]);
 /// any other file is read as a TOML scene ([`load_scene_with`]).
 ///
 /// # Errors
 /// A [`SceneError`] naming the file, the place and the problem.
 pub fn load_path(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    if is_stdin_path(path) {
+        return load_scene_from_reader(&mut std::io::stdin().lock(), options);
+    }
     if is_obj_path(path) { load_obj_scene(path, options) } else { load_scene_with(path, options) }
+}
+
+/// Whether `path` names standard input (`-`) for [`load_path`].
+#[must_use]
+pub fn is_stdin_path(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// The name a scene read from standard input has in messages.
+pub const STDIN_NAME: &str = "<stdin>";
+
+/// Loads a TOML scene read from `reader` (standard input for `prism
+/// render -`): at most [`MAX_SCENE_BYTES`], UTF-8. Its messages name it
+/// [`STDIN_NAME`], and the paths it holds (meshes, textures) are relative
+/// to the current directory, as there is no scene file to be relative to.
+///
+/// # Errors
+/// A [`SceneError`] naming [`STDIN_NAME`], the place and the problem.
+pub fn load_scene_from_reader(
+    reader: &mut dyn std::io::Read,
+    options: &LoadOptions,
+) -> Result<LoadedScene, SceneError> {
+    let name = Path::new(STDIN_NAME);
+    let text = read::scene_text_from(reader, name)?;
+    parse_scene_str_with(&text, Path::new("."), name, options)
 }
 
 /// Whether [`load_path`] reads `path` as an OBJ mesh (its extension is
@@ -254,6 +292,12 @@ pub fn is_obj_path(path: &Path) -> bool {
 /// # Errors
 /// A [`SceneError`] naming the file, the place and the problem.
 pub fn load_obj_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    if let Some(set) = options.sets.first() {
+        return Err(SceneError::Option {
+            flag: "--set",
+            message: format!("{set}: --set changes a scene file's values; an OBJ file as a scene has none"),
+        });
+    }
     let (canonical, base, name) = read::obj_alone_path(path)?;
     let res = read::read_obj_alone(&base, &name);
     build::build_obj_scene(check::Ctx::new(path, ""), &name, &canonical, &res, options)
@@ -278,6 +322,12 @@ pub fn parse_scene_str_with(
     file_name: &Path,
     options: &LoadOptions,
 ) -> Result<LoadedScene, SceneError> {
+    if !options.sets.is_empty() {
+        let edited = set::apply(text, &options.sets, file_name)?;
+        let plain = LoadOptions { sets: Vec::new(), ..options.clone() };
+        return parse_scene_str_with(&edited.text, base_dir, file_name, &plain)
+            .map_err(|e| edited.remap(e, file_name));
+    }
     let file = format::SceneFile::parse(text, file_name)?;
     let res = read::read_resources(&file, base_dir);
     let notes = std::cell::RefCell::new(Vec::new());

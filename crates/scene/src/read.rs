@@ -298,12 +298,22 @@ fn named_error(path: &Path, what: &'static str, reason: String) -> SceneError {
 /// # Errors
 /// [`SceneError::Read`] or, for text that is not UTF-8, [`SceneError::Syntax`].
 pub(crate) fn read_scene_text(path: &Path) -> Result<(String, Option<PathBuf>), SceneError> {
-    use std::io::Read;
     check_named(path, "scene file", "a .toml file")?;
+    let mut file = std::fs::File::open(path).map_err(|e| named_error(path, "scene file", io_reason(&e)))?;
+    let text = scene_text_from(&mut file, path)?;
+    Ok((text, std::fs::canonicalize(path).ok()))
+}
+
+/// The scene text read from `reader` (named `path` in messages): at most
+/// [`MAX_SCENE_BYTES`], UTF-8, a byte-order mark dropped.
+///
+/// # Errors
+/// [`SceneError::Read`] or, for text that is not UTF-8, [`SceneError::Syntax`].
+pub(crate) fn scene_text_from(reader: &mut dyn std::io::Read, path: &Path) -> Result<String, SceneError> {
+    use std::io::Read;
     let read_err = |reason: String| named_error(path, "scene file", reason);
-    let file = std::fs::File::open(path).map_err(|e| read_err(io_reason(&e)))?;
     let mut bytes = Vec::new();
-    file.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes).map_err(|e| read_err(io_reason(&e)))?;
+    reader.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes).map_err(|e| read_err(io_reason(&e)))?;
     if bytes.len() as u64 > MAX_SCENE_BYTES {
         return Err(read_err(format!(
             "it holds more than {} MiB; a scene file is text (is this the right file?)",
@@ -322,7 +332,7 @@ pub(crate) fn read_scene_text(path: &Path) -> Result<(String, Option<PathBuf>), 
             "invalid UTF-8 here: scene files are UTF-8 TOML text (is this a binary file?)",
         )
     })?;
-    Ok((text.to_owned(), std::fs::canonicalize(path).ok()))
+    Ok(text.to_owned())
 }
 
 /// For an OBJ file `path` loaded as a scene: its canonical path, its

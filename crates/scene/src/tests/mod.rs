@@ -11,6 +11,7 @@ mod files;
 mod messages;
 mod overrides;
 mod parse;
+mod set;
 
 pub(super) const BASE: &str = r#"
 [render]

@@ -1,0 +1,299 @@
+//! `--set KEY=VALUE`: scene values replaced by their dotted path
+//! (`render.spp=16`, `fog.enabled=false`, `objects.1.radius=2`,
+//! `materials.red.color=[1, 0, 0]`) in the scene *text*, before it is
+//! parsed, so that a set reaches every key the format has, checked exactly
+//! like the file's own.
+//!
+//! The text is edited in place (toml_edit's spans): a value that exists is
+//! replaced where it is written, on its line; a key that does not exist is
+//! added on a new line under its table's header (or at the end of the
+//! file, under a new header, for a table the file does not have). Every
+//! other line keeps its text, and [`Edited::remap`] turns an error back
+//! into the file's own line numbers, or, for an error in a set value, into
+//! an error that names the flag.
+
+use crate::error::SceneError;
+use std::ops::Range;
+use std::path::Path;
+use toml_edit::{ImDocument, Item, Key, Table, Value};
+
+/// The flag, in messages.
+const FLAG: &str = "--set";
+
+/// One edit: where a set's value went in the edited text.
+#[derive(Clone, Debug)]
+struct Edit {
+    /// The set as given (`KEY=VALUE`).
+    set: String,
+    /// 1-based line in the edited text.
+    line: usize,
+    /// Whole lines inserted from `line` on (0: a value replaced on `line`).
+    lines: usize,
+    /// For a replaced value: the 1-based column where it starts.
+    column: usize,
+}
+
+/// The scene text with every set applied.
+#[derive(Clone, Debug)]
+pub(crate) struct Edited {
+    /// The edited text.
+    pub text: String,
+    edits: Vec<Edit>,
+}
+
+/// Applies `sets` (each `KEY=VALUE`) to the scene `text`, in order.
+///
+/// # Errors
+/// [`SceneError::Option`] naming `--set`, for a set that is not
+/// `KEY=VALUE`, a path through something that is not a table or array, an
+/// index past the end, or a whole table replaced by a value.
+/// [`SceneError::Syntax`] when `text` itself is not TOML (at its place).
+pub(crate) fn apply(text: &str, sets: &[String], file: &Path) -> Result<Edited, SceneError> {
+    let mut edited = Edited { text: text.to_owned(), edits: Vec::new() };
+    for set in sets {
+        edited.apply_one(set, file)?;
+    }
+    Ok(edited)
+}
+
+fn flag_error(set: &str, message: impl std::fmt::Display) -> SceneError {
+    SceneError::Option { flag: FLAG, message: format!("{set}: {message}") }
+}
+
+/// Where a set's value goes.
+enum Target {
+    /// Replace the value written at this span.
+    Replace(Range<usize>),
+    /// A new line `KEY = VALUE` (KEY dotted) after the line of the table
+    /// header at this byte offset.
+    Line(usize, String),
+    /// A new line `KEY = VALUE` at the top of the file.
+    Top(String),
+    /// `KEY = VALUE` inside the inline table whose closing brace is at
+    /// this offset (`empty`: it has no keys yet).
+    Inline { close: usize, key: String, empty: bool },
+    /// A new `[TABLE]` with `KEY = VALUE` at the end of the file.
+    NewTable(String, String),
+}
+
+impl Edited {
+    fn apply_one(&mut self, set: &str, file: &Path) -> Result<(), SceneError> {
+        let Some((path, value)) = set.split_once('=') else {
+            return Err(flag_error(set, "expected KEY=VALUE, such as render.spp=16 or fog.enabled=false"));
+        };
+        let (path, value) = (path.trim(), value.trim());
+        let keys = Key::parse(path).map_err(|_| {
+            flag_error(
+                set,
+                format!("`{path}` is not a dotted key path (such as render.spp or objects.0.radius)"),
+            )
+        })?;
+        let keys: Vec<String> = keys.iter().map(|k| k.get().to_owned()).collect();
+        if value.contains('\n') {
+            return Err(flag_error(set, "the value must be on one line"));
+        }
+        // A TOML value as written, or else a string (`material=blue`).
+        let repr = match value.parse::<Value>() {
+            Ok(_) => value.to_owned(),
+            Err(_) => Value::from(value).to_string().trim().to_owned(),
+        };
+        let doc = ImDocument::parse(self.text.as_str()).map_err(|e| {
+            let location = match e.span() {
+                Some(s) => crate::error::Location::at_span(file, &self.text, &s),
+                None => crate::error::Location::file(file),
+            };
+            SceneError::Syntax { location, message: e.message().trim().to_owned() }
+        })?;
+        let target = locate(doc.as_table(), &keys, set, "")?;
+        let text = &self.text;
+        let line_of = |offset: usize| crate::error::line_col(text, offset);
+        let (new_text, edit) = match target {
+            Target::Replace(span) => {
+                let (line, column) = line_of(span.start);
+                let t = format!("{}{repr}{}", &text[..span.start], &text[span.end..]);
+                (t, Edit { set: set.to_owned(), line, lines: 0, column })
+            }
+            Target::Line(header, key) => {
+                // On the line after the table's header (the top of the file for the top level).
+                let at = text[header..].find('\n').map_or(text.len(), |i| header + i + 1);
+                let lead =
+                    if at == text.len() && !text.is_empty() && !text.ends_with('\n') { "\n" } else { "" };
+                let (line, _) = line_of(at);
+                let line = if lead.is_empty() { line } else { line + 1 };
+                let t = format!("{}{lead}{key} = {repr}\n{}", &text[..at], &text[at..]);
+                (t, Edit { set: set.to_owned(), line, lines: 1, column: 1 })
+            }
+            Target::Top(key) => {
+                let t = format!("{key} = {repr}\n{text}");
+                (t, Edit { set: set.to_owned(), line: 1, lines: 1, column: 1 })
+            }
+            Target::Inline { close, key, empty } => {
+                let (line, column) = line_of(close);
+                let sep = if empty { " " } else { ", " };
+                let t = format!("{}{sep}{key} = {repr} {}", text[..close].trim_end(), &text[close..]);
+                (t, Edit { set: set.to_owned(), line, lines: 0, column: column.saturating_sub(1).max(1) })
+            }
+            Target::NewTable(table, key) => {
+                let sep = if text.is_empty() || text.ends_with('\n') { "" } else { "\n" };
+                let (line, _) = line_of(text.len());
+                let line = if sep.is_empty() { line } else { line + 1 };
+                let t = format!("{text}{sep}[{table}]\n{key} = {repr}\n");
+                (t, Edit { set: set.to_owned(), line, lines: 2, column: 1 })
+            }
+        };
+        if edit.lines > 0 {
+            for e in &mut self.edits {
+                if e.line >= edit.line {
+                    e.line += edit.lines;
+                }
+            }
+        }
+        self.text = new_text;
+        self.edits.push(edit);
+        Ok(())
+    }
+
+    /// `e` (from the edited text) in the terms of the file as written: a
+    /// problem at a set value names the flag and the set; any other
+    /// place's line is the file's own.
+    pub(crate) fn remap(&self, e: SceneError, file: &Path) -> SceneError {
+        let Some(loc) = e.location().filter(|l| l.file == file) else { return e };
+        let Some(line) = loc.line else { return e };
+        let column = loc.column.unwrap_or(1);
+        for edit in self.edits.iter().rev() {
+            let hit = if edit.lines == 0 {
+                line == edit.line && column >= edit.column
+            } else {
+                (edit.line..edit.line + edit.lines).contains(&line)
+            };
+            if hit {
+                let message = match &e {
+                    SceneError::Syntax { message, .. } | SceneError::Invalid { message, .. } => {
+                        message.clone()
+                    }
+                    other => other.to_string(),
+                };
+                return flag_error(&edit.set, message);
+            }
+        }
+        let shift: usize = self.edits.iter().filter(|d| d.lines > 0 && d.line < line).map(|d| d.lines).sum();
+        let mut e = e;
+        if let SceneError::Syntax { location, .. }
+        | SceneError::Invalid { location, .. }
+        | SceneError::Read { location, .. } = &mut e
+        {
+            location.line = Some(line - shift.min(line - 1));
+        }
+        e
+    }
+}
+
+/// `keys` as a dotted key, each part quoted where TOML needs it.
+fn dotted(keys: &[String]) -> String {
+    keys.iter().map(|k| Key::new(k.as_str()).to_string()).collect::<Vec<_>>().join(".")
+}
+
+/// `here` joined with `more`, for messages.
+fn join(here: &str, more: &str) -> String {
+    if here.is_empty() { more.to_owned() } else { format!("{here}.{more}") }
+}
+
+/// The index `key` into a list of `len` entries at `here`.
+fn index(key: &str, len: usize, here: &str, set: &str) -> Result<usize, SceneError> {
+    match key.parse::<usize>() {
+        Ok(n) if n < len => Ok(n),
+        Ok(n) => Err(flag_error(
+            set,
+            format!("`{here}` has {len} entries (0 to {}), there is no entry {n}", len.saturating_sub(1)),
+        )),
+        Err(_) => Err(flag_error(set, format!("`{here}` is a list; expected an index from 0, got `{key}`"))),
+    }
+}
+
+/// What a value is, for messages.
+fn describe(v: &Value) -> &'static str {
+    match v {
+        Value::String(_) => "a string",
+        Value::Integer(_) | Value::Float(_) => "a number",
+        Value::Boolean(_) => "true or false",
+        Value::Datetime(_) => "a date",
+        Value::Array(_) => "a list",
+        Value::InlineTable(_) => "a table",
+    }
+}
+
+fn is_a_table(set: &str, here: &str) -> SceneError {
+    flag_error(set, format!("`{here}` is a table; set its keys one by one (such as {here}.KEY=VALUE)"))
+}
+
+/// Where `keys` (at least one) go in the table `t` at `here`.
+fn locate(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, SceneError> {
+    let key = &keys[0];
+    let at = join(here, key);
+    match t.get(key) {
+        None | Some(Item::None) => missing(t, keys, set, here),
+        Some(Item::Table(sub)) if keys.len() > 1 => locate(sub, &keys[1..], set, &at),
+        Some(Item::Table(_)) => Err(is_a_table(set, &at)),
+        Some(Item::ArrayOfTables(a)) => {
+            let Some(k) = keys.get(1) else { return Err(is_a_table(set, &at)) };
+            let n = index(k, a.len(), &at, set)?;
+            let at = format!("{at}.{n}");
+            match (a.get(n), keys.len() > 2) {
+                (Some(sub), true) => locate(sub, &keys[2..], set, &at),
+                _ => Err(is_a_table(set, &at)),
+            }
+        }
+        Some(Item::Value(v)) => locate_value(v, &keys[1..], set, &at),
+    }
+}
+
+/// Where `keys` (perhaps none: the value itself) go in the value `v` at `here`.
+fn locate_value(v: &Value, keys: &[String], set: &str, here: &str) -> Result<Target, SceneError> {
+    let Some(key) = keys.first() else {
+        return v.span().map(Target::Replace).ok_or_else(|| flag_error(set, "cannot place this value"));
+    };
+    match v {
+        Value::InlineTable(t) => match t.get(key) {
+            Some(inner) => locate_value(inner, &keys[1..], set, &join(here, key)),
+            None => {
+                let span = t.span().ok_or_else(|| flag_error(set, "cannot place this value"))?;
+                Ok(Target::Inline {
+                    close: span.end.saturating_sub(1),
+                    key: dotted(keys),
+                    empty: t.is_empty(),
+                })
+            }
+        },
+        Value::Array(a) => {
+            let n = index(key, a.len(), here, set)?;
+            let inner = a.get(n).ok_or_else(|| flag_error(set, "cannot place this value"))?;
+            locate_value(inner, &keys[1..], set, &format!("{here}.{n}"))
+        }
+        other => Err(flag_error(set, format!("`{here}` is {}, not a table", describe(other)))),
+    }
+}
+
+/// Where `keys`, whose first is not in the table `t` at `here`, go.
+fn missing(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, SceneError> {
+    let (last, table) = keys.split_last().ok_or_else(|| flag_error(set, "empty key"))?;
+    let key = Key::new(last.as_str()).to_string();
+    if here.is_empty() {
+        // The top level: a key before the first table, or a new table.
+        return Ok(if table.is_empty() { Target::Top(key) } else { Target::NewTable(dotted(table), key) });
+    }
+    if t.is_implicit() {
+        // Named only by its sub-tables (`[materials.red]` makes `materials`).
+        let path: Vec<String> = here.split('.').map(str::to_owned).chain(table.iter().cloned()).collect();
+        return Ok(Target::NewTable(dotted(&path), key));
+    }
+    match t.span() {
+        Some(span) if !t.is_dotted() => Ok(Target::Line(span.start, dotted(keys))),
+        _ => Err(flag_error(
+            set,
+            format!(
+                "cannot add `{}` to `{here}` as the file writes it; add the key in the file",
+                dotted(keys)
+            ),
+        )),
+    }
+}

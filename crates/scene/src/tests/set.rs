@@ -1,0 +1,120 @@
+//! `--set KEY=VALUE` (`LoadOptions::sets`): values replaced, keys and
+//! tables added, errors naming the flag, and the file's own lines kept for
+//! every other error.
+
+use super::*;
+
+const SCENE: &str = r#"[render]
+width = 32
+height = 18
+spp = 1
+
+[camera]
+position = [0, 1, 5]
+look_at = [0, 1, 0]
+
+[[lights]]
+position = [3, 5, 4]
+
+[materials.red]
+color = [0.8, 0.1, 0.1]
+
+[[objects]]
+type = "plane"
+
+[[objects]]
+type = "sphere"
+center = [0, 1, 0]
+radius = 1
+material = "red"
+"#;
+
+fn with_sets(text: &str, sets: &[&str]) -> Result<LoadedScene, SceneError> {
+    let opts = LoadOptions { sets: sets.iter().map(|s| (*s).to_owned()).collect(), ..LoadOptions::default() };
+    parse_scene_str_with(text, Path::new("."), Path::new("s.toml"), &opts)
+}
+
+fn set_err(text: &str, sets: &[&str]) -> String {
+    with_sets(text, sets).unwrap_err().to_string()
+}
+
+#[test]
+fn sets_replace_values_add_keys_and_tables() {
+    let plain = with_sets(SCENE, &[]).unwrap();
+    assert_eq!(plain.settings.spp, 1);
+    let l = with_sets(
+        SCENE,
+        &[
+            "render.spp=16",
+            "render.max_depth=3",
+            "camera.position.2 = 9",
+            "objects.1.radius=0.5",
+            "materials.red.color=[0, 0, 1]",
+            "materials.blue.color=\"#00ff00\"",
+            "objects.0.material=blue",
+            "render.width=20",
+        ],
+    )
+    .unwrap();
+    assert_eq!(l.settings.spp, 16);
+    assert_eq!(l.settings.max_depth, 3);
+    assert_eq!(l.settings.camera.size(), (20, 18));
+    assert_eq!(l.settings.camera.position(), prism_geometry::glam::Vec3::new(0.0, 1.0, 9.0));
+    assert_eq!(l.info.materials, ["blue", "red"], "the plane uses blue: no default material");
+    // The sphere's radius: its bounds.
+    assert_eq!(l.info.bounds.max, prism_geometry::glam::Vec3::new(0.5, 1.5, 0.5));
+    // The last set of a key wins; a key of a table the file lacks makes the table.
+    let l = with_sets(SCENE, &["render.spp=2", "render.spp=5"]).unwrap();
+    assert_eq!(l.settings.spp, 5);
+    let no_render = SCENE.replace("[render]\nwidth = 32\nheight = 18\nspp = 1\n", "");
+    let l = with_sets(&no_render, &["render.spp=7"]).unwrap();
+    assert_eq!(l.settings.spp, 7);
+    let fog = format!("{SCENE}[fog]\nend = 20\n");
+    assert!(with_sets(&fog, &[]).unwrap().settings.fog);
+    assert!(!with_sets(&fog, &["fog.enabled=false"]).unwrap().settings.fog);
+}
+
+#[test]
+fn problems_in_a_set_name_the_flag() {
+    for (sets, words) in [
+        (&["render.spp=0"][..], "--set: render.spp=0: spp (samples per pixel) must be at least 1"),
+        (&["render.spp"], "--set: render.spp: expected KEY=VALUE"),
+        (&["render.sp=3"], "--set: render.sp=3: unknown key `sp`; did you mean `spp`?"),
+        (
+            &["render.spp=many"],
+            "--set: render.spp=many: expected a whole number (0 or more), got the string \"many\"",
+        ),
+        (
+            &["objects.9.radius=1"],
+            "--set: objects.9.radius=1: `objects` has 2 entries (0 to 1), there is no entry 9",
+        ),
+        (&["objects.x.radius=1"], "`objects` is a list; expected an index from 0, got `x`"),
+        (&["render=3"], "`render` is a table; set its keys one by one"),
+        (&["render.spp.x=1"], "`render.spp` is a number, not a table"),
+        (&["objects.1.radios=1"], "unknown key `radios` in a sphere; did you mean `radius`?"),
+        (&["fog.enabled=false"], "--set: fog.enabled=false: linear fog needs `end`"),
+    ] {
+        let err = set_err(SCENE, sets);
+        assert!(err.starts_with("--set: ") && err.contains(words), "{sets:?}: {err}");
+    }
+}
+
+#[test]
+fn other_errors_keep_the_files_own_lines() {
+    let bad = SCENE.replace("radius = 1", "radius = -1");
+    let plain = with_sets(&bad, &[]).unwrap_err().to_string();
+    assert!(plain.starts_with("s.toml:22:10: "), "{plain}");
+    // A key added under [render] (a new line) and a table added at the end.
+    let err = set_err(&bad, &["render.max_depth=3", "materials.green.color=[0, 1, 0]", "render.spp=2"]);
+    assert_eq!(err, plain);
+}
+
+#[test]
+fn an_obj_scene_refuses_sets() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let opts = LoadOptions { sets: vec!["render.spp=2".into()], ..LoadOptions::default() };
+    let err = load_path(&obj, &opts).unwrap_err().to_string();
+    assert!(err.starts_with("--set: render.spp=2:") && err.contains("OBJ"), "{err}");
+}
