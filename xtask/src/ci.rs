@@ -1,8 +1,8 @@
 //! `cargo xtask ci`: everything a commit must pass, and exactly what CI
 //! (`.ci/run`) runs: rustfmt (the workspace and `fuzz/`), clippy with
 //! warnings denied, every test (including the tidy tests of
-//! `xtask/src/tidy.rs`), the docs with warnings denied, and a build of the
-//! fuzz targets.
+//! `xtask/src/tidy.rs`), the docs with warnings denied, a build of the
+//! fuzz targets, and `cargo publish --dry-run -p prism-geometry`.
 
 use crate::{cargo, fuzz, run_checked};
 use anyhow::Result;
@@ -34,6 +34,14 @@ pub fn run(_args: &[String]) -> Result<()> {
     let t = Instant::now();
     fuzz::build()?;
     step("fuzz build", t);
+
+    // prism-geometry is published on its own: its package (metadata,
+    // README, sources) must build alone from crates.io dependencies.
+    // `--allow-dirty` so that the check also runs before a commit; it
+    // needs the crates.io index (network).
+    let t = Instant::now();
+    run_checked(cargo().args(["publish", "--dry-run", "-p", "prism-geometry", "--allow-dirty"]))?;
+    step("prism-geometry publish dry run", t);
 
     eprintln!("xtask ci: all checks passed in {:.0} s", start.elapsed().as_secs_f64());
     Ok(())

@@ -13,9 +13,14 @@
 //! ([`offset_ray_origin`]); that is the crate's only self-intersection
 //! epsilon. No NaN leaves the crate for finite inputs.
 //!
+//! Some items mention "the report": the ray-tracing report whose scene
+//! prism first reproduced. Each such mention also states the formula it
+//! refers to, so these docs stand alone.
+//!
 //! # Example
 //!
-//! The report's box rotated 45° about Y, hit head-on along −Z:
+//! A box rotated 45° about Y (as in the report prism started from), hit
+//! head-on along −Z:
 //!
 //! ```
 //! use prism_geometry::{Cuboid, Instance, Intersect, Ray, Transform};

@@ -6,7 +6,11 @@ use glam::{Vec2, Vec3};
 
 /// A solid cone along +Y: base centre `base`, base `radius`, apex at
 /// `base + height·Y`, with a closed base cap and no second nappe above the
-/// apex (the report's figure 3 bug).
+/// apex: the quadric `x² + z² = (k·(height − y))²` (`x, y, z` relative to
+/// `base`, `k = radius / height`)
+/// is also satisfied by the mirror cone above the apex (`y > base.y +
+/// height`), whose hits are discarded (the original report's figure 3 shows
+/// that second nappe by mistake).
 ///
 /// On the side, the outward normal at a point at distance `s = height − y`
 /// below the apex is `(radial + k·Y) / √(1 + k²)` with `k = radius / height`

@@ -5,7 +5,9 @@ use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
 /// A solid cylinder along +Y: base centre `base`, `radius`, `height`; both
-/// caps closed (the report's cylinder "with a visible top").
+/// caps closed (the report's cylinder "with a visible top"): the side is
+/// `(x − base.x)² + (z − base.z)² = radius²` for `base.y ≤ y ≤ base.y +
+/// height`, the caps the disks of that radius at both ends.
 ///
 /// uv: on the side, `u = 0.5 + atan2(z, x) / 2π` about the axis and
 /// `v = (y − base.y) / height`; on a cap, `((x / r + 1) / 2, (z / r + 1) / 2)`

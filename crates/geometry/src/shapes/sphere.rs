@@ -16,7 +16,9 @@ pub struct Sphere {
     radius: f32,
 }
 
-/// The report's spherical mapping of a unit direction `d` to `(u, v)`.
+/// The spherical mapping of a unit direction `d` to `(u, v)`:
+/// `u = 0.5 + atan2(d.z, d.x) / 2π`, `v = 0.5 − asin(d.y) / π` (the
+/// report's equations 7 and 8; `d.y` is clamped to `[−1, 1]`).
 #[inline]
 #[must_use]
 pub fn sphere_uv(d: Vec3) -> Vec2 {
