@@ -97,6 +97,8 @@ struct RenderArgs {
     #[arg(long)]
     aov_preview: bool,
     #[command(flatten)]
+    obj: ObjArgs,
+    #[command(flatten)]
     limits: LimitArgs,
 }
 
@@ -111,7 +113,29 @@ struct InfoArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
     #[command(flatten)]
+    obj: ObjArgs,
+    #[command(flatten)]
     limits: LimitArgs,
+}
+
+/// OBJ mode's choices (`prism render model.obj`); a TOML scene refuses them.
+#[derive(Args)]
+struct ObjArgs {
+    /// For an OBJ file: where the camera looks from [default: auto, facing the mesh's larger side].
+    #[arg(long, value_enum, value_name = "VIEW")]
+    view: Option<prism_scene::ObjView>,
+    /// For an OBJ file: the point light's position, replacing the one placed for the view.
+    #[arg(long, value_name = "X,Y,Z", value_parser = prism_scene::parse_vec3, allow_hyphen_values = true)]
+    light: Option<prism_geometry::glam::Vec3>,
+    /// For an OBJ file: a ground plane under the mesh, which catches its shadow.
+    #[arg(long)]
+    floor: bool,
+}
+
+impl ObjArgs {
+    fn options(&self) -> prism_scene::ObjOptions {
+        prism_scene::ObjOptions { view: self.view, light: self.light, floor: self.floor }
+    }
 }
 
 #[derive(Args)]
@@ -165,8 +189,12 @@ fn view_command(args: ViewArgs) -> Result<()> {
 }
 
 fn info_command(args: &InfoArgs) -> Result<()> {
-    let opts =
-        LoadOptions { limits: args.limits.limits(), overrides: args.overrides, sets: args.set.clone() };
+    let opts = LoadOptions {
+        limits: args.limits.limits(),
+        overrides: args.overrides,
+        sets: args.set.clone(),
+        obj: args.obj.options(),
+    };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -183,8 +211,12 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
-    let opts =
-        LoadOptions { limits: args.limits.limits(), overrides: args.overrides, sets: args.set.clone() };
+    let opts = LoadOptions {
+        limits: args.limits.limits(),
+        overrides: args.overrides,
+        sets: args.set.clone(),
+        obj: args.obj.options(),
+    };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");

@@ -415,6 +415,10 @@ fn cases() -> Vec<Case> {
             .flags(&["--set", "render.sp=2"]),
     );
     v.push(
+        Case::new("flag: --view on a scene file", GOOD, "--view", "applies to an OBJ file")
+            .flags(&["--view", "top"]),
+    );
+    v.push(
         Case::new("flag: --set without =", GOOD, "--set: spp", "expected KEY=VALUE").flags(&["--set", "spp"]),
     );
     v.push(

@@ -99,8 +99,18 @@ pub(crate) fn build_obj_scene(
     let vfov = ov.fov.filter(|f| f.is_finite() && *f > 0.0 && *f < 180.0).unwrap_or(OBJ_FOV);
     let half_v = (vfov / 2.0).to_radians();
     let half_h = (half_v.tan() * w.max(1) as f32 / h.max(1) as f32).atan();
-    let eye = c + Vec3::new(0.0, 0.0, r / half_v.min(half_h).sin());
-    let light = c + r * Vec3::new(1.0, 2.0, 1.5);
+    let framing = crate::obj_view::Framing::new(options.obj.view.unwrap_or_default(), bounds);
+    let eye = c + framing.toward_eye * (r / half_v.min(half_h).sin());
+    let light = match options.obj.light {
+        Some(l) if l.is_finite() => l,
+        Some(l) => {
+            return Err(SceneError::Option {
+                flag: "--light",
+                message: format!("X,Y,Z must be finite numbers, got {l}"),
+            });
+        }
+        None => framing.light(c, r),
+    };
     if !(c.is_finite() && r.is_finite() && eye.is_finite() && light.is_finite() && eye != c) {
         return Err(ctx.invalid_file(format!(
             "cannot frame the mesh, its bounds {} to {} are too large (or too small for their distance from the origin)",
@@ -109,7 +119,10 @@ pub(crate) fn build_obj_scene(
     }
     let settings = settings::resolve(&ctx, None, d, options)?;
     let lights = vec![PointLight { position: light, color: Vec3::ONE, intensity: 1.0 }];
-    let camera = CameraSource::Framed { eye, look_at: c, fov: OBJ_FOV };
+    if options.obj.floor && !bounds.is_empty() {
+        b.floor(bounds.min.y).map_err(|e| ctx.invalid_file(format!("cannot place the floor: {e}")))?;
+    }
+    let camera = CameraSource::Framed { eye, look_at: c, fov: OBJ_FOV, up: framing.up };
     b.finish(settings, &camera, lights, None).map_err(own)
 }
 
@@ -156,6 +169,17 @@ impl<'a> Build<'a> {
             object_materials: Vec::new(),
             kinds: BTreeMap::new(),
         }
+    }
+
+    /// A ground plane (normal +Y) at height `y`, in the default material
+    /// (OBJ mode's `--floor`).
+    fn floor(&mut self, y: f32) -> std::result::Result<(), prism_geometry::GeometryError> {
+        let plane = prism_geometry::Plane::new(Vec3::new(0.0, y, 0.0), Vec3::Y)?;
+        let material = self.materials.default_material();
+        *self.kinds.entry("plane".into()).or_default() += 1;
+        self.objects.push(Object::Shape(Instance::new(plane.into(), Transform::IDENTITY)));
+        self.object_materials.push(material);
+        Ok(())
     }
 
     /// A warning about the scene file.

@@ -56,6 +56,7 @@ mod error;
 mod format;
 mod material;
 mod obj;
+mod obj_view;
 mod object;
 mod overrides;
 mod read;
@@ -65,6 +66,7 @@ mod suggest;
 mod view;
 
 pub use error::{Location, SceneError, line_col};
+pub use obj_view::{ObjOptions, ObjView};
 pub use overrides::{Overrides, parse_vec3};
 pub use settings::fit_size;
 
@@ -114,6 +116,9 @@ pub struct LoadOptions {
     /// `--set`; other places keep the file's own lines. Scene files only:
     /// an OBJ file as a scene refuses them.
     pub sets: Vec<String>,
+    /// How an OBJ file as a scene is seen and lit (`--view`, `--light`,
+    /// `--floor`); a TOML scene refuses them.
+    pub obj: ObjOptions,
 }
 
 /// One OBJ file used by the scene (stored once however many objects use it).
@@ -277,13 +282,22 @@ pub fn is_obj_path(path: &Path) -> bool {
 ///   "auto"`;
 /// - a camera that frames the mesh's bounding sphere: with `c` the centre
 ///   of the bounding box and `r = |max − min| / 2`, the eye at
-///   `c + (0, 0, r / sin(θ/2))` looking at `c`, up +Y, where θ is the
-///   narrower of the vertical and horizontal fields of view (the vertical
-///   field of view is 40°, or `--fov`); camera overrides replace any of
-///   this;
-/// - one white point light of intensity 1 at `c + r · (1, 2, 1.5)`
-///   (above, right of and in front of the mesh), ambient `[1, 1, 1]`, a
-///   dark grey-blue background `[0.05, 0.05, 0.07]`;
+///   `c + e · r / sin(θ/2)` looking at `c`, where θ is the narrower of the
+///   vertical and horizontal fields of view (the vertical field of view is
+///   40°, or `--fov`) and `e` the unit direction of the view
+///   ([`ObjOptions::view`], [`ObjView`]): +Z for `front` (up +Y), −Z
+///   `back`, −X `left`, +X `right`, +Y `top` (up −Z), (1, 1, 1)/√3 `iso`;
+///   automatically `front` if the box is at least as wide (X) as it is
+///   deep (Z), else `right`, so that the camera faces the larger side;
+///   camera overrides replace any of this;
+/// - one white point light of intensity 1 at `c + r · (1·right + 2·up +
+///   1.5·e)` in the view's frame (above, right of and in front of the mesh
+///   as seen; `c + r · (1, 2, 1.5)` for `front`), or at
+///   [`ObjOptions::light`]; ambient `[1, 1, 1]`, a dark grey-blue
+///   background `[0.05, 0.05, 0.07]`;
+/// - with [`ObjOptions::floor`], an infinite ground plane (normal +Y, the
+///   neutral grey material) at the bottom of the mesh's bounding box,
+///   which catches its shadow;
 /// - 640×480 pixels, 4 samples per pixel, max depth 8 (overrides apply).
 ///
 /// Errors in the OBJ name its line; errors in its material library or
@@ -322,6 +336,7 @@ pub fn parse_scene_str_with(
     file_name: &Path,
     options: &LoadOptions,
 ) -> Result<LoadedScene, SceneError> {
+    options.obj.refuse_for_toml()?;
     if !options.sets.is_empty() {
         let edited = set::apply(text, &options.sets, file_name)?;
         let plain = LoadOptions { sets: Vec::new(), ..options.clone() };

@@ -17,8 +17,8 @@ pub(crate) enum CameraSource<'a> {
     /// A scene file's `[camera]` table, checked here.
     File(&'a Spanned<CameraDef>),
     /// A camera computed by the loader (an OBJ file as a scene): finite,
-    /// `eye != look_at`, up +Y; not written in any file.
-    Framed { eye: Vec3, look_at: Vec3, fov: f32 },
+    /// `eye != look_at`, `up` across the view; not written in any file.
+    Framed { eye: Vec3, look_at: Vec3, fov: f32, up: Vec3 },
 }
 
 /// The vertical field of view of a camera that does not give one.
@@ -66,7 +66,10 @@ pub(crate) fn camera(
     let up = match (ov.up, file.and_then(|d| d.up.as_ref())) {
         (Some(u), _) => flag_vec3(u, "--up")?,
         (None, Some(u)) => ctx.vec3(u, "camera up")?,
-        (None, None) => Vec3::Y,
+        (None, None) => match source {
+            CameraSource::Framed { up, .. } => *up,
+            CameraSource::File(_) => Vec3::Y,
+        },
     };
     let fov = match (ov.fov, source) {
         (Some(f), _) => {

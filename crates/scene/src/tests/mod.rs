@@ -9,6 +9,7 @@ use std::fs;
 mod build;
 mod files;
 mod messages;
+mod obj_mode;
 mod overrides;
 mod parse;
 mod set;

@@ -1,0 +1,99 @@
+//! OBJ mode's `--view`, `--light` and `--floor` (`LoadOptions::obj`),
+//! through `load_path`.
+
+use super::*;
+use prism_geometry::Ray;
+use prism_geometry::glam::Vec3;
+
+/// A box 2 wide (X), 1 high, 6 deep (Z), bottom at y = 0.
+fn deep_box(dir: &Path) -> PathBuf {
+    let path = dir.join("deep.obj");
+    let mut s = String::new();
+    for z in [-3.0, 3.0] {
+        for y in [0.0, 1.0] {
+            for x in [-1.0, 1.0] {
+                s.push_str(&format!("v {x} {y} {z}\n"));
+            }
+        }
+    }
+    // Faces of the box (1-based; index = 1 + x + 2y + 4z).
+    s.push_str("f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n");
+    fs::write(&path, s).unwrap();
+    path
+}
+
+fn load(path: &Path, obj: ObjOptions) -> LoadedScene {
+    load_path(path, &LoadOptions { obj, ..LoadOptions::default() }).unwrap()
+}
+
+#[test]
+fn views_put_the_eye_on_their_side_and_auto_faces_the_larger_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = deep_box(dir.path());
+    let c = Vec3::new(0.0, 0.5, 0.0);
+    for (view, side) in [
+        (None, Vec3::X),
+        (Some(ObjView::Auto), Vec3::X),
+        (Some(ObjView::Front), Vec3::Z),
+        (Some(ObjView::Back), Vec3::NEG_Z),
+        (Some(ObjView::Left), Vec3::NEG_X),
+        (Some(ObjView::Right), Vec3::X),
+        (Some(ObjView::Top), Vec3::Y),
+        (Some(ObjView::Iso), Vec3::ONE.normalize()),
+    ] {
+        let l = load(&path, ObjOptions { view, ..ObjOptions::default() });
+        let cam = &l.settings.camera;
+        assert!((cam.look_at() - c).length() < 1e-5, "{view:?}");
+        let toward = (cam.position() - c).normalize();
+        assert!((toward - side).length() < 1e-5, "{view:?}: eye toward {toward}");
+        // The mesh is in the middle of the image; the light is on the eye's side.
+        assert!(l.scene.accel.closest_hit(&cam.ray(320.0, 240.0)).is_some(), "{view:?}");
+        assert!((l.info.lights[0].position - c).dot(side) > 0.0, "{view:?}");
+    }
+}
+
+#[test]
+fn light_and_floor_are_placed_as_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = deep_box(dir.path());
+    let l = load(&path, ObjOptions { light: Some(Vec3::new(0.0, 9.0, 0.0)), ..ObjOptions::default() });
+    assert_eq!(l.info.lights[0].position, Vec3::new(0.0, 9.0, 0.0));
+    assert!(!l.info.objects_by_kind.contains_key("plane"));
+    let down = Ray::new(Vec3::new(5.0, 3.0, 0.0), Vec3::NEG_Y);
+    assert!(l.scene.accel.closest_hit(&down).is_none());
+    let l = load(&path, ObjOptions { floor: true, ..ObjOptions::default() });
+    assert_eq!(l.info.objects_by_kind.get("plane"), Some(&1));
+    // The floor is at the bottom of the mesh, beside it and under it.
+    let hit = l.scene.accel.closest_hit(&down).expect("the floor");
+    assert!((hit.hit.point.y - 0.0).abs() < 1e-5, "{:?}", hit.hit.point);
+    // A non-finite light names its flag.
+    let err = load_path(
+        &path,
+        &LoadOptions {
+            obj: ObjOptions { light: Some(Vec3::new(f32::INFINITY, 0.0, 0.0)), ..ObjOptions::default() },
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.starts_with("--light: X,Y,Z must be finite"), "{err}");
+}
+
+#[test]
+fn a_toml_scene_refuses_obj_options_naming_the_flag() {
+    for (obj, flag) in [
+        (ObjOptions { view: Some(ObjView::Top), ..ObjOptions::default() }, "--view"),
+        (ObjOptions { light: Some(Vec3::ONE), ..ObjOptions::default() }, "--light"),
+        (ObjOptions { floor: true, ..ObjOptions::default() }, "--floor"),
+    ] {
+        let err = parse_scene_str_with(
+            BASE,
+            Path::new("."),
+            Path::new("t.toml"),
+            &LoadOptions { obj, ..LoadOptions::default() },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.starts_with(&format!("{flag}: applies to an OBJ file")), "{err}");
+    }
+}
