@@ -5,16 +5,22 @@
 //!                    [--threads N] [--max-depth N] [--quiet]
 //!                    [--aov LIST] [--aov-preview]
 //!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
-//! prism info SCENE [the same overrides as render]
+//!                    [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
+//! prism info SCENE [the same overrides as render] [--set KEY=VALUE]...
 //! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
 //! ```
 //!
 //! The overrides (`--width` … `--fov`) are one type, `prism_scene::Overrides`,
 //! flattened into each command; the loader applies them once.
 //!
-//! A SCENE is a TOML scene file or an OBJ mesh (`.obj`), which becomes a
-//! scene of its own (`prism_scene::load_obj_scene`: a camera framing it,
-//! one light, its MTL materials).
+//! A SCENE is a TOML scene file, `-` for one on standard input (its
+//! relative paths then relative to the current directory), or an OBJ mesh
+//! (`.obj`), which becomes a scene of its own
+//! (`prism_scene::load_obj_scene`: a camera framing it from `--view`, one
+//! light, its MTL materials, `--floor`). `--set KEY=VALUE` replaces any
+//! value of a scene file by its dotted path (`prism_scene::LoadOptions::sets`).
+//! An output that cannot be written is refused before the scene is loaded
+//! (`writable.rs`).
 //!
 //! Errors are printed as `error: FILE:LINE:COLUMN: what` with a non-zero
 //! exit status; no output file is created or changed then.

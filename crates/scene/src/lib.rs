@@ -340,8 +340,10 @@ pub fn parse_scene_str_with(
     if !options.sets.is_empty() {
         let edited = set::apply(text, &options.sets, file_name)?;
         let plain = LoadOptions { sets: Vec::new(), ..options.clone() };
-        return parse_scene_str_with(&edited.text, base_dir, file_name, &plain)
-            .map_err(|e| edited.remap(e, file_name));
+        let mut loaded = parse_scene_str_with(&edited.text, base_dir, file_name, &plain)
+            .map_err(|e| edited.remap(e, file_name))?;
+        loaded.warnings = loaded.warnings.into_iter().map(|w| edited.remap_warning(w, file_name)).collect();
+        return Ok(loaded);
     }
     let file = format::SceneFile::parse(text, file_name)?;
     let res = read::read_resources(&file, base_dir);

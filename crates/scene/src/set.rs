@@ -188,6 +188,29 @@ impl Edited {
     }
 }
 
+impl Edited {
+    /// A warning of the build (`FILE:LINE[:COLUMN]: message`, places in
+    /// the edited text) in the file's own terms, as [`Edited::remap`] does
+    /// for errors.
+    pub(crate) fn remap_warning(&self, w: String, file: &Path) -> String {
+        let prefix = format!("{}:", file.display());
+        let Some(rest) = w.strip_prefix(&prefix) else { return w };
+        let number = |s: &str| -> Option<(usize, usize)> {
+            let digits = s.bytes().take_while(u8::is_ascii_digit).count();
+            s[..digits].parse().ok().map(|n| (n, digits))
+        };
+        let Some((line, n)) = number(rest) else { return w };
+        let rest = &rest[n..];
+        let (column, rest) = match rest.strip_prefix(':').and_then(|r| number(r).map(|c| (c, r))) {
+            Some(((c, n), r)) => (Some(c), &r[n..]),
+            None => (None, rest),
+        };
+        let Some(message) = rest.strip_prefix(": ") else { return w };
+        let location = crate::error::Location { file: file.to_path_buf(), line: Some(line), column };
+        self.remap(SceneError::Invalid { location, message: message.to_owned() }, file).to_string()
+    }
+}
+
 /// `keys` as a dotted key, each part quoted where TOML needs it.
 fn dotted(keys: &[String]) -> String {
     keys.iter().map(|k| Key::new(k.as_str()).to_string()).collect::<Vec<_>>().join(".")

@@ -110,6 +110,24 @@ fn other_errors_keep_the_files_own_lines() {
 }
 
 #[test]
+fn warnings_keep_the_files_lines_or_name_the_set() {
+    let eight = SCENE.replace("[0.8, 0.1, 0.1]", "[255, 0, 0]");
+    let plain = with_sets(&eight, &[]).unwrap().warnings;
+    assert!(plain[0].starts_with("s.toml:14:9: color [255, 0, 0] looks like 8-bit"), "{plain:?}");
+    let l = with_sets(&eight, &["render.max_depth=2", "materials.blue.color=[0, 0, 255]"]).unwrap();
+    assert_eq!(l.warnings.len(), 2, "{:?}", l.warnings);
+    assert!(l.warnings.contains(&plain[0]), "{:?}", l.warnings);
+    assert!(
+        l.warnings
+            .iter()
+            .any(|w| w
+                .starts_with("--set: materials.blue.color=[0, 0, 255]: color [0, 0, 255] looks like 8-bit")),
+        "{:?}",
+        l.warnings
+    );
+}
+
+#[test]
 fn an_obj_scene_refuses_sets() {
     let dir = tempfile::tempdir().unwrap();
     let obj = dir.path().join("t.obj");
