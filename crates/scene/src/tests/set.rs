@@ -4,30 +4,18 @@
 
 use super::*;
 
-const SCENE: &str = r#"[render]
-width = 32
-height = 18
-spp = 1
+/// The base scene with a plane (`objects.0`) and a red sphere (`objects.1`).
+fn scene() -> String {
+    format!(
+        "{BASE}[[objects]]\ntype = \"plane\"\n\n[[objects]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 1\nmaterial = \"red\"\n"
+    )
+}
 
-[camera]
-position = [0, 1, 5]
-look_at = [0, 1, 0]
-
-[[lights]]
-position = [3, 5, 4]
-
-[materials.red]
-color = [0.8, 0.1, 0.1]
-
-[[objects]]
-type = "plane"
-
-[[objects]]
-type = "sphere"
-center = [0, 1, 0]
-radius = 1
-material = "red"
-"#;
+/// `s.toml:LINE:COL` of the first `needle` in `text`.
+fn place(text: &str, needle: &str) -> String {
+    let (line, col) = line_col(text, text.find(needle).unwrap());
+    format!("s.toml:{line}:{col}")
+}
 
 fn with_sets(text: &str, sets: &[&str]) -> Result<LoadedScene, SceneError> {
     let opts = LoadOptions { sets: sets.iter().map(|s| (*s).to_owned()).collect(), ..LoadOptions::default() };
@@ -40,10 +28,10 @@ fn set_err(text: &str, sets: &[&str]) -> String {
 
 #[test]
 fn sets_replace_values_add_keys_and_tables() {
-    let plain = with_sets(SCENE, &[]).unwrap();
-    assert_eq!(plain.settings.spp, 1);
+    let plain = with_sets(&scene(), &[]).unwrap();
+    assert_eq!(plain.settings.spp, 2);
     let l = with_sets(
-        SCENE,
+        &scene(),
         &[
             "render.spp=16",
             "render.max_depth=3",
@@ -58,18 +46,18 @@ fn sets_replace_values_add_keys_and_tables() {
     .unwrap();
     assert_eq!(l.settings.spp, 16);
     assert_eq!(l.settings.max_depth, 3);
-    assert_eq!(l.settings.camera.size(), (20, 18));
-    assert_eq!(l.settings.camera.position(), prism_geometry::glam::Vec3::new(0.0, 1.0, 9.0));
+    assert_eq!(l.settings.camera.size(), (20, 180));
+    assert_eq!(l.settings.camera.position(), prism_geometry::glam::Vec3::new(0.0, 2.0, 9.0));
     assert_eq!(l.info.materials, ["blue", "red"], "the plane uses blue: no default material");
     // The sphere's radius: its bounds.
     assert_eq!(l.info.bounds.max, prism_geometry::glam::Vec3::new(0.5, 1.5, 0.5));
     // The last set of a key wins; a key of a table the file lacks makes the table.
-    let l = with_sets(SCENE, &["render.spp=2", "render.spp=5"]).unwrap();
+    let l = with_sets(&scene(), &["render.spp=2", "render.spp=5"]).unwrap();
     assert_eq!(l.settings.spp, 5);
-    let no_render = SCENE.replace("[render]\nwidth = 32\nheight = 18\nspp = 1\n", "");
+    let no_render = scene().replace("[render]\nwidth = 320\nheight = 180\nspp = 2\n", "");
     let l = with_sets(&no_render, &["render.spp=7"]).unwrap();
     assert_eq!(l.settings.spp, 7);
-    let fog = format!("{SCENE}[fog]\nend = 20\n");
+    let fog = format!("{}[fog]\nend = 20\n", scene());
     assert!(with_sets(&fog, &[]).unwrap().settings.fog);
     assert!(!with_sets(&fog, &["fog.enabled=false"]).unwrap().settings.fog);
 }
@@ -94,16 +82,16 @@ fn problems_in_a_set_name_the_flag() {
         (&["objects.1.radios=1"], "unknown key `radios` in a sphere; did you mean `radius`?"),
         (&["fog.enabled=false"], "--set: fog.enabled=false: linear fog needs `end`"),
     ] {
-        let err = set_err(SCENE, sets);
+        let err = set_err(&scene(), sets);
         assert!(err.starts_with("--set: ") && err.contains(words), "{sets:?}: {err}");
     }
 }
 
 #[test]
 fn other_errors_keep_the_files_own_lines() {
-    let bad = SCENE.replace("radius = 1", "radius = -1");
+    let bad = &scene().replace("radius = 1", "radius = -1");
     let plain = with_sets(&bad, &[]).unwrap_err().to_string();
-    assert!(plain.starts_with("s.toml:22:10: "), "{plain}");
+    assert!(plain.starts_with(&format!("{}: ", place(&bad, "-1"))), "{plain}");
     // A key added under [render] (a new line) and a table added at the end.
     let err = set_err(&bad, &["render.max_depth=3", "materials.green.color=[0, 1, 0]", "render.spp=2"]);
     assert_eq!(err, plain);
@@ -111,9 +99,12 @@ fn other_errors_keep_the_files_own_lines() {
 
 #[test]
 fn warnings_keep_the_files_lines_or_name_the_set() {
-    let eight = SCENE.replace("[0.8, 0.1, 0.1]", "[255, 0, 0]");
+    let eight = &scene().replace("[0.8, 0.1, 0.1]", "[255, 0, 0]");
     let plain = with_sets(&eight, &[]).unwrap().warnings;
-    assert!(plain[0].starts_with("s.toml:14:9: color [255, 0, 0] looks like 8-bit"), "{plain:?}");
+    assert!(
+        plain[0].starts_with(&format!("{}: color [255, 0, 0] looks like 8-bit", place(&eight, "[255"))),
+        "{plain:?}"
+    );
     let l = with_sets(&eight, &["render.max_depth=2", "materials.blue.color=[0, 0, 255]"]).unwrap();
     assert_eq!(l.warnings.len(), 2, "{:?}", l.warnings);
     assert!(l.warnings.contains(&plain[0]), "{:?}", l.warnings);
