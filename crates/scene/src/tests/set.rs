@@ -89,7 +89,7 @@ fn problems_in_a_set_name_the_flag() {
 
 #[test]
 fn other_errors_keep_the_files_own_lines() {
-    let bad = &scene().replace("radius = 1", "radius = -1");
+    let bad = scene().replace("radius = 1", "radius = -1");
     let plain = with_sets(&bad, &[]).unwrap_err().to_string();
     assert!(plain.starts_with(&format!("{}: ", place(&bad, "-1"))), "{plain}");
     // A key added under [render] (a new line) and a table added at the end.
@@ -99,7 +99,7 @@ fn other_errors_keep_the_files_own_lines() {
 
 #[test]
 fn warnings_keep_the_files_lines_or_name_the_set() {
-    let eight = &scene().replace("[0.8, 0.1, 0.1]", "[255, 0, 0]");
+    let eight = scene().replace("[0.8, 0.1, 0.1]", "[255, 0, 0]");
     let plain = with_sets(&eight, &[]).unwrap().warnings;
     assert!(
         plain[0].starts_with(&format!("{}: color [255, 0, 0] looks like 8-bit", place(&eight, "[255"))),
