@@ -47,6 +47,7 @@
 //! // The light is straight behind the eye: ambient 0.1 + Lambert 0.9 · cos 0.
 //! assert!((image.pixels[0] - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5);
 //! assert_eq!(stats.rays, 2); // the camera ray and one shadow ray
+//! assert_eq!((stats.camera_rays, stats.shadow_rays, stats.secondary_rays()), (1, 1, 0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -68,7 +69,7 @@ pub use integrator::MAX_DEPTH_LIMIT;
 pub use material::Material;
 pub use output::{
     OutputError, OutputFormat, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
-    write_aov_preview_png, write_exr_rgb, write_image, write_image_exr, write_png_rgb8,
+    write_aov_preview_png, write_bytes_atomic, write_exr_rgb, write_image, write_image_exr, write_png_rgb8,
 };
 pub use render::{
     Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples, sample_position,

@@ -143,6 +143,18 @@ fn write_atomic(
     result
 }
 
+/// Writes `bytes` to `path` atomically (as every image: a temporary file
+/// in the same directory, synced, renamed over `path`), for the other
+/// files a render produces (e.g. statistics).
+///
+/// # Errors
+/// [`OutputError::Io`] if writing fails; the target is then untouched.
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    write_atomic(path, |w| {
+        w.write_all(bytes).map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
+    })
+}
+
 /// Writes a 32-bit float RGB OpenEXR file (channels `R`, `G`, `B`, no
 /// alpha, row 0 at the top) from `width · height · 3` interleaved floats,
 /// atomically. Floats are stored as they are, `±∞` included; NaN is

@@ -92,11 +92,26 @@ pub struct RenderStats {
     pub seconds: f64,
     /// Every ray traced: camera, reflection, refraction, transparency, shadow.
     pub rays: u64,
+    /// Of `rays`, the beauty's camera rays (one per sample).
+    pub camera_rays: u64,
+    /// Of `rays`, the shadow rays.
+    pub shadow_rays: u64,
+    /// Of `rays`, the rays the AOV passes traced for themselves.
+    pub aov_rays: u64,
     /// Whether the render was cancelled before the end.
     pub cancelled: bool,
     /// Samples whose radiance was not finite (NaN or infinite) and so
     /// counted as black; 0 unless something is wrong.
     pub nonfinite_samples: u64,
+}
+
+impl RenderStats {
+    /// Of `rays`, the secondary rays: reflection, refraction and
+    /// transparency (everything that is not a camera, shadow or AOV ray).
+    #[must_use]
+    pub fn secondary_rays(&self) -> u64 {
+        self.rays.saturating_sub(self.camera_rays + self.shadow_rays + self.aov_rays)
+    }
 }
 
 /// Renders the whole image with `settings.spp` samples per pixel: the
@@ -168,6 +183,7 @@ pub(crate) fn render_pixels<'a>(
     let pattern = SamplePattern::new(spp);
     let see_through = beauty && Tracer::scene_is_see_through(scene);
     let rays = AtomicU64::new(0);
+    let [camera_rays, shadow_rays, aov_rays_all] = [(); 3].map(|()| AtomicU64::new(0));
     let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let mut pixels = vec![Vec3::ZERO; if beauty { w as usize * h as usize } else { 0 }];
@@ -207,6 +223,11 @@ pub(crate) fn render_pixels<'a>(
         }
         let aov_rays = sink.map_or(0, |s| s.rays);
         rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);
+        let camera =
+            if beauty { u64::from(w) * u64::from(samples.end.saturating_sub(samples.start)) } else { 0 };
+        camera_rays.fetch_add(camera, Ordering::Relaxed);
+        shadow_rays.fetch_add(tracer.shadow_rays, Ordering::Relaxed);
+        aov_rays_all.fetch_add(aov_rays, Ordering::Relaxed);
         if bad > 0 {
             nonfinite.fetch_add(bad, Ordering::Relaxed);
         }
@@ -234,6 +255,9 @@ pub(crate) fn render_pixels<'a>(
     let stats = RenderStats {
         seconds: start.elapsed().as_secs_f64(),
         rays: rays.into_inner(),
+        camera_rays: camera_rays.into_inner(),
+        shadow_rays: shadow_rays.into_inner(),
+        aov_rays: aov_rays_all.into_inner(),
         cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
         nonfinite_samples: nonfinite.into_inner(),
     };
