@@ -21,12 +21,15 @@
 
 #![forbid(unsafe_code)]
 
+mod completions;
 mod info;
 mod interrupt;
 mod overwrite;
+mod stats;
+mod version;
 
 use anyhow::{Context, Result, anyhow};
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use prism_scene::{Limits, LoadOptions, Overrides, load_path};
 use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_aovs, write_image};
@@ -37,7 +40,7 @@ use std::time::Instant;
 
 /// prism: a fast, exact, Whitted-style CPU ray tracer.
 #[derive(Parser)]
-#[command(name = "prism", version, about, propagate_version = true)]
+#[command(name = "prism", version, long_version = version::long(), about, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -52,6 +55,11 @@ enum Command {
     /// Open a window that renders a scene progressively: f/c fog on/off, s save PNG,
     /// r reload, arrows or drag orbit, w/a/d/x move, Home reset, Esc/q quit.
     View(ViewArgs),
+    /// Print a shell completion script: `prism completions bash > ~/.local/share/bash-completion/completions/prism`.
+    Completions(completions::CompletionsArgs),
+    /// Write the man pages into a directory (run by `cargo xtask man`).
+    #[command(hide = true)]
+    Man(completions::ManArgs),
 }
 
 #[derive(Args)]
@@ -90,6 +98,10 @@ struct RenderArgs {
     /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
     #[arg(long)]
     aov_preview: bool,
+    /// Write the render's figures to FILE as JSON: seconds per phase, rays per kind,
+    /// BVH size, peak memory.
+    #[arg(long, value_name = "FILE")]
+    stats_json: Option<PathBuf>,
     #[command(flatten)]
     limits: LimitArgs,
 }
@@ -102,6 +114,9 @@ struct InfoArgs {
     overrides: Overrides,
     #[command(flatten)]
     limits: LimitArgs,
+    /// Print the description as one JSON object (for scripts; keys in the README).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -134,6 +149,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render_command(&args),
         Command::Info(args) => info_command(&args),
         Command::View(args) => view_command(args),
+        Command::Completions(args) => completions::completions_command(&args, Cli::command()),
+        Command::Man(args) => completions::man_command(&args, Cli::command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -160,7 +177,11 @@ fn info_command(args: &InfoArgs) -> Result<()> {
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
-    print!("{}", info::describe(&loaded, &args.scene));
+    if args.json {
+        println!("{:#}", info::to_json(&loaded, &args.scene));
+    } else {
+        print!("{}", info::describe(&loaded, &args.scene));
+    }
     Ok(())
 }
 
@@ -172,7 +193,9 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
     let opts = LoadOptions { limits: args.limits.limits(), overrides: args.overrides };
+    let load_start = Instant::now();
     let loaded = load_path(&args.scene, &opts)?;
+    let load_seconds = load_start.elapsed().as_secs_f64();
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -193,6 +216,9 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         for ext in if previews { &["exr", "png"][..] } else { &["exr"][..] } {
             overwrite::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
         }
+    }
+    if let Some(s) = &args.stats_json {
+        overwrite::check_not_an_input(s, &loaded.inputs)?;
     }
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
@@ -237,11 +263,20 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     if stats.cancelled {
         return Err(interrupt.finish(&image, &output, format, args.partial));
     }
+    let write_start = Instant::now();
     write_image(&output, &image, format)?;
     let written = match &passes {
         Some(p) => prism_shade::write_aov_files(&output, p, previews)?,
         None => Vec::new(),
     };
+    if let Some(file) = &args.stats_json {
+        let phases =
+            stats::Phases { load: load_seconds, render: wall, write: write_start.elapsed().as_secs_f64() };
+        let outputs: Vec<&Path> =
+            std::iter::once(output.as_path()).chain(written.iter().map(PathBuf::as_path)).collect();
+        let json = stats::to_json(&loaded, &args.scene, &outputs, phases, &stats);
+        prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())?;
+    }
     if !args.quiet {
         let mrays = stats.rays as f64 / 1e6;
         println!(
