@@ -54,7 +54,9 @@
 #![warn(missing_docs)]
 
 mod aov;
+mod bounds;
 mod camera;
+mod exr;
 mod integrator;
 mod material;
 pub mod optics;
@@ -64,7 +66,11 @@ mod scene;
 mod texture;
 
 pub use aov::{Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_aovs};
+pub use bounds::{BoundsError, PixelBounds};
 pub use camera::Camera;
+pub use exr::{
+    ExrAttribute, ExrChannel, ExrLayer, ExrSamples, LayeredExr, read_layered_exr, write_layered_exr,
+};
 pub use integrator::MAX_DEPTH_LIMIT;
 pub use material::Material;
 pub use output::{

@@ -50,7 +50,7 @@ pub enum OutputError {
     },
 }
 
-fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
+pub(crate) fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
     OutputError::Invalid { path: path.to_path_buf(), reason: reason.into() }
 }
 
@@ -111,7 +111,7 @@ pub fn write_image(path: &Path, image: &Image, format: OutputFormat) -> Result<(
 /// Writes `path` atomically: `encode` fills a new temporary file next to
 /// it, which then replaces `path`; on any error the temporary file is
 /// removed and `path` is left as it was.
-fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
