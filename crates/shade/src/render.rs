@@ -80,9 +80,7 @@ impl Image {
 /// The sRGB transfer function applied to a linear value, to 8 bits.
 #[must_use]
 pub fn linear_to_srgb8(x: f32) -> u8 {
-    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
-    let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
+    (crate::tonemap::linear_to_srgb(x) * 255.0 + 0.5) as u8
 }
 
 /// Figures about a finished render.
@@ -156,7 +154,7 @@ pub fn render_samples(
     samples: Range<u32>,
     hooks: RenderHooks<'_>,
 ) -> (Image, RenderStats) {
-    let (image, _, stats) = render_pixels(scene, settings, samples, true, &[], hooks);
+    let (image, _, stats) = render_pixels(scene, settings, samples, true, &[], false, hooks);
     (image, stats)
 }
 
@@ -167,13 +165,16 @@ pub fn render_samples(
 /// being `0..spp`). Returns the per-pixel beauty *sums* (an empty image
 /// without `beauty`), one AOV row per image row (empty without `aovs`),
 /// and the statistics. Rows skipped after a cancel hold zero sums and the
-/// AOV miss values.
+/// AOV miss values. With `alpha`, the rows' sinks also gather coverage and
+/// the premultiplied beauty (from each sample's radiance).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn render_pixels<'a>(
     scene: &Scene,
     settings: &RenderSettings,
     samples: Range<u32>,
     beauty: bool,
     aovs: &'a [Aov],
+    alpha: bool,
     hooks: RenderHooks<'_>,
 ) -> (Image, Vec<AovRow<'a>>, RenderStats) {
     let start = std::time::Instant::now();
@@ -187,8 +188,11 @@ pub(crate) fn render_pixels<'a>(
     let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let mut pixels = vec![Vec3::ZERO; if beauty { w as usize * h as usize } else { 0 }];
-    let mut aov_rows: Vec<AovRow<'a>> =
-        if aovs.is_empty() { Vec::new() } else { (0..h).map(|_| AovRow::new(aovs, w, spp)).collect() };
+    let mut aov_rows: Vec<AovRow<'a>> = if aovs.is_empty() && !alpha {
+        Vec::new()
+    } else {
+        (0..h).map(|_| AovRow::new(aovs, w, spp, alpha)).collect()
+    };
     let render_row = |j: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>| {
         if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             return;
@@ -202,16 +206,18 @@ pub(crate) fn render_pixels<'a>(
             for s in samples.clone() {
                 let (dx, dy) = pattern.offset(index, s);
                 let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+                let mut l = Vec3::ZERO;
                 if beauty {
-                    let l = tracer.trace_camera(&ray);
+                    l = tracer.trace_camera(&ray);
                     if l.is_finite() {
                         sum += l;
                     } else {
                         bad += 1;
+                        l = Vec3::ZERO;
                     }
                 }
                 if let Some(sink) = sink.as_deref_mut() {
-                    sink.sample(scene, &ray);
+                    sink.sample(scene, &ray, l);
                 }
             }
             if let Some(px) = row.get_mut(i) {
