@@ -3,10 +3,13 @@
 //! ```text
 //! prism render SCENE [-o OUT] [--width W] [--height H] [--spp N] [--fog | --no-fog]
 //!                    [--threads N] [--max-depth N] [--quiet]
-//!                    [--aov LIST] [--aov-preview]
+//!                    [--aov LIST] [--aov-preview] [--aov-files] [--stats-json FILE]
+//!                    [--alpha] [--bit-depth 8|16] [--exposure EV] [--tonemap clamp|reinhard|aces]
 //!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
-//! prism info SCENE [the same overrides as render]
+//! prism info SCENE [the same overrides as render] [--json]
 //! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
+//! prism completions bash|zsh|fish
+//! prism --version
 //! ```
 //!
 //! The overrides (`--width` … `--fov`) are one type, `prism_scene::Overrides`,
@@ -24,6 +27,7 @@
 mod completions;
 mod info;
 mod interrupt;
+mod outputs;
 mod overwrite;
 mod stats;
 mod version;
@@ -32,7 +36,7 @@ use anyhow::{Context, Result, anyhow};
 use clap::{Args, CommandFactory, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use prism_scene::{Limits, LoadOptions, Overrides, load_path};
-use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_aovs, write_image};
+use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_alpha, render_with_aovs};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -104,6 +108,8 @@ struct RenderArgs {
     stats_json: Option<PathBuf>,
     #[command(flatten)]
     limits: LimitArgs,
+    #[command(flatten)]
+    image: outputs::ImageArgs,
 }
 
 #[derive(Args)]
@@ -212,10 +218,12 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             "warning: --aov-preview without AOV passes (--aov or the scene's `aov`) writes no previews"
         );
     }
-    for &a in &aovs {
-        for ext in if previews { &["exr", "png"][..] } else { &["exr"][..] } {
-            overwrite::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
-        }
+    let (plan, warnings) = args.image.plan(output.clone(), format, !aovs.is_empty(), previews)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    for f in plan.other_files(&aovs)? {
+        overwrite::check_not_an_input(&f, &loaded.inputs)?;
     }
     if let Some(s) = &args.stats_json {
         overwrite::check_not_an_input(s, &loaded.inputs)?;
@@ -249,24 +257,28 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let hooks = RenderHooks { progress: Some(&progress), cancel: Some(interrupt.flag()) };
     let start = Instant::now();
-    let (image, passes, stats) = if aovs.is_empty() {
+    let (image, alpha, passes, stats) = if plan.alpha {
+        let (rgba, passes, stats) = render_with_alpha(&loaded.scene, settings, &aovs, hooks);
+        (rgba.color, Some(rgba.alpha), (!aovs.is_empty()).then_some(passes), stats)
+    } else if aovs.is_empty() {
         let (image, stats) = render(&loaded.scene, settings, hooks);
-        (image, None, stats)
+        (image, None, None, stats)
     } else {
         let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, &aovs, hooks);
-        (image, Some(passes), stats)
+        (image, None, Some(passes), stats)
     };
     let wall = start.elapsed().as_secs_f64();
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     if stats.cancelled {
-        return Err(interrupt.finish(&image, &output, format, args.partial));
+        let write = || plan.write_image(&image, alpha.as_deref(), passes.as_ref());
+        return Err(interrupt.finish(image.height, &output, args.partial, write));
     }
     let write_start = Instant::now();
-    write_image(&output, &image, format)?;
+    plan.write_image(&image, alpha.as_deref(), passes.as_ref())?;
     let written = match &passes {
-        Some(p) => prism_shade::write_aov_files(&output, p, previews)?,
+        Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
         None => Vec::new(),
     };
     if let Some(file) = &args.stats_json {

@@ -125,6 +125,6 @@ fn stats_json_holds_real_figures() {
         // The process held at least its image buffers.
         assert!(j["peak_memory_bytes"].as_u64().unwrap() > 32 * 18 * 12);
     }
-    assert_eq!(j["outputs"], serde_json::json!(["o.png", "o.depth.exr"]));
+    assert_eq!(j["outputs"], serde_json::json!(["o.png", "o.aov.exr"]));
     assert_eq!(listing(&dir.path().join("st")), ["s.json"], "written atomically");
 }
