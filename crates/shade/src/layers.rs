@@ -41,7 +41,7 @@ fn planes(data: &[f32], channels: usize) -> Vec<Vec<f32>> {
     (0..channels).map(|c| data.iter().skip(c).step_by(channels).copied().collect()).collect()
 }
 
-/// The layers of a render ([module table](self)): the beauty `image`, its
+/// The layers of a render (channel names in `docs/aov.md`): the beauty `image`, its
 /// `alpha` if any (one value per pixel), and the passes.
 #[must_use]
 pub fn render_layers(image: &Image, alpha: Option<&[f32]>, passes: &AovImages) -> Vec<ExrLayer> {

@@ -94,7 +94,8 @@ pub struct RenderStats {
     pub camera_rays: u64,
     /// Of `rays`, the shadow rays.
     pub shadow_rays: u64,
-    /// Of `rays`, the rays the AOV passes traced for themselves.
+    /// Of `rays`, the rays the AOV passes (and the coverage test of
+    /// [`crate::render_with_alpha`]) traced for themselves.
     pub aov_rays: u64,
     /// Whether the render was cancelled before the end.
     pub cancelled: bool,
