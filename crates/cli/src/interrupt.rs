@@ -18,7 +18,7 @@
 //! can leave such a `.tmp` file, but never a truncated file at the output
 //! path.
 
-use prism_shade::{Image, OutputFormat, write_image};
+use prism_shade::OutputError;
 use signal_hook::consts::SIGINT;
 use std::fmt;
 use std::path::Path;
@@ -63,15 +63,21 @@ impl Interrupt {
         self.rows.fetch_max(done, Ordering::Relaxed);
     }
 
-    /// The error that ends an interrupted render: with `partial`, after
-    /// writing `image` (the rows done so far) to `output`.
-    pub fn finish(&self, image: &Image, output: &Path, format: OutputFormat, partial: bool) -> anyhow::Error {
-        let rows = self.rows.load(Ordering::Relaxed).min(image.height);
-        let done = format!("interrupted (Ctrl-C) after {rows} of {} rows", image.height);
+    /// The error that ends an interrupted render of `height` rows: with
+    /// `partial`, after `write` has written the rows done so far to `output`.
+    pub fn finish(
+        &self,
+        height: u32,
+        output: &Path,
+        partial: bool,
+        write: impl FnOnce() -> Result<(), OutputError>,
+    ) -> anyhow::Error {
+        let rows = self.rows.load(Ordering::Relaxed).min(height);
+        let done = format!("interrupted (Ctrl-C) after {rows} of {height} rows");
         let message = if !partial {
             format!("{done}; nothing was written (--partial writes the rows done)")
         } else {
-            match write_image(output, image, format) {
+            match write() {
                 Ok(()) => format!(
                     "{done}; wrote the partial image to {} (rows not rendered are black)",
                     output.display()

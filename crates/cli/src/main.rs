@@ -3,11 +3,14 @@
 //! ```text
 //! prism render SCENE [-o OUT] [--width W] [--height H] [--spp N] [--fog | --no-fog]
 //!                    [--threads N] [--max-depth N] [--quiet]
-//!                    [--aov LIST] [--aov-preview]
+//!                    [--aov LIST] [--aov-preview] [--aov-files] [--stats-json FILE]
+//!                    [--alpha] [--bit-depth 8|16] [--exposure EV] [--tonemap clamp|reinhard|aces]
 //!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
 //!                    [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
-//! prism info SCENE [the same overrides as render] [--set KEY=VALUE]...
+//! prism info SCENE [the same overrides as render] [--set KEY=VALUE]... [--json]
 //! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
+//! prism completions bash|zsh|fish
+//! prism --version
 //! ```
 //!
 //! The overrides (`--width` … `--fov`) are one type, `prism_scene::Overrides`,
@@ -27,16 +30,20 @@
 
 #![forbid(unsafe_code)]
 
+mod completions;
 mod info;
 mod interrupt;
+mod outputs;
 mod overwrite;
+mod stats;
+mod version;
 mod writable;
 
 use anyhow::{Context, Result, anyhow};
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use prism_scene::{Limits, LoadOptions, Overrides, load_path};
-use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_aovs, write_image};
+use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_alpha, render_with_aovs};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -44,7 +51,7 @@ use std::time::Instant;
 
 /// prism: a fast, exact, Whitted-style CPU ray tracer.
 #[derive(Parser)]
-#[command(name = "prism", version, about, propagate_version = true)]
+#[command(name = "prism", version, long_version = version::long(), about, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -59,6 +66,11 @@ enum Command {
     /// Open a window that renders a scene progressively: f/c fog on/off, s save PNG,
     /// r reload, arrows or drag orbit, w/a/d/x move, Home reset, Esc/q quit.
     View(ViewArgs),
+    /// Print a shell completion script: `prism completions bash > ~/.local/share/bash-completion/completions/prism`.
+    Completions(completions::CompletionsArgs),
+    /// Write the man pages into a directory (run by `cargo xtask man`).
+    #[command(hide = true)]
+    Man(completions::ManArgs),
 }
 
 #[derive(Args)]
@@ -102,10 +114,16 @@ struct RenderArgs {
     /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
     #[arg(long)]
     aov_preview: bool,
+    /// Write the render's figures to FILE as JSON: seconds per phase, rays per kind,
+    /// BVH size, peak memory.
+    #[arg(long, value_name = "FILE")]
+    stats_json: Option<PathBuf>,
     #[command(flatten)]
     obj: ObjArgs,
     #[command(flatten)]
     limits: LimitArgs,
+    #[command(flatten)]
+    image: outputs::ImageArgs,
 }
 
 #[derive(Args)]
@@ -122,6 +140,9 @@ struct InfoArgs {
     obj: ObjArgs,
     #[command(flatten)]
     limits: LimitArgs,
+    /// Print the description as one JSON object (for scripts; keys in the README).
+    #[arg(long)]
+    json: bool,
 }
 
 /// OBJ mode's choices (`prism render model.obj`); a TOML scene refuses them.
@@ -174,6 +195,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render_command(&args),
         Command::Info(args) => info_command(&args),
         Command::View(args) => view_command(args),
+        Command::Completions(args) => completions::completions_command(&args, Cli::command()),
+        Command::Man(args) => completions::man_command(&args, Cli::command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -205,7 +228,11 @@ fn info_command(args: &InfoArgs) -> Result<()> {
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
-    print!("{}", info::describe(&loaded, &args.scene));
+    if args.json {
+        println!("{:#}", info::to_json(&loaded, &args.scene));
+    } else {
+        print!("{}", info::describe(&loaded, &args.scene));
+    }
     Ok(())
 }
 
@@ -223,7 +250,9 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         sets: args.set.clone(),
         obj: args.obj.options(),
     };
+    let load_start = Instant::now();
     let loaded = load_path(&args.scene, &opts)?;
+    let load_seconds = load_start.elapsed().as_secs_f64();
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -243,10 +272,15 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             "warning: --aov-preview without AOV passes (--aov or the scene's `aov`) writes no previews"
         );
     }
-    for &a in &aovs {
-        for ext in if previews { &["exr", "png"][..] } else { &["exr"][..] } {
-            overwrite::check_not_an_input(&prism_shade::aov_path(&output, a, ext)?, &loaded.inputs)?;
-        }
+    let (plan, warnings) = args.image.plan(output.clone(), format, !aovs.is_empty(), previews)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    for f in plan.other_files(&aovs)? {
+        overwrite::check_not_an_input(&f, &loaded.inputs)?;
+    }
+    if let Some(s) = &args.stats_json {
+        overwrite::check_not_an_input(s, &loaded.inputs)?;
     }
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
@@ -277,25 +311,38 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let hooks = RenderHooks { progress: Some(&progress), cancel: Some(interrupt.flag()) };
     let start = Instant::now();
-    let (image, passes, stats) = if aovs.is_empty() {
+    let (image, alpha, passes, stats) = if plan.alpha {
+        let (rgba, passes, stats) = render_with_alpha(&loaded.scene, settings, &aovs, hooks);
+        (rgba.color, Some(rgba.alpha), (!aovs.is_empty()).then_some(passes), stats)
+    } else if aovs.is_empty() {
         let (image, stats) = render(&loaded.scene, settings, hooks);
-        (image, None, stats)
+        (image, None, None, stats)
     } else {
         let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, &aovs, hooks);
-        (image, Some(passes), stats)
+        (image, None, Some(passes), stats)
     };
     let wall = start.elapsed().as_secs_f64();
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     if stats.cancelled {
-        return Err(interrupt.finish(&image, &output, format, args.partial));
+        let write = || plan.write_image(&image, alpha.as_deref(), passes.as_ref());
+        return Err(interrupt.finish(image.height, &output, args.partial, write));
     }
-    write_image(&output, &image, format)?;
+    let write_start = Instant::now();
+    plan.write_image(&image, alpha.as_deref(), passes.as_ref())?;
     let written = match &passes {
-        Some(p) => prism_shade::write_aov_files(&output, p, previews)?,
+        Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
         None => Vec::new(),
     };
+    if let Some(file) = &args.stats_json {
+        let phases =
+            stats::Phases { load: load_seconds, render: wall, write: write_start.elapsed().as_secs_f64() };
+        let outputs: Vec<&Path> =
+            std::iter::once(output.as_path()).chain(written.iter().map(PathBuf::as_path)).collect();
+        let json = stats::to_json(&loaded, &args.scene, &outputs, phases, &stats);
+        prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())?;
+    }
     if !args.quiet {
         let mrays = stats.rays as f64 / 1e6;
         println!(

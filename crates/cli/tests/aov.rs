@@ -1,5 +1,6 @@
-//! `prism render --aov`: the passes are written next to the image and read
-//! back with the right sizes and values; unknown pass names are refused
+//! `prism render --aov --aov-files`: the passes are written next to the
+//! image as separate files and read back with the right sizes and values
+//! (the default, one multi-layer EXR, is tested in tests/outputs.rs); unknown pass names are refused
 //! before anything is written; an OBJ file renders on its own, framed; the
 //! camera flags move the camera and bad values are refused naming the flag.
 
@@ -72,7 +73,15 @@ fn aov_flag_writes_every_pass_with_analytic_values() {
     let dir = scene_dir(SPHERE);
     let out = prism(
         dir.path(),
-        &["render", "s.toml", "-o", "out.exr", "--aov", "depth,normal,geo_normal,albedo,object_id"],
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "out.exr",
+            "--aov-files",
+            "--aov",
+            "depth,normal,geo_normal,albedo,object_id",
+        ],
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let names = ["depth", "normal", "geo_normal", "albedo", "object_id"];
@@ -112,8 +121,10 @@ fn aov_flag_writes_every_pass_with_analytic_values() {
 #[test]
 fn aov_previews_are_written_when_asked() {
     let dir = scene_dir(SPHERE);
-    let out =
-        prism(dir.path(), &["render", "s.toml", "-o", "img.png", "--aov", "depth,normal", "--aov-preview"]);
+    let out = prism(
+        dir.path(),
+        &["render", "s.toml", "-o", "img.png", "--aov-files", "--aov", "depth,normal", "--aov-preview"],
+    );
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert_eq!(
         listing(dir.path()),
@@ -126,7 +137,8 @@ fn aov_previews_are_written_when_asked() {
         assert_ne!(img.get_pixel(16, 12).0, [0, 0, 0], "{n}: the sphere shows");
     }
     // Without --aov-preview, no previews.
-    let out = prism(dir.path(), &["render", "s.toml", "-o", "b.png", "--aov", "object_id", "-q"]);
+    let out =
+        prism(dir.path(), &["render", "s.toml", "-o", "b.png", "--aov-files", "--aov", "object_id", "-q"]);
     assert!(out.status.success() && out.stdout.is_empty(), "{}", text(&out.stderr));
     assert!(dir.path().join("b.object_id.exr").is_file());
     assert!(!dir.path().join("b.object_id.png").exists());
@@ -136,7 +148,7 @@ fn aov_previews_are_written_when_asked() {
 fn the_scene_file_can_ask_for_passes() {
     let scene = SPHERE.replace("spp = 1", "spp = 1\naov = [\"depth\", \"object_id\"]\naov_preview = true");
     let dir = scene_dir(&scene);
-    let out = prism(dir.path(), &["render", "s.toml", "-o", "x.exr"]);
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "x.exr", "--aov-files"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert_eq!(
         listing(dir.path()),
@@ -145,7 +157,7 @@ fn the_scene_file_can_ask_for_passes() {
     let depth = exr_pixel(&dir.path().join("x.depth.exr"), 16, 12)[0];
     assert!((depth - 4.0).abs() <= 4e-4, "{depth}");
     // --aov replaces the scene's list.
-    let out = prism(dir.path(), &["render", "s.toml", "-o", "y.exr", "--aov", "normal"]);
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "y.exr", "--aov-files", "--aov", "normal"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(dir.path().join("y.normal.exr").is_file() && !dir.path().join("y.depth.exr").exists());
     let out = prism(dir.path(), &["info", "s.toml"]);
@@ -160,7 +172,7 @@ fn the_scene_file_can_ask_for_passes() {
 fn unknown_pass_names_are_refused_and_nothing_is_written() {
     let dir = scene_dir(SPHERE);
     for list in ["depth,dept", "", "depth,,normal", "Depth"] {
-        let out = prism(dir.path(), &["render", "s.toml", "-o", "out.exr", "--aov", list]);
+        let out = prism(dir.path(), &["render", "s.toml", "-o", "out.exr", "--aov-files", "--aov", list]);
         assert!(!out.status.success(), "{list:?}");
         let err = text(&out.stderr);
         assert!(
@@ -188,7 +200,19 @@ fn an_obj_file_renders_on_its_own_in_frame() {
     fs::write(dir.path().join("tetra.obj"), TETRA).unwrap();
     let out = prism(
         dir.path(),
-        &["render", "tetra.obj", "-o", "t.exr", "--width", "32", "--spp", "1", "--aov", "object_id,depth"],
+        &[
+            "render",
+            "tetra.obj",
+            "-o",
+            "t.exr",
+            "--width",
+            "32",
+            "--spp",
+            "1",
+            "--aov-files",
+            "--aov",
+            "object_id,depth",
+        ],
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stdout).contains("t.exr: 32×24, 1 spp"), "{}", text(&out.stdout));
@@ -231,6 +255,7 @@ fn the_shipped_gem_renders_with_its_material() {
             "24",
             "--spp",
             "1",
+            "--aov-files",
             "--aov",
             "object_id",
         ],
@@ -245,7 +270,7 @@ fn the_shipped_gem_renders_with_its_material() {
 fn camera_flags_move_the_camera() {
     let dir = scene_dir(SPHERE);
     let depth_at_centre = |args: &[&str]| {
-        let mut all = vec!["render", "s.toml", "-o", "c.exr", "--aov", "depth", "-q"];
+        let mut all = vec!["render", "s.toml", "-o", "c.exr", "--aov-files", "--aov", "depth", "-q"];
         all.extend_from_slice(args);
         let out = prism(dir.path(), &all);
         assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));

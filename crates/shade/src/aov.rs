@@ -225,7 +225,7 @@ pub fn render_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (AovImages, RenderStats) {
-    let (_, images, stats) = render_passes(scene, settings, aovs, false, hooks);
+    let (_, images, _, stats) = render_passes(scene, settings, aovs, false, false, hooks);
     (images, stats)
 }
 
@@ -241,7 +241,40 @@ pub fn render_with_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (Image, AovImages, RenderStats) {
-    render_passes(scene, settings, aovs, true, hooks)
+    let (image, passes, _, stats) = render_passes(scene, settings, aovs, true, false, hooks);
+    (image, passes, stats)
+}
+
+/// A render over a transparent background: the colour *premultiplied* by
+/// coverage, and the coverage (alpha) of each pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlphaImage {
+    /// Linear RGB premultiplied by alpha: the mean over the pixel's samples
+    /// of the sample's radiance where its camera ray hit a surface, and 0
+    /// where it hit nothing (the background contributes nothing directly;
+    /// seen in mirrors and through glass it still does).
+    pub color: Image,
+    /// Per pixel, row-major: the fraction of its samples whose camera ray
+    /// hit a surface, in `[0, 1]` (0 where only background is seen).
+    pub alpha: Vec<f32>,
+}
+
+/// The beauty over a transparent background ([`AlphaImage`]) and the AOV
+/// passes `aovs` (possibly none), in one pass over the pixels (POV-Ray's
+/// `+UA`; Blender's "transparent film").
+///
+/// Where every sample of a pixel hits a surface, its colour is bit for bit
+/// that of [`crate::render`] and its alpha 1. Each camera ray is tested
+/// once more for a hit by the pass sink (counted in `stats.aov_rays`).
+pub fn render_with_alpha(
+    scene: &Scene,
+    settings: &RenderSettings,
+    aovs: &[Aov],
+    hooks: RenderHooks<'_>,
+) -> (AlphaImage, AovImages, RenderStats) {
+    let (image, passes, alpha, stats) = render_passes(scene, settings, aovs, true, true, hooks);
+    let (color, alpha) = alpha.unwrap_or_else(|| (image.clone(), vec![1.0; image.pixels.len()]));
+    (AlphaImage { color, alpha }, passes, stats)
 }
 
 fn render_passes(
@@ -249,8 +282,9 @@ fn render_passes(
     settings: &RenderSettings,
     aovs: &[Aov],
     beauty: bool,
+    alpha: bool,
     hooks: RenderHooks<'_>,
-) -> (Image, AovImages, RenderStats) {
+) -> (Image, AovImages, Option<(Image, Vec<f32>)>, RenderStats) {
     let mut wanted: Vec<Aov> = Vec::with_capacity(aovs.len());
     for &a in aovs {
         if !wanted.contains(&a) {
@@ -258,19 +292,36 @@ fn render_passes(
         }
     }
     let spp = settings.spp.max(1);
-    let (mut image, rows, stats) = render_pixels(scene, settings, 0..spp, beauty, &wanted, hooks);
+    let (mut image, rows, stats) = render_pixels(scene, settings, 0..spp, beauty, &wanted, alpha, hooks);
     scale_to_mean(&mut image, spp);
     let (w, h) = (image.width, image.height);
     let n = w as usize * h as usize;
     let mut data: Vec<Vec<f32>> = wanted.iter().map(|a| Vec::with_capacity(n * a.channels())).collect();
+    let mut coverage = alpha.then(|| (Vec::with_capacity(n), Vec::with_capacity(n)));
     for row in rows {
         for (d, p) in data.iter_mut().zip(&row.passes) {
             d.extend_from_slice(p);
         }
+        if let (Some((rgb, a)), Some(row)) = (&mut coverage, &row.alpha) {
+            rgb.extend_from_slice(&row.rgb);
+            a.extend_from_slice(&row.alpha);
+        }
     }
     let passes =
         wanted.iter().zip(data).map(|(&aov, data)| AovImage { aov, width: w, height: h, data }).collect();
-    (image, AovImages { width: w, height: h, passes }, stats)
+    let coverage = coverage.map(|(pixels, a)| (Image { width: w, height: h, pixels }, a));
+    (image, AovImages { width: w, height: h, passes }, coverage, stats)
+}
+
+/// The coverage sink of one row: per pixel, the samples whose camera ray
+/// hit a surface and the sum of their radiance.
+struct AlphaRow {
+    hits: u32,
+    covered: Vec3,
+    /// Premultiplied colour per pixel of the row.
+    rgb: Vec<Vec3>,
+    /// Alpha per pixel of the row.
+    alpha: Vec<f32>,
 }
 
 /// Per-pixel sums of the averaged passes.
@@ -300,6 +351,8 @@ pub(crate) struct AovRow<'a> {
     passes: Vec<Vec<f32>>,
     sums: Sums,
     centre_id: Option<f32>,
+    /// Coverage and the premultiplied beauty, when alpha is wanted.
+    alpha: Option<AlphaRow>,
     /// Rays traced for the passes.
     pub(crate) rays: u64,
 }
@@ -310,8 +363,9 @@ fn finite_or_zero(v: Vec3) -> Vec3 {
 
 impl<'a> AovRow<'a> {
     /// A row of `width` pixels of the passes `wanted` (no repeats), for a
-    /// render of `spp` samples per pixel.
-    pub(crate) fn new(wanted: &'a [Aov], width: u32, spp: u32) -> Self {
+    /// render of `spp` samples per pixel, with coverage if `alpha`.
+    pub(crate) fn new(wanted: &'a [Aov], width: u32, spp: u32, alpha: bool) -> Self {
+        let n = width as usize;
         Self {
             wanted,
             spp: spp.max(1),
@@ -320,20 +374,32 @@ impl<'a> AovRow<'a> {
             passes: wanted.iter().map(|a| vec![a.miss_value(); width as usize * a.channels()]).collect(),
             sums: Sums::ZERO,
             centre_id: None,
+            alpha: alpha.then(|| AlphaRow {
+                hits: 0,
+                covered: Vec3::ZERO,
+                rgb: vec![Vec3::ZERO; n],
+                alpha: vec![0.0; n],
+            }),
             rays: 0,
         }
     }
 
-    /// One sample's camera ray of the current pixel.
+    /// One sample's camera ray of the current pixel, and the radiance the
+    /// beauty got from it (finite; 0 without a beauty).
     #[inline]
-    pub(crate) fn sample(&mut self, scene: &Scene, ray: &Ray) {
-        if !(self.want_averaged || (self.want_id && self.spp == 1)) {
+    pub(crate) fn sample(&mut self, scene: &Scene, ray: &Ray, radiance: Vec3) {
+        if !(self.want_averaged || (self.want_id && self.spp == 1) || self.alpha.is_some()) {
             return;
         }
         self.rays += 1;
         let hit = scene.accel.closest_hit(ray);
+        if let (Some(a), Some(_)) = (&mut self.alpha, &hit) {
+            a.hits += 1;
+            a.covered += radiance;
+        }
         let sums = &mut self.sums;
         match &hit {
+            Some(_) if !self.want_averaged => {}
             Some(hit) => {
                 let d = hit.hit.t * ray.dir.length();
                 sums.depth += if d.is_nan() { f32::INFINITY } else { d };
@@ -371,6 +437,12 @@ impl<'a> AovRow<'a> {
                     buf[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
                 }
             }
+        }
+        if let Some(a) = &mut self.alpha {
+            a.rgb[i] = a.covered * inv;
+            a.alpha[i] = a.hits as f32 * inv;
+            a.hits = 0;
+            a.covered = Vec3::ZERO;
         }
         self.sums = Sums::ZERO;
         self.centre_id = None;

@@ -31,6 +31,8 @@ pub(crate) struct Tracer<'a> {
     see_through: bool,
     /// Rays traced so far (camera, secondary, shadow).
     pub rays: u64,
+    /// Of `rays`, the shadow rays.
+    pub shadow_rays: u64,
 }
 
 /// Whether object `object` is a closed solid (its inside is bounded by it):
@@ -64,6 +66,7 @@ impl<'a> Tracer<'a> {
             fog: scene.fog.filter(|_| settings.fog).map(|f| (f.mode, f.color)),
             see_through,
             rays: 0,
+            shadow_rays: 0,
         }
     }
 
@@ -231,6 +234,7 @@ impl<'a> Tracer<'a> {
     fn shadow(&mut self, hit: &Hit, target: Vec3) -> Vec3 {
         let ray = Ray::spawn_to(hit.point, hit.geo_normal, target);
         self.rays += 1;
+        self.shadow_rays += 1;
         let scene = self.scene;
         if !self.see_through {
             return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };

@@ -47,28 +47,41 @@
 //! // The light is straight behind the eye: ambient 0.1 + Lambert 0.9 · cos 0.
 //! assert!((image.pixels[0] - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-5);
 //! assert_eq!(stats.rays, 2); // the camera ray and one shadow ray
+//! assert_eq!((stats.camera_rays, stats.shadow_rays, stats.secondary_rays()), (1, 1, 0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 #![warn(missing_docs)]
 
 mod aov;
+mod bounds;
 mod camera;
+mod exr;
 mod integrator;
+mod layers;
 mod material;
 pub mod optics;
 mod output;
 mod render;
 mod scene;
 mod texture;
+mod tonemap;
 
-pub use aov::{Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_aovs};
+pub use aov::{
+    AlphaImage, Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_alpha, render_with_aovs,
+};
+pub use bounds::{BoundsError, PixelBounds};
 pub use camera::Camera;
+pub use exr::{
+    ExrAttribute, ExrChannel, ExrLayer, ExrSamples, LayeredExr, read_layered_exr, write_layered_exr,
+};
 pub use integrator::MAX_DEPTH_LIMIT;
+pub use layers::{NO_ID, RenderExr, aov_exr_channels, read_render_exr, render_layers, write_render_exr};
 pub use material::Material;
 pub use output::{
     OutputError, OutputFormat, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
-    write_aov_preview_png, write_exr_rgb, write_image, write_image_exr, write_png_rgb8,
+    write_aov_preview_png, write_bytes_atomic, write_exr_rgb, write_image, write_image_exr, write_png,
+    write_png_rgb8,
 };
 pub use render::{
     Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples, sample_position,
@@ -78,6 +91,7 @@ pub use texture::{
     ImageTexture, MAX_TEXTURE_EDGE, MAX_TEXTURE_TEXELS, Mapping, Texture, Wrap, srgb_to_linear,
     srgb8_to_linear,
 };
+pub use tonemap::{BitDepth, PngOptions, Tonemap, TonemapParseError, linear_to_srgb};
 
 /// Errors from building shading data.
 #[derive(Debug, thiserror::Error)]

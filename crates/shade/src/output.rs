@@ -12,8 +12,9 @@
 //!   or pass produces one (non-finite samples count as black), and a NaN
 //!   in a file spreads through every filter that reads it.
 
-use crate::{Aov, AovImage, AovImages, Image, linear_to_srgb8};
-use image::{ImageBuffer, ImageFormat, Rgb};
+use crate::{Aov, AovImage, AovImages, BitDepth, Image, PngOptions, linear_to_srgb8};
+use image::{ImageBuffer, ImageFormat, Rgb, Rgba};
+use prism_geometry::glam::Vec3;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -50,7 +51,7 @@ pub enum OutputError {
     },
 }
 
-fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
+pub(crate) fn invalid(path: &Path, reason: impl Into<String>) -> OutputError {
     OutputError::Invalid { path: path.to_path_buf(), reason: reason.into() }
 }
 
@@ -111,7 +112,7 @@ pub fn write_image(path: &Path, image: &Image, format: OutputFormat) -> Result<(
 /// Writes `path` atomically: `encode` fills a new temporary file next to
 /// it, which then replaces `path`; on any error the temporary file is
 /// removed and `path` is left as it was.
-fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
@@ -141,6 +142,18 @@ fn write_atomic(
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Writes `bytes` to `path` atomically (as every image: a temporary file
+/// in the same directory, synced, renamed over `path`), for the other
+/// files a render produces (e.g. statistics).
+///
+/// # Errors
+/// [`OutputError::Io`] if writing fails; the target is then untouched.
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    write_atomic(path, |w| {
+        w.write_all(bytes).map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
+    })
 }
 
 /// Writes a 32-bit float RGB OpenEXR file (channels `R`, `G`, `B`, no
@@ -173,14 +186,85 @@ where
     T: image::Primitive,
     [T]: image::EncodableLayout,
 {
-    check_len(path, width, height, rgb.len(), 3)?;
-    let buffer: ImageBuffer<Rgb<T>, &[T]> =
-        ImageBuffer::from_raw(width, height, rgb).ok_or_else(|| invalid(path, "buffer too small"))?;
+    write_pixels::<Rgb<T>>(path, width, height, rgb, format)
+}
+
+/// Writes `width · height` pixels of type `P` (interleaved channels) as
+/// `format`, atomically.
+fn write_pixels<P>(
+    path: &Path,
+    width: u32,
+    height: u32,
+    data: &[P::Subpixel],
+    format: ImageFormat,
+) -> Result<(), OutputError>
+where
+    P: image::PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+{
+    check_len(path, width, height, data.len(), usize::from(P::CHANNEL_COUNT))?;
+    let buffer: ImageBuffer<P, &[P::Subpixel]> =
+        ImageBuffer::from_raw(width, height, data).ok_or_else(|| invalid(path, "buffer too small"))?;
     write_atomic(path, |w| {
         buffer
             .write_to(w, format)
             .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
     })
+}
+
+/// Writes a linear image as a PNG file through `options` (exposure, tone
+/// mapping, sRGB, 8 or 16 bits), atomically. With `alpha` (one coverage
+/// value per pixel, `image` then premultiplied by it, as
+/// [`crate::render_with_alpha`] gives), the file is RGBA with *straight*
+/// alpha, as PNG defines it: the colour is `image / alpha` where alpha > 0,
+/// black where it is 0, and alpha is stored linearly (`⌊a · (2^bits − 1) + ½⌋`).
+///
+/// # Errors
+/// [`OutputError::Invalid`] if `alpha` is not one value per pixel; else as
+/// [`write_exr_rgb`].
+pub fn write_png(
+    path: &Path,
+    image: &Image,
+    alpha: Option<&[f32]>,
+    options: &PngOptions,
+) -> Result<(), OutputError> {
+    let (w, h) = (image.width, image.height);
+    let straight = |k: usize, p: Vec3| -> (Vec3, Option<f32>) {
+        match alpha.and_then(|a| a.get(k)) {
+            Some(&a) if a > 0.0 => (p / a, Some(a.min(1.0))),
+            Some(_) => (Vec3::ZERO, Some(0.0)),
+            None => (p, None),
+        }
+    };
+    if let Some(a) = alpha {
+        check_len(path, w, h, a.len(), 1)?;
+    }
+    let channels = if alpha.is_some() { 4 } else { 3 };
+    macro_rules! encode {
+        ($encode:ident, $max:expr) => {{
+            let mut out = Vec::with_capacity(image.pixels.len() * channels);
+            for (k, &p) in image.pixels.iter().enumerate() {
+                let (c, a) = straight(k, p);
+                out.extend(c.to_array().map(|x| options.$encode(x)));
+                if let Some(a) = a {
+                    out.push((a * $max + 0.5) as _);
+                }
+            }
+            out
+        }};
+    }
+    match (options.bit_depth, alpha.is_some()) {
+        (BitDepth::Eight, false) => write_rgb::<u8>(path, w, h, &encode!(encode8, 255.0), ImageFormat::Png),
+        (BitDepth::Sixteen, false) => {
+            write_rgb::<u16>(path, w, h, &encode!(encode16, 65535.0), ImageFormat::Png)
+        }
+        (BitDepth::Eight, true) => {
+            write_pixels::<Rgba<u8>>(path, w, h, &encode!(encode8, 255.0), ImageFormat::Png)
+        }
+        (BitDepth::Sixteen, true) => {
+            write_pixels::<Rgba<u16>>(path, w, h, &encode!(encode16, 65535.0), ImageFormat::Png)
+        }
+    }
 }
 
 /// Writes a linear [`Image`] (the beauty) as a float RGB OpenEXR file; see
@@ -269,8 +353,10 @@ pub fn write_aov_files(base: &Path, aovs: &AovImages, previews: bool) -> Result<
 /// - `normal`, `geo_normal`: each component `n` as `(n + 1) / 2` of 255
 ///   (so +X is red, +Y green, +Z blue); pixels whose value is exactly 0
 ///   (nothing hit) black;
-/// - `depth`: grey from white at the smallest finite depth to 10% grey at
-///   the largest (all white if they are equal); `+∞` (misses) black;
+/// - `depth`: grey from white at the 1st percentile of the finite depths
+///   to 10% grey at the 99th, logarithmic in depth between them and
+///   clamped outside (all white if they are equal), so that a plane
+///   reaching the horizon does not wash the rest out; `+∞` (misses) black;
 /// - `albedo`: sRGB-encoded, clamped to `[0, 1]`;
 /// - `object_id`: a distinct colour per id from a hash of the id (each
 ///   channel at least 64, so never black); −1 (nothing hit) black.
@@ -304,15 +390,10 @@ pub fn aov_preview_rgb8(pass: &AovImage) -> Vec<u8> {
             }
         }
         Aov::Depth => {
-            let finite = pass.data.iter().copied().filter(|d| d.is_finite());
-            let (lo, hi) =
-                finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+            let scale = DepthScale::of(&pass.data);
             for k in 0..n {
                 match px(k) {
-                    [d] if d.is_finite() => {
-                        let t = if hi > lo { (d - lo) / (hi - lo) } else { 0.0 };
-                        out.extend([unit(1.0 - 0.9 * t); 3]);
-                    }
+                    [d] if d.is_finite() => out.extend([unit(1.0 - 0.9 * scale.t(*d)); 3]),
                     _ => out.extend([0; 3]),
                 }
             }
@@ -327,6 +408,42 @@ pub fn aov_preview_rgb8(pass: &AovImage) -> Vec<u8> {
         }
     }
     out
+}
+
+/// How the depth preview maps a depth to grey: logarithmically between
+/// the 1st and 99th percentiles of the finite depths (`lo`, `hi`), so that
+/// a floor running to the horizon (a few huge depths) or a speck very near
+/// the camera does not squash everything else into one grey:
+/// `t = (ln d − ln lo) / (ln hi − ln lo)`, clamped to `[0, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct DepthScale {
+    ln_lo: f32,
+    ln_hi: f32,
+}
+
+impl DepthScale {
+    /// Smallest depth the logarithm sees (a hit at the eye).
+    const FLOOR: f32 = 1e-6;
+
+    fn of(depths: &[f32]) -> Self {
+        let mut finite: Vec<f32> = depths.iter().copied().filter(|d| d.is_finite()).collect();
+        if finite.is_empty() {
+            return Self { ln_lo: 0.0, ln_hi: 0.0 };
+        }
+        finite.sort_unstable_by(f32::total_cmp);
+        let at = |q: f64| finite[((finite.len() - 1) as f64 * q).round() as usize];
+        let ln = |d: f32| d.max(Self::FLOOR).ln();
+        Self { ln_lo: ln(at(0.01)), ln_hi: ln(at(0.99)) }
+    }
+
+    /// `0` at `lo` (and nearer), `1` at `hi` (and farther).
+    fn t(self, d: f32) -> f32 {
+        if self.ln_hi > self.ln_lo {
+            ((d.max(Self::FLOOR).ln() - self.ln_lo) / (self.ln_hi - self.ln_lo)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
 }
 
 /// A colour for object id `id`: a hash of it, each channel in `[64, 255]`.
@@ -407,6 +524,37 @@ mod tests {
         let back = image::open(&p).unwrap().to_rgb8();
         assert_eq!(back.get_pixel(0, 0).0, [255, linear_to_srgb8(0.5), 0]);
         assert_eq!(back.get_pixel(1, 0).0, [0, 0, 0]);
+    }
+
+    #[test]
+    fn the_depth_preview_stays_readable_to_the_horizon() {
+        // A camera 1 above an infinite floor, looking level: row j of 200
+        // sees the floor at depth 1 / sin(angle below the horizon), from 1.2
+        // at the bottom to thousands at the horizon row; the top half is sky.
+        let (w, h) = (4u32, 200u32);
+        let mut data = Vec::new();
+        for j in 0..h {
+            let below = (j as f32 + 0.5 - 100.0) / 100.0 * 0.9; // radians below the horizon
+            let d = if below > 0.0 { 1.0 / below.sin() } else { f32::INFINITY };
+            data.extend([d; 4]);
+        }
+        let pass = AovImage { aov: Aov::Depth, width: w, height: h, data };
+        let grey = aov_preview_rgb8(&pass);
+        let floor: Vec<u8> = (100..h).map(|j| grey[(j * w) as usize * 3]).collect();
+        // Sky is black; the floor (listed from the horizon down) brightens
+        // monotonically toward the camera...
+        assert_eq!(grey[0], 0);
+        assert!(floor.windows(2).all(|p| p[0] <= p[1]), "{floor:?}");
+        // ...and uses the grey range: white near, 10% far, the median row
+        // well below white and at most 15% of the rows within 5 levels of
+        // white (the old min–max scale puts the median row at 254 and 83% there).
+        assert_eq!((floor[0], floor[floor.len() - 1]), (26, 255));
+        let near_white = floor.iter().filter(|&&g| g >= 250).count();
+        assert!(near_white * 100 <= 15 * floor.len(), "{near_white} of {}: {floor:?}", floor.len());
+        assert!(floor[floor.len() / 2] <= 225, "{floor:?}");
+        let mut levels = floor.clone();
+        levels.dedup();
+        assert!(levels.len() > 60, "{} grey levels", levels.len());
     }
 
     #[test]

@@ -80,9 +80,7 @@ impl Image {
 /// The sRGB transfer function applied to a linear value, to 8 bits.
 #[must_use]
 pub fn linear_to_srgb8(x: f32) -> u8 {
-    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
-    let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
+    (crate::tonemap::linear_to_srgb(x) * 255.0 + 0.5) as u8
 }
 
 /// Figures about a finished render.
@@ -92,11 +90,27 @@ pub struct RenderStats {
     pub seconds: f64,
     /// Every ray traced: camera, reflection, refraction, transparency, shadow.
     pub rays: u64,
+    /// Of `rays`, the beauty's camera rays (one per sample).
+    pub camera_rays: u64,
+    /// Of `rays`, the shadow rays.
+    pub shadow_rays: u64,
+    /// Of `rays`, the rays the AOV passes (and the coverage test of
+    /// [`crate::render_with_alpha`]) traced for themselves.
+    pub aov_rays: u64,
     /// Whether the render was cancelled before the end.
     pub cancelled: bool,
     /// Samples whose radiance was not finite (NaN or infinite) and so
     /// counted as black; 0 unless something is wrong.
     pub nonfinite_samples: u64,
+}
+
+impl RenderStats {
+    /// Of `rays`, the secondary rays: reflection, refraction and
+    /// transparency (everything that is not a camera, shadow or AOV ray).
+    #[must_use]
+    pub fn secondary_rays(&self) -> u64 {
+        self.rays.saturating_sub(self.camera_rays + self.shadow_rays + self.aov_rays)
+    }
 }
 
 /// Renders the whole image with `settings.spp` samples per pixel: the
@@ -141,7 +155,7 @@ pub fn render_samples(
     samples: Range<u32>,
     hooks: RenderHooks<'_>,
 ) -> (Image, RenderStats) {
-    let (image, _, stats) = render_pixels(scene, settings, samples, true, &[], hooks);
+    let (image, _, stats) = render_pixels(scene, settings, samples, true, &[], false, hooks);
     (image, stats)
 }
 
@@ -152,13 +166,16 @@ pub fn render_samples(
 /// being `0..spp`). Returns the per-pixel beauty *sums* (an empty image
 /// without `beauty`), one AOV row per image row (empty without `aovs`),
 /// and the statistics. Rows skipped after a cancel hold zero sums and the
-/// AOV miss values.
+/// AOV miss values. With `alpha`, the rows' sinks also gather coverage and
+/// the premultiplied beauty (from each sample's radiance).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn render_pixels<'a>(
     scene: &Scene,
     settings: &RenderSettings,
     samples: Range<u32>,
     beauty: bool,
     aovs: &'a [Aov],
+    alpha: bool,
     hooks: RenderHooks<'_>,
 ) -> (Image, Vec<AovRow<'a>>, RenderStats) {
     let start = std::time::Instant::now();
@@ -168,11 +185,15 @@ pub(crate) fn render_pixels<'a>(
     let pattern = SamplePattern::new(spp);
     let see_through = beauty && Tracer::scene_is_see_through(scene);
     let rays = AtomicU64::new(0);
+    let [camera_rays, shadow_rays, aov_rays_all] = [(); 3].map(|()| AtomicU64::new(0));
     let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let mut pixels = vec![Vec3::ZERO; if beauty { w as usize * h as usize } else { 0 }];
-    let mut aov_rows: Vec<AovRow<'a>> =
-        if aovs.is_empty() { Vec::new() } else { (0..h).map(|_| AovRow::new(aovs, w, spp)).collect() };
+    let mut aov_rows: Vec<AovRow<'a>> = if aovs.is_empty() && !alpha {
+        Vec::new()
+    } else {
+        (0..h).map(|_| AovRow::new(aovs, w, spp, alpha)).collect()
+    };
     let render_row = |j: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>| {
         if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             return;
@@ -186,16 +207,18 @@ pub(crate) fn render_pixels<'a>(
             for s in samples.clone() {
                 let (dx, dy) = pattern.offset(index, s);
                 let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+                let mut l = Vec3::ZERO;
                 if beauty {
-                    let l = tracer.trace_camera(&ray);
+                    l = tracer.trace_camera(&ray);
                     if l.is_finite() {
                         sum += l;
                     } else {
                         bad += 1;
+                        l = Vec3::ZERO;
                     }
                 }
                 if let Some(sink) = sink.as_deref_mut() {
-                    sink.sample(scene, &ray);
+                    sink.sample(scene, &ray, l);
                 }
             }
             if let Some(px) = row.get_mut(i) {
@@ -207,6 +230,11 @@ pub(crate) fn render_pixels<'a>(
         }
         let aov_rays = sink.map_or(0, |s| s.rays);
         rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);
+        let camera =
+            if beauty { u64::from(w) * u64::from(samples.end.saturating_sub(samples.start)) } else { 0 };
+        camera_rays.fetch_add(camera, Ordering::Relaxed);
+        shadow_rays.fetch_add(tracer.shadow_rays, Ordering::Relaxed);
+        aov_rays_all.fetch_add(aov_rays, Ordering::Relaxed);
         if bad > 0 {
             nonfinite.fetch_add(bad, Ordering::Relaxed);
         }
@@ -234,6 +262,9 @@ pub(crate) fn render_pixels<'a>(
     let stats = RenderStats {
         seconds: start.elapsed().as_secs_f64(),
         rays: rays.into_inner(),
+        camera_rays: camera_rays.into_inner(),
+        shadow_rays: shadow_rays.into_inner(),
+        aov_rays: aov_rays_all.into_inner(),
         cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
         nonfinite_samples: nonfinite.into_inner(),
     };

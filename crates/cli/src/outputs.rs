@@ -1,0 +1,181 @@
+//! What `prism render` writes besides the statistics, decided once before
+//! the render (so that every file is checked against the inputs first) and
+//! written after it: the image (PNG through the exposure, tone mapping and
+//! bit depth flags; EXR linear), its alpha, and the AOV passes, as layers
+//! of one multi-layer EXR or, with `--aov-files`, as separate files.
+
+use anyhow::{Result, anyhow};
+use clap::Args;
+use prism_shade::{
+    AovImages, BitDepth, Image, OutputError, OutputFormat, PngOptions, Tonemap, aov_path, write_aov_files,
+    write_aov_preview_png, write_image, write_png, write_render_exr,
+};
+use std::path::PathBuf;
+
+/// The image flags of `prism render`.
+#[derive(Args)]
+pub struct ImageArgs {
+    /// Make the background transparent: RGBA output (PNG with straight alpha, EXR premultiplied).
+    #[arg(long)]
+    alpha: bool,
+    /// Bits per channel of a PNG: 8 or 16.
+    #[arg(long, value_name = "BITS", default_value = "8", value_parser = ["8", "16"])]
+    bit_depth: String,
+    /// Exposure in stops for PNG output (the linear values times 2^EV); EXR stays linear.
+    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Tone mapping for PNG output: clamp (default), reinhard, aces; EXR stays linear.
+    #[arg(long, value_name = "OP", default_value = "clamp", value_parser = parse_tonemap)]
+    tonemap: Tonemap,
+    /// Write each AOV pass to its own file (OUT-stem.PASS.exr, RGB) instead of as layers of one EXR.
+    #[arg(long)]
+    aov_files: bool,
+}
+
+fn parse_tonemap(s: &str) -> Result<Tonemap, String> {
+    s.parse().map_err(|e: prism_shade::TonemapParseError| e.to_string())
+}
+
+/// The files of one render and how to write them.
+pub struct Plan {
+    /// The image.
+    pub output: PathBuf,
+    format: OutputFormat,
+    png: PngOptions,
+    /// Whether the background is transparent.
+    pub alpha: bool,
+    /// AOV passes go to separate files (the old layout).
+    aov_files: bool,
+    previews: bool,
+    /// Whether passes were asked for.
+    has_aovs: bool,
+}
+
+impl ImageArgs {
+    /// The plan for `output` (format known), with or without passes; warns
+    /// (returned as text) about flags that do not apply.
+    ///
+    /// # Errors
+    /// A non-finite `--exposure`.
+    pub fn plan(
+        &self,
+        output: PathBuf,
+        format: OutputFormat,
+        has_aovs: bool,
+        previews: bool,
+    ) -> Result<(Plan, Vec<String>)> {
+        if !self.exposure.is_finite() || self.exposure.abs() > 64.0 {
+            return Err(anyhow!("--exposure: must be a number of stops in [-64, 64], got {}", self.exposure));
+        }
+        let png = PngOptions {
+            exposure: self.exposure,
+            tonemap: self.tonemap,
+            bit_depth: if self.bit_depth == "16" { BitDepth::Sixteen } else { BitDepth::Eight },
+        };
+        let mut warnings = Vec::new();
+        if format == OutputFormat::Exr && png != PngOptions::default() {
+            warnings.push(
+                "--exposure, --tonemap and --bit-depth apply to PNG output only; the EXR stays linear float"
+                    .to_owned(),
+            );
+        }
+        if self.aov_files && !has_aovs {
+            warnings.push(
+                "--aov-files without AOV passes (--aov or the scene's `aov`) writes no pass files".into(),
+            );
+        }
+        let plan =
+            Plan { output, format, png, alpha: self.alpha, aov_files: self.aov_files, previews, has_aovs };
+        Ok((plan, warnings))
+    }
+}
+
+impl Plan {
+    /// The multi-layer EXR holding the passes when the image is a PNG:
+    /// `<stem>.aov.exr` beside it.
+    fn layered_beside(&self) -> Result<Option<PathBuf>, OutputError> {
+        if !self.has_aovs || self.aov_files || self.format == OutputFormat::Exr {
+            return Ok(None);
+        }
+        let stem = self.output.file_stem().ok_or_else(|| OutputError::Invalid {
+            path: self.output.clone(),
+            reason: "the output path has no file name".into(),
+        })?;
+        let mut name = stem.to_os_string();
+        name.push(".aov.exr");
+        Ok(Some(self.output.with_file_name(name)))
+    }
+
+    /// Every file the render may write besides the image, for the checks
+    /// made before rendering.
+    ///
+    /// # Errors
+    /// An output path without a file name.
+    pub fn other_files(&self, aovs: &[prism_shade::Aov]) -> Result<Vec<PathBuf>, OutputError> {
+        let mut v: Vec<PathBuf> = self.layered_beside()?.into_iter().collect();
+        for &a in aovs {
+            if self.aov_files {
+                v.push(aov_path(&self.output, a, "exr")?);
+            }
+            if self.previews {
+                v.push(aov_path(&self.output, a, "png")?);
+            }
+        }
+        Ok(v)
+    }
+
+    /// Writes the image: `color` (premultiplied by `alpha` when given) as a
+    /// PNG through the flags, or as a linear EXR whose base layer holds
+    /// `A` too, and the passes as its layers unless they go elsewhere.
+    ///
+    /// # Errors
+    /// As the writers.
+    pub fn write_image(
+        &self,
+        color: &Image,
+        alpha: Option<&[f32]>,
+        passes: Option<&AovImages>,
+    ) -> Result<(), OutputError> {
+        match self.format {
+            OutputFormat::Png => write_png(&self.output, color, alpha, &self.png),
+            OutputFormat::Exr => {
+                let layered = passes.filter(|_| !self.aov_files);
+                if alpha.is_none() && layered.is_none() {
+                    return write_image(&self.output, color, OutputFormat::Exr);
+                }
+                let empty = AovImages { width: color.width, height: color.height, passes: Vec::new() };
+                write_render_exr(&self.output, color, alpha, layered.unwrap_or(&empty))
+            }
+        }
+    }
+
+    /// Writes the passes that do not live in the image (the multi-layer
+    /// `<stem>.aov.exr` beside a PNG, or the separate files) and the
+    /// previews; returns the files written, in order.
+    ///
+    /// # Errors
+    /// As the writers; files written before an error stay.
+    pub fn write_passes(
+        &self,
+        color: &Image,
+        alpha: Option<&[f32]>,
+        passes: &AovImages,
+    ) -> Result<Vec<PathBuf>, OutputError> {
+        if self.aov_files {
+            return write_aov_files(&self.output, passes, self.previews);
+        }
+        let mut written = Vec::new();
+        if let Some(beside) = self.layered_beside()? {
+            write_render_exr(&beside, color, alpha, passes)?;
+            written.push(beside);
+        }
+        if self.previews {
+            for pass in &passes.passes {
+                let png = aov_path(&self.output, pass.aov, "png")?;
+                write_aov_preview_png(&png, pass)?;
+                written.push(png);
+            }
+        }
+        Ok(written)
+    }
+}

@@ -1,0 +1,75 @@
+//! `prism --version`: the version, the git commit of the build and the
+//! SIMD paths this machine enables, detected at run time.
+
+use std::sync::OnceLock;
+
+/// The git commit the binary was built from (12 hex digits), or `unknown`
+/// (recorded by `build.rs`).
+pub const COMMIT: &str = env!("PRISM_GIT_COMMIT");
+
+/// The SIMD paths of prism and whether this CPU (and environment) enables
+/// each: `(path, enabled)`. Today one: the BVH's AVX2
+/// traversal (`prism_bvh::Accel`, chosen when the structure is built); a
+/// new run-time path adds a line here.
+#[must_use]
+pub fn simd_paths() -> Vec<(&'static str, bool)> {
+    let forced_off = std::env::var_os("PRISM_BVH_NO_SIMD").is_some();
+    vec![
+        // avx2 fma bmi1 bmi2 lzcnt popcnt; off with PRISM_BVH_NO_SIMD.
+        ("bvh-avx2", !forced_off && has_avx2_set()),
+    ]
+}
+
+#[cfg(target_arch = "x86_64")]
+fn has_avx2_set() -> bool {
+    is_x86_feature_detected!("avx2")
+        && is_x86_feature_detected!("fma")
+        && is_x86_feature_detected!("bmi1")
+        && is_x86_feature_detected!("bmi2")
+        && is_x86_feature_detected!("lzcnt")
+        && is_x86_feature_detected!("popcnt")
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn has_avx2_set() -> bool {
+    false
+}
+
+/// The SIMD paths enabled here, space-separated (`scalar` if none).
+#[must_use]
+pub fn enabled_simd() -> String {
+    let on: Vec<&str> = simd_paths().into_iter().filter(|p| p.1).map(|p| p.0).collect();
+    if on.is_empty() { "scalar".to_owned() } else { on.join(" ") }
+}
+
+/// The text after `prism ` printed by `prism --version`:
+///
+/// ```text
+/// 0.1.0
+/// commit: 4645439abcde
+/// simd:   bvh-avx2 (detected at run time; scalar fallback always present)
+/// ```
+pub fn long() -> &'static str {
+    static TEXT: OnceLock<String> = OnceLock::new();
+    TEXT.get_or_init(|| {
+        format!(
+            "{}\ncommit: {COMMIT}\nsimd:   {} (detected at run time; scalar fallback always present)",
+            env!("CARGO_PKG_VERSION"),
+            enabled_simd()
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_long_version_names_version_commit_and_simd() {
+        let text = long();
+        assert!(text.starts_with(env!("CARGO_PKG_VERSION")), "{text}");
+        assert!(text.contains(&format!("commit: {COMMIT}")), "{text}");
+        assert!(COMMIT == "unknown" || (COMMIT.len() == 12 && COMMIT.bytes().all(|b| b.is_ascii_hexdigit())));
+        assert!(text.contains(&enabled_simd()), "{text}");
+    }
+}

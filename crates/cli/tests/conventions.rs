@@ -1,0 +1,130 @@
+//! The CLI conventions: `--version`, `completions SHELL`, the man pages,
+//! `info --json` and `render --stats-json`.
+
+mod common;
+
+use common::{GOOD, listing, prism, text};
+use std::fs;
+
+#[test]
+fn version_names_the_version_the_commit_and_the_simd_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = prism(dir.path(), &["--version"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let s = text(&out.stdout);
+    let lines: Vec<&str> = s.lines().collect();
+    assert_eq!(lines[0], format!("prism {}", env!("CARGO_PKG_VERSION")), "{s}");
+    let commit = lines[1].strip_prefix("commit: ").unwrap_or_else(|| panic!("{s}"));
+    assert!(
+        commit == "unknown" || (commit.len() == 12 && commit.bytes().all(|b| b.is_ascii_hexdigit())),
+        "{s}"
+    );
+    let simd = lines[2].strip_prefix("simd:   ").unwrap_or_else(|| panic!("{s}"));
+    assert!(simd.starts_with("bvh-avx2 ") || simd.starts_with("scalar "), "{s}");
+    // The switch that turns the AVX2 walk off is honoured.
+    let out = common::prism_cmd(dir.path()).arg("--version").env("PRISM_BVH_NO_SIMD", "1").output().unwrap();
+    assert!(text(&out.stdout).contains("simd:   scalar "), "{}", text(&out.stdout));
+}
+
+#[test]
+fn completions_generate_for_each_shell() {
+    let dir = tempfile::tempdir().unwrap();
+    for (shell, marker) in [("bash", "complete -F"), ("zsh", "#compdef prism"), ("fish", "complete -c prism")]
+    {
+        let out = prism(dir.path(), &["completions", shell]);
+        assert!(out.status.success(), "{shell}: {}", text(&out.stderr));
+        let s = text(&out.stdout);
+        assert!(s.contains(marker), "{shell}: no {marker:?} in\n{s}");
+        for word in ["render", "info", "spp", "aov-preview", "stats-json"] {
+            assert!(s.contains(word), "{shell}: {word} missing");
+        }
+        if shell == "bash" {
+            // The bash script parses (zsh and fish are not required here).
+            let file = dir.path().join("prism.bash");
+            fs::write(&file, &s).unwrap();
+            match std::process::Command::new("bash").arg("-n").arg(&file).output() {
+                Ok(o) => assert!(o.status.success(), "bash -n: {}", text(&o.stderr)),
+                Err(_) => prism_testkit::skip("bash is not installed"),
+            }
+        }
+    }
+    let out = prism(dir.path(), &["completions", "tcsh"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn man_pages_are_written_per_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = prism(dir.path(), &["man", "pages"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let pages = listing(&dir.path().join("pages"));
+    for p in ["prism.1", "prism-render.1", "prism-info.1", "prism-view.1", "prism-completions.1"] {
+        assert!(pages.iter().any(|x| x == p), "{p} not in {pages:?}");
+    }
+    let render = fs::read_to_string(dir.path().join("pages/prism-render.1")).unwrap();
+    assert!(render.starts_with(".ie \\n(.g .ds Aq") || render.contains(".TH prism-render"), "{render}");
+    assert!(render.contains("stats\\-json"), "{render}");
+}
+
+fn json(bytes: &[u8]) -> serde_json::Value {
+    serde_json::from_slice(bytes).unwrap_or_else(|e| panic!("not JSON ({e}): {}", text(bytes)))
+}
+
+#[test]
+fn info_json_holds_the_scene_in_numbers() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    let out = prism(dir.path(), &["info", "s.toml", "--json", "--width", "64"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let j = json(&out.stdout);
+    assert_eq!(j["image"]["width"], 64);
+    assert_eq!(j["image"]["height"], 36);
+    assert_eq!(j["objects"], 2);
+    assert_eq!(j["objects_by_kind"]["sphere"], 1);
+    assert_eq!(j["materials"], serde_json::json!(["red", "(default)"]));
+    assert_eq!(j["lights"][0]["position"], serde_json::json!([3.0, 5.0, 4.0]));
+    assert_eq!(j["camera"]["position"], serde_json::json!([0.0, 1.0, 5.0]));
+    assert_eq!(j["bounds"]["min"], serde_json::json!([-1.0, 0.0, -1.0]));
+    assert_eq!(j["bvh"]["unbounded_objects"], 1, "the plane");
+    assert!(j["bvh"]["nodes"].as_u64().unwrap() >= 1);
+    assert!(j["bvh"]["build_seconds"].as_f64().unwrap() >= 0.0);
+    assert_eq!(j["fog"], serde_json::Value::Null);
+}
+
+#[test]
+fn stats_json_holds_real_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    // A mirror ball: camera, shadow, secondary and AOV rays all happen.
+    let scene = GOOD.replace("color = [0.8, 0.1, 0.1]", "color = [0.8, 0.1, 0.1]\nreflectivity = 0.5");
+    fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let args =
+        ["render", "s.toml", "-o", "o.png", "--spp", "2", "--aov", "depth", "--stats-json", "st/s.json"];
+    fs::create_dir(dir.path().join("st")).unwrap();
+    let out = prism(dir.path(), &args);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let j = json(&fs::read(dir.path().join("st/s.json")).unwrap());
+    let u = |a: &str, b: &str| j[a][b].as_u64().unwrap_or_else(|| panic!("{a}.{b} in {j}"));
+    let f = |a: &str, b: &str| j[a][b].as_f64().unwrap_or_else(|| panic!("{a}.{b} in {j}"));
+    assert_eq!(u("image", "width") * u("image", "height"), 32 * 18);
+    // One camera ray per sample; the depth pass traces its own.
+    assert_eq!(u("rays", "camera"), 32 * 18 * 2);
+    assert_eq!(u("rays", "aov"), 32 * 18 * 2);
+    assert!(u("rays", "shadow") > 0 && u("rays", "secondary") > 0, "{j}");
+    assert_eq!(
+        u("rays", "total"),
+        u("rays", "camera") + u("rays", "shadow") + u("rays", "secondary") + u("rays", "aov")
+    );
+    for phase in ["load", "bvh_build", "render", "write"] {
+        assert!(f("seconds", phase) >= 0.0, "{phase}");
+    }
+    let total = f("seconds", "load") + f("seconds", "render") + f("seconds", "write");
+    assert!((f("seconds", "total") - total).abs() < 1e-9);
+    assert!(f("seconds", "bvh_build") <= f("seconds", "load"));
+    assert!(u("bvh", "nodes") >= 1);
+    if cfg!(target_os = "linux") {
+        // The process held at least its image buffers.
+        assert!(j["peak_memory_bytes"].as_u64().unwrap() > 32 * 18 * 12);
+    }
+    assert_eq!(j["outputs"], serde_json::json!(["o.png", "o.aov.exr"]));
+    assert_eq!(listing(&dir.path().join("st")), ["s.json"], "written atomically");
+}

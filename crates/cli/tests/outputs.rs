@@ -1,0 +1,260 @@
+//! Images ready for compositing: `--alpha` (RGBA PNG and EXR, transparent
+//! where the background was), `--bit-depth 16`, `--exposure`/`--tonemap`
+//! (PNG only), and the AOV passes as layers of one multi-layer EXR with
+//! standard channel names, read back with the `exr` crate.
+
+mod common;
+
+use common::{listing, prism, text};
+use prism_shade::{PngOptions, Tonemap, read_exr_rgb};
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::Path;
+
+/// A unit sphere at the origin seen from (0, 0, 5) over a blue background
+/// (no floor): the corners are background, the centre pixel (16, 12) sees
+/// the sphere at depth 4.
+const SPHERE: &str = r#"[render]
+width = 33
+height = 25
+spp = 1
+background = [0.2, 0.3, 0.9]
+
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+fov = 30
+
+[[lights]]
+position = [3, 5, 4]
+intensity = 3
+
+[materials.white]
+color = [0.9, 0.9, 0.9]
+specular = 0.8
+
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "white"
+"#;
+
+fn scene_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), SPHERE).unwrap();
+    dir
+}
+
+fn run_ok(dir: &Path, args: &[&str]) -> String {
+    let out = prism(dir, args);
+    assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));
+    text(&out.stderr)
+}
+
+/// Every channel of a (single-part) EXR file, read with the `exr` crate,
+/// by full name.
+fn exr_channels(path: &Path) -> BTreeMap<String, exr::prelude::FlatSamples> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(image.layer_data.len(), 1, "one part");
+    let layer = &image.layer_data[0];
+    assert_eq!((layer.size.x(), layer.size.y()), (33, 25));
+    layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.clone())).collect()
+}
+
+fn f32s(ch: &BTreeMap<String, exr::prelude::FlatSamples>, name: &str) -> Vec<f32> {
+    match ch.get(name) {
+        Some(exr::prelude::FlatSamples::F32(v)) => v.clone(),
+        other => panic!("{name}: {other:?}"),
+    }
+}
+
+#[test]
+fn alpha_is_transparent_where_the_background_was() {
+    let dir = scene_dir();
+    run_ok(dir.path(), &["render", "s.toml", "-o", "plain.png"]);
+    run_ok(dir.path(), &["render", "s.toml", "-o", "a.png", "--alpha"]);
+    let plain = image::open(dir.path().join("plain.png")).unwrap();
+    let a = image::open(dir.path().join("a.png")).unwrap();
+    assert_eq!(a.color(), image::ColorType::Rgba8);
+    let (plain, a) = (plain.to_rgb8(), a.to_rgba8());
+    // Background: fully transparent (and black); the plain render shows blue there.
+    for (i, j) in [(0, 0), (32, 0), (0, 24), (32, 24)] {
+        assert_eq!(a.get_pixel(i, j).0, [0, 0, 0, 0], "({i}, {j})");
+        assert!(plain.get_pixel(i, j).0[2] > 200);
+    }
+    // On the sphere: opaque, and the same colour as without --alpha.
+    let c = a.get_pixel(16, 12).0;
+    assert_eq!(c[3], 255);
+    assert_eq!(c[..3], plain.get_pixel(16, 12).0);
+    let opaque = a.pixels().filter(|p| p.0[3] == 255).count();
+    let clear = a.pixels().filter(|p| p.0[3] == 0).count();
+    assert!(opaque > 50 && clear > 300 && opaque + clear == 33 * 25, "{opaque} {clear}");
+}
+
+#[test]
+fn alpha_exr_is_premultiplied_with_an_a_channel() {
+    let dir = scene_dir();
+    run_ok(dir.path(), &["render", "s.toml", "-o", "plain.exr", "--spp", "4"]);
+    run_ok(dir.path(), &["render", "s.toml", "-o", "a.exr", "--spp", "4", "--alpha"]);
+    let ch = exr_channels(&dir.path().join("a.exr"));
+    assert_eq!(ch.keys().collect::<Vec<_>>(), ["A", "B", "G", "R"]);
+    let alpha = f32s(&ch, "A");
+    let (_, _, plain) = read_exr_rgb(&dir.path().join("plain.exr")).unwrap();
+    let rgb = [f32s(&ch, "R"), f32s(&ch, "G"), f32s(&ch, "B")];
+    let mut edge = 0;
+    for (k, &a) in alpha.iter().enumerate() {
+        let px = [rgb[0][k], rgb[1][k], rgb[2][k]];
+        match a {
+            // Fully covered: bit for bit the plain render.
+            1.0 => assert_eq!(px[..], plain[3 * k..3 * k + 3], "pixel {k}"),
+            // Background: nothing.
+            0.0 => assert_eq!(px, [0.0; 3], "pixel {k}"),
+            // Silhouette: coverage in quarters (4 samples), colour without
+            // the background's share.
+            _ => {
+                edge += 1;
+                assert!([0.25, 0.5, 0.75].contains(&a), "{a}");
+                assert!(px[2] < plain[3 * k + 2], "pixel {k}: the blue background is taken out");
+            }
+        }
+    }
+    assert!(edge > 0, "the silhouette is antialiased");
+    assert_eq!(alpha[12 * 33 + 16], 1.0);
+    assert_eq!(alpha[0], 0.0);
+}
+
+#[test]
+fn aovs_are_layers_of_one_exr_with_standard_names() {
+    let dir = scene_dir();
+    let stdout =
+        text(&prism(dir.path(), &["render", "s.toml", "-o", "out.exr", "--aov", "all", "--alpha"]).stdout);
+    assert!(!stdout.contains("wrote"), "one file: {stdout}");
+    assert_eq!(listing(dir.path()), ["out.exr", "s.toml"]);
+    let ch = exr_channels(&dir.path().join("out.exr"));
+    let names: Vec<&str> = ch.keys().map(String::as_str).collect();
+    let mut want = [
+        "R", "G", "B", "A", "Z", "id", "N.X", "N.Y", "N.Z", "Ng.X", "Ng.Y", "Ng.Z", "albedo.R", "albedo.G",
+        "albedo.B",
+    ];
+    want.sort_unstable();
+    assert_eq!(names, want);
+    let centre = 12 * 33 + 16;
+    // Depth: d − r = 4 at the centre; +inf where nothing is hit.
+    let z = f32s(&ch, "Z");
+    assert!((z[centre] - 4.0).abs() < 4e-4, "{}", z[centre]);
+    assert_eq!(z[0], f32::INFINITY);
+    // The id is stored as UINT: object 0, u32::MAX for nothing.
+    match &ch["id"] {
+        exr::prelude::FlatSamples::U32(ids) => {
+            assert_eq!((ids[centre], ids[0]), (0, u32::MAX));
+        }
+        other => panic!("id is not UINT: {other:?}"),
+    }
+    let n = [f32s(&ch, "N.X")[centre], f32s(&ch, "N.Y")[centre], f32s(&ch, "N.Z")[centre]];
+    assert!(n[0].abs() < 1e-4 && n[1].abs() < 1e-4 && (n[2] - 1.0).abs() < 1e-4, "{n:?}");
+    assert_eq!(f32s(&ch, "albedo.G")[centre], 0.9);
+    assert_eq!(f32s(&ch, "Ng.Z")[0], 0.0);
+    // prism reads its own file back: the same passes.
+    let back = prism_shade::read_render_exr(&dir.path().join("out.exr")).unwrap();
+    assert_eq!(back.passes.passes.len(), 5);
+    assert_eq!(back.alpha.as_deref().map(<[f32]>::len), Some(33 * 25));
+}
+
+#[test]
+fn a_png_gets_its_passes_in_one_exr_beside_it() {
+    let dir = scene_dir();
+    let out = prism(
+        dir.path(),
+        &["render", "s.toml", "-o", "img.png", "--aov", "depth,object_id", "--aov-preview"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("wrote img.aov.exr"), "{}", text(&out.stdout));
+    assert_eq!(
+        listing(dir.path()),
+        ["img.aov.exr", "img.depth.png", "img.object_id.png", "img.png", "s.toml"]
+    );
+    let ch = exr_channels(&dir.path().join("img.aov.exr"));
+    assert_eq!(ch.keys().collect::<Vec<_>>(), ["B", "G", "R", "Z", "id"]);
+    // The beauty in it is the linear render.
+    run_ok(dir.path(), &["render", "s.toml", "-o", "lin.exr"]);
+    let (_, _, lin) = read_exr_rgb(&dir.path().join("lin.exr")).unwrap();
+    assert_eq!(f32s(&ch, "G"), lin.iter().skip(1).step_by(3).copied().collect::<Vec<_>>());
+}
+
+#[test]
+fn sixteen_bit_png_refines_the_eight_bit_one() {
+    let dir = scene_dir();
+    run_ok(dir.path(), &["render", "s.toml", "-o", "a8.png"]);
+    run_ok(dir.path(), &["render", "s.toml", "-o", "a16.png", "--bit-depth", "16"]);
+    run_ok(dir.path(), &["render", "s.toml", "-o", "b16.png", "--bit-depth", "16", "--alpha"]);
+    let a8 = image::open(dir.path().join("a8.png")).unwrap();
+    let a16 = image::open(dir.path().join("a16.png")).unwrap();
+    assert_eq!(a16.color(), image::ColorType::Rgb16);
+    assert_eq!(image::open(dir.path().join("b16.png")).unwrap().color(), image::ColorType::Rgba16);
+    let (a8, a16) = (a8.to_rgb8(), a16.to_rgb16());
+    let mut finer = false;
+    for (p8, p16) in a8.pixels().zip(a16.pixels()) {
+        for (v8, v16) in p8.0.iter().zip(p16.0) {
+            // Both round the same display value: 16 bits / 257 is within half a step of 8 bits.
+            let scaled = f64::from(v16) / 257.0;
+            assert!((scaled - f64::from(*v8)).abs() <= 0.5 + 1e-3, "{v8} vs {v16}");
+            finer |= v16 % 257 != 0;
+        }
+    }
+    assert!(finer, "16 bits carry more than 8");
+}
+
+#[test]
+fn exposure_and_tonemap_shape_the_png_and_leave_the_exr_linear() {
+    let dir = scene_dir();
+    run_ok(dir.path(), &["render", "s.toml", "-o", "lin.exr"]);
+    let (_, _, lin) = read_exr_rgb(&dir.path().join("lin.exr")).unwrap();
+    for (ev, op) in [("1.5", Tonemap::Aces), ("-1", Tonemap::Reinhard), ("0.5", Tonemap::Clamp)] {
+        run_ok(dir.path(), &["render", "s.toml", "-o", "t.png", "--exposure", ev, "--tonemap", op.name()]);
+        let png = image::open(dir.path().join("t.png")).unwrap().to_rgb8();
+        let o = PngOptions { exposure: ev.parse().unwrap(), tonemap: op, ..PngOptions::default() };
+        let want: Vec<u8> = lin.iter().map(|&x| o.encode8(x)).collect();
+        assert_eq!(png.as_raw(), &want, "{ev} {op}");
+    }
+    // The sphere's highlight saturates under clamp, not under Reinhard.
+    run_ok(dir.path(), &["render", "s.toml", "-o", "c.png", "--exposure", "3"]);
+    run_ok(dir.path(), &["render", "s.toml", "-o", "r.png", "--exposure", "3", "--tonemap", "reinhard"]);
+    let white = |f: &str| {
+        image::open(dir.path().join(f)).unwrap().to_rgb8().pixels().filter(|p| p.0 == [255; 3]).count()
+    };
+    assert!(white("c.png") > 0 && white("r.png") == 0);
+    // An EXR stays linear, bit for bit, and says so.
+    let err =
+        run_ok(dir.path(), &["render", "s.toml", "-o", "e.exr", "--exposure", "2", "--tonemap", "aces"]);
+    assert!(err.contains("apply to PNG output only"), "{err}");
+    assert_eq!(read_exr_rgb(&dir.path().join("e.exr")).unwrap().2, lin);
+}
+
+#[test]
+fn bad_image_flags_are_refused_naming_the_flag() {
+    let dir = scene_dir();
+    let cases: [(&[&str], &str, i32); 4] = [
+        (&["--tonemap", "filmic"], "--tonemap", 2),
+        (&["--bit-depth", "12"], "--bit-depth", 2),
+        (&["--exposure", "nan"], "--exposure", 1),
+        (&["--exposure", "1e9"], "--exposure", 1),
+    ];
+    for (flags, words, code) in cases {
+        let mut args = vec!["render", "s.toml", "-o", "x.png"];
+        args.extend(flags);
+        let out = prism(dir.path(), &args);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{flags:?}: {err}");
+        assert!(err.contains(words) && !err.contains("panicked"), "{flags:?}: {err}");
+    }
+    assert_eq!(listing(dir.path()), ["s.toml"]);
+}
