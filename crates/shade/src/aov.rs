@@ -225,7 +225,7 @@ pub fn render_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (AovImages, RenderStats) {
-    let (_, images, stats) = render_passes(scene, settings, aovs, false, hooks);
+    let (_, images, stats) = render_passes(scene, settings, aovs, None, false, hooks);
     (images, stats)
 }
 
@@ -241,13 +241,16 @@ pub fn render_with_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (Image, AovImages, RenderStats) {
-    render_passes(scene, settings, aovs, true, hooks)
+    render_passes(scene, settings, aovs, None, true, hooks)
 }
 
-fn render_passes(
+/// The beauty (if `beauty`) and the passes `aovs` of `region` (`None`: the
+/// whole image), one pass over its pixels.
+pub(crate) fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
     aovs: &[Aov],
+    region: Option<crate::PixelBounds>,
     beauty: bool,
     hooks: RenderHooks<'_>,
 ) -> (Image, AovImages, RenderStats) {
@@ -258,7 +261,7 @@ fn render_passes(
         }
     }
     let spp = settings.spp.max(1);
-    let (mut image, rows, stats) = render_pixels(scene, settings, 0..spp, beauty, &wanted, hooks);
+    let (mut image, rows, stats) = render_pixels(scene, settings, 0..spp, region, beauty, &wanted, hooks);
     scale_to_mean(&mut image, spp);
     let (w, h) = (image.width, image.height);
     let n = w as usize * h as usize;
@@ -300,6 +303,8 @@ pub(crate) struct AovRow<'a> {
     passes: Vec<Vec<f32>>,
     sums: Sums,
     centre_id: Option<f32>,
+    /// The image column of the row's first value (a partial render's `x0`).
+    x0: u32,
     /// Rays traced for the passes.
     pub(crate) rays: u64,
 }
@@ -320,8 +325,14 @@ impl<'a> AovRow<'a> {
             passes: wanted.iter().map(|a| vec![a.miss_value(); width as usize * a.channels()]).collect(),
             sums: Sums::ZERO,
             centre_id: None,
+            x0: 0,
             rays: 0,
         }
+    }
+
+    /// The same row, its first value being image column `x0`.
+    pub(crate) fn starting_at(self, x0: u32) -> Self {
+        Self { x0, ..self }
     }
 
     /// One sample's camera ray of the current pixel.
@@ -357,7 +368,7 @@ impl<'a> AovRow<'a> {
         }
         let inv = 1.0 / self.spp as f32;
         let (sums, id) = (self.sums, self.centre_id.unwrap_or(-1.0));
-        let i = i as usize;
+        let i = (i - self.x0) as usize;
         for (a, buf) in self.wanted.iter().zip(&mut self.passes) {
             match a {
                 Aov::Depth => buf[i] = sums.depth * inv,
