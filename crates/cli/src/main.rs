@@ -7,6 +7,9 @@
 //!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
 //! prism info SCENE [the same overrides as render]
 //! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
+//! prism render SCENE (--pixel-bounds X0,X1,Y0,Y1 | --tile I/N | --tile-from-env N) -o TILE.exr
+//! prism render SCENE --frames N [--orbit DEGREES] [--frame I | --frame-from-env] -o OUT.png
+//! prism merge TILE... -o OUT
 //! ```
 //!
 //! The overrides (`--width` … `--fov`) are one type, `prism_scene::Overrides`,
@@ -21,15 +24,20 @@
 
 #![forbid(unsafe_code)]
 
+mod frames;
 mod info;
 mod interrupt;
+mod merge;
 mod overwrite;
+mod tile;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use prism_scene::{Limits, LoadOptions, Overrides, load_path};
-use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_aovs, write_image};
+use prism_scene::{Limits, LoadOptions, LoadedScene, Overrides, load_path};
+use prism_shade::{
+    Aov, OutputFormat, RenderHooks, RenderSettings, render, render_region, render_with_aovs, write_image,
+};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -52,6 +60,8 @@ enum Command {
     /// Open a window that renders a scene progressively: f/c fog on/off, s save PNG,
     /// r reload, arrows or drag orbit, w/a/d/x move, Home reset, Esc/q quit.
     View(ViewArgs),
+    /// Assemble tiles (`prism render --tile I/N -o TILE.exr`) into the full image.
+    Merge(merge::MergeArgs),
 }
 
 #[derive(Args)]
@@ -92,6 +102,10 @@ struct RenderArgs {
     aov_preview: bool,
     #[command(flatten)]
     limits: LimitArgs,
+    #[command(flatten)]
+    part: tile::PartArgs,
+    #[command(flatten)]
+    frames: frames::FrameArgs,
 }
 
 #[derive(Args)]
@@ -134,6 +148,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render_command(&args),
         Command::Info(args) => info_command(&args),
         Command::View(args) => view_command(args),
+        Command::Merge(args) => merge::merge_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -199,11 +214,30 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     }
 
-    let settings = &loaded.settings;
+    let plan = frames::plan(&args.frames, &loaded.settings, &output)?;
+    for (settings, output) in &plan {
+        overwrite::check_not_an_input(output, &loaded.inputs)?;
+        render_to(args, &loaded, settings, output, format, &aovs, previews)?;
+    }
+    Ok(())
+}
+
+/// Renders `settings` (the whole image, or the part `args` asks for) and
+/// writes it to `output` (a part as `.exr`: a tile file).
+fn render_to(
+    args: &RenderArgs,
+    loaded: &LoadedScene,
+    settings: &RenderSettings,
+    output: &Path,
+    format: OutputFormat,
+    aovs: &[Aov],
+    previews: bool,
+) -> Result<()> {
     let (w, h) = settings.camera.size();
+    let region = args.part.region(w, h)?;
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
-        let bar = ProgressBar::new(u64::from(h));
+        let bar = ProgressBar::new(u64::from(region.map_or(h, |r| r.0.height())));
         if let Ok(style) = ProgressStyle::with_template(
             "{spinner} rendering [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
         ) {
@@ -223,11 +257,14 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let hooks = RenderHooks { progress: Some(&progress), cancel: Some(interrupt.flag()) };
     let start = Instant::now();
-    let (image, passes, stats) = if aovs.is_empty() {
+    let (image, passes, stats) = if let Some((b, _)) = region {
+        let (image, passes, stats) = render_region(&loaded.scene, settings, b, aovs, hooks)?;
+        (image, Some(passes), stats)
+    } else if aovs.is_empty() {
         let (image, stats) = render(&loaded.scene, settings, hooks);
         (image, None, stats)
     } else {
-        let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, &aovs, hooks);
+        let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, aovs, hooks);
         (image, Some(passes), stats)
     };
     let wall = start.elapsed().as_secs_f64();
@@ -235,12 +272,24 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         b.finish_and_clear();
     }
     if stats.cancelled {
-        return Err(interrupt.finish(&image, &output, format, args.partial));
+        return Err(interrupt.finish(&image, output, format, args.partial));
     }
-    write_image(&output, &image, format)?;
-    let written = match &passes {
-        Some(p) => prism_shade::write_aov_files(&output, p, previews)?,
-        None => Vec::new(),
+    let written = match (region, &passes) {
+        (Some((bounds, tile)), Some(passes)) if format == OutputFormat::Exr => {
+            let inputs = prism_scene::inputs_digest(&loaded.inputs)?;
+            let header = tile::TileHeader::new(&args.scene, inputs, settings, aovs, tile);
+            let (width, height) = (w, h);
+            let tile = tile::Tile { width, height, bounds, image, aovs: passes.clone(), header };
+            tile::write_tile(output, &tile)?;
+            Vec::new()
+        }
+        _ => {
+            write_image(output, &image, format)?;
+            match &passes {
+                Some(p) => prism_shade::write_aov_files(output, p, previews)?,
+                None => Vec::new(),
+            }
+        }
     };
     if !args.quiet {
         let mrays = stats.rays as f64 / 1e6;
