@@ -10,6 +10,8 @@
 //! prism render SCENE (--pixel-bounds X0,X1,Y0,Y1 | --tile I/N | --tile-from-env N) -o TILE.exr
 //! prism render SCENE --frames N [--orbit DEGREES] [--frame I | --frame-from-env] -o OUT.png
 //! prism merge TILE... -o OUT
+//! prism farm slurm SCENE (--tiles N | --frames N [--orbit DEG]) [RENDER OPTIONS] -o OUT
+//!                  [--wait] [--dry-run] [--work-dir DIR] [-- SBATCH_ARGS...]
 //! ```
 //!
 //! The overrides (`--width` … `--fov`) are one type, `prism_scene::Overrides`,
@@ -24,6 +26,7 @@
 
 #![forbid(unsafe_code)]
 
+mod farm;
 mod frames;
 mod info;
 mod interrupt;
@@ -62,6 +65,8 @@ enum Command {
     View(ViewArgs),
     /// Assemble tiles (`prism render --tile I/N -o TILE.exr`) into the full image.
     Merge(merge::MergeArgs),
+    /// Render on a cluster: tiles or turntable frames as a job array, merged (see docs/farm.md).
+    Farm(farm::FarmArgs),
 }
 
 #[derive(Args)]
@@ -149,6 +154,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info_command(&args),
         Command::View(args) => view_command(args),
         Command::Merge(args) => merge::merge_command(&args),
+        Command::Farm(args) => farm::farm_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

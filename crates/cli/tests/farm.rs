@@ -225,3 +225,68 @@ fn turntable_frames_orbit_the_camera() {
     let e = fails(d, &["render", "a.toml", "--frame", "1", "-o", "x.png"]);
     assert!(e.contains("--frames"), "{e}");
 }
+
+#[test]
+fn farm_dry_run_prints_the_job_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("a.toml"), GOOD).unwrap();
+    let args = [
+        "farm",
+        "slurm",
+        "a.toml",
+        "--tiles",
+        "3",
+        "--spp",
+        "2",
+        "--no-fog",
+        "--aov",
+        "depth",
+        "-o",
+        "out/x.png",
+        "--dry-run",
+        "--no-shared-check",
+        "--",
+        "--partition=render",
+        "--time=10",
+    ];
+    let out = ok(d, &args);
+    for want in [
+        "#SBATCH --array=0-2",
+        "--tile-from-env 3",
+        "--spp 2",
+        "--no-fog",
+        "--aov depth",
+        "i=${SLURM_ARRAY_TASK_ID:-$JOB_COMPLETION_INDEX}",
+        " merge ",
+        "--dependency=afterok:ARRAY_JOB_ID --partition=render --time=10",
+        "x.farm/tiles/tile-0002.exr",
+    ] {
+        assert!(out.contains(want), "`{want}` in\n{out}");
+    }
+    assert_eq!(listing(d), ["a.toml"], "a dry run writes nothing");
+    let frames = ok(
+        d,
+        &[
+            "farm",
+            "slurm",
+            "a.toml",
+            "--frames",
+            "5",
+            "--orbit",
+            "45",
+            "-o",
+            "t.png",
+            "--dry-run",
+            "--no-shared-check",
+        ],
+    );
+    assert!(
+        frames.contains("--frames 5 --orbit 45 --frame-from-env") && !frames.contains(" merge "),
+        "{frames}"
+    );
+    let e = fails(d, &["farm", "slurm", "a.toml", "--tiles", "40", "-o", "x.png", "--dry-run"]);
+    assert!(e.contains("--tiles 40: 40 tiles are more than the image's 18 rows"), "{e}");
+    let e = fails(d, &["farm", "slurm", "a.toml", "-o", "x.png", "--dry-run"]);
+    assert!(e.contains("required arguments were not provided") && e.contains("--tiles"), "{e}");
+}
