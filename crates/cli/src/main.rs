@@ -280,16 +280,15 @@ fn render_to(
     if stats.cancelled {
         return Err(interrupt.finish(&image, output, format, args.partial));
     }
-    let written = match (region, &passes) {
+    let written = match (region, passes) {
         (Some((bounds, tile)), Some(passes)) if format == OutputFormat::Exr => {
             let inputs = prism_scene::inputs_digest(&loaded.inputs)?;
             let header = tile::TileHeader::new(&args.scene, inputs, settings, aovs, tile);
-            let (width, height) = (w, h);
-            let tile = tile::Tile { width, height, bounds, image, aovs: passes.clone(), header };
+            let tile = tile::Tile { width: w, height: h, bounds, image, aovs: passes, header };
             tile::write_tile(output, &tile)?;
             Vec::new()
         }
-        _ => {
+        (_, passes) => {
             write_image(output, &image, format)?;
             match &passes {
                 Some(p) => prism_shade::write_aov_files(output, p, previews)?,

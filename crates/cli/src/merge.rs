@@ -6,7 +6,7 @@
 
 use crate::overwrite::check_not_an_input;
 use crate::tile::{Tile, read_tile};
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use prism_shade::{AovImage, AovImages, Image, OutputFormat, write_aov_files, write_image};
 use std::path::PathBuf;
@@ -33,7 +33,8 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
         args.tiles.iter().map(|p| Ok((p.clone(), read_tile(p)?))).collect::<Result<_>>()?;
     let (image, aovs) = assemble(&tiles)?;
     if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     }
     write_image(&args.output, &image, format)?;
     let written = write_aov_files(&args.output, &aovs, false)?;
