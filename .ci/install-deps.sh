@@ -4,7 +4,9 @@
 #     (libfuzzer-sys's build script);
 #   - for the viewer's real-window test (crates/cli/tests/view_window.rs):
 #     Xvfb, xdotool, ImageMagick's `import` (screenshots), and the X client
-#     libraries that minifb loads at run time.
+#     libraries that minifb loads at run time;
+#   - for the render-farm test (crates/cli/tests/farm_slurm.rs): a real
+#     single-node Slurm (slurmctld, slurmd, sbatch...) and munge.
 # Idempotent: does nothing when everything is there. Where it cannot install
 # (no apt-get, not root and no sudo, or apt fails), it says what is missing;
 # under CI (`CI` set to anything but empty, `0` or `false`, as .ci/run does)
@@ -34,12 +36,15 @@ missing() {
     done
     has_lib libX11 || m+=("libX11")
     has_lib libXcursor || m+=("libXcursor")
+    for tool in slurmctld slurmd sbatch munged; do
+        command -v "$tool" >/dev/null 2>&1 || m+=("$tool")
+    done
     echo "${m[*]}"
 }
 
 give_up() {
     if in_ci; then
-        echo "install-deps: error: $1; missing: $(missing). CI needs them (the window test and the fuzz build would fail)" >&2
+        echo "install-deps: error: $1; missing: $(missing). CI needs them (the window and Slurm tests and the fuzz build would fail)" >&2
         exit 1
     fi
     echo "install-deps: warning: $1; missing: $(missing). The window tests will skip themselves and say why" >&2
@@ -47,7 +52,7 @@ give_up() {
 }
 
 if [ -z "$(missing)" ]; then
-    echo "install-deps: c++, Xvfb, xdotool, import and the X libraries are present"
+    echo "install-deps: c++, Xvfb, xdotool, import, the X libraries, Slurm and munge are present"
     exit 0
 fi
 
@@ -64,7 +69,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 
 export DEBIAN_FRONTEND=noninteractive
-packages=(g++ xvfb xdotool imagemagick libx11-6 libxcursor1)
+packages=(g++ xvfb xdotool imagemagick libx11-6 libxcursor1 slurm-wlm munge)
 # A mirror can fail for a moment: try a few times before giving up.
 for attempt in 1 2 3; do
     if "${sudo[@]}" apt-get update -qq \

@@ -9,6 +9,11 @@
 //!                    [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
 //! prism info SCENE [the same overrides as render] [--set KEY=VALUE]... [--json]
 //! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
+//! prism render SCENE (--pixel-bounds X0,X1,Y0,Y1 | --tile I/N | --tile-from-env N) -o TILE.exr
+//! prism render SCENE --frames N [--orbit DEGREES] [--frame I | --frame-from-env] -o OUT.png
+//! prism merge TILE... -o OUT
+//! prism farm slurm SCENE (--tiles N | --frames N [--orbit DEG]) [RENDER OPTIONS] -o OUT
+//!                  [--wait] [--dry-run] [--work-dir DIR] [-- SBATCH_ARGS...]
 //! prism completions bash|zsh|fish
 //! prism --version
 //! ```
@@ -31,19 +36,26 @@
 #![forbid(unsafe_code)]
 
 mod completions;
+mod farm;
+mod frames;
 mod info;
 mod interrupt;
+mod merge;
 mod outputs;
 mod overwrite;
 mod stats;
+mod tile;
 mod version;
 mod writable;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Args, CommandFactory, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use prism_scene::{Limits, LoadOptions, Overrides, load_path};
-use prism_shade::{Aov, OutputFormat, RenderHooks, render, render_with_alpha, render_with_aovs};
+use prism_scene::{Limits, LoadOptions, LoadedScene, Overrides, load_path};
+use prism_shade::{
+    Aov, OutputFormat, RenderHooks, RenderSettings, render, render_region, render_with_alpha,
+    render_with_aovs,
+};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -71,6 +83,10 @@ enum Command {
     /// Write the man pages into a directory (run by `cargo xtask man`).
     #[command(hide = true)]
     Man(completions::ManArgs),
+    /// Assemble tiles (`prism render --tile I/N -o TILE.exr`) into the full image.
+    Merge(merge::MergeArgs),
+    /// Render on a cluster: tiles or turntable frames as a job array, merged (see docs/farm.md).
+    Farm(farm::FarmArgs),
 }
 
 #[derive(Args)]
@@ -124,6 +140,10 @@ struct RenderArgs {
     limits: LimitArgs,
     #[command(flatten)]
     image: outputs::ImageArgs,
+    #[command(flatten)]
+    part: tile::PartArgs,
+    #[command(flatten)]
+    frames: frames::FrameArgs,
 }
 
 #[derive(Args)]
@@ -197,6 +217,8 @@ fn main() -> ExitCode {
         Command::View(args) => view_command(args),
         Command::Completions(args) => completions::completions_command(&args, Cli::command()),
         Command::Man(args) => completions::man_command(&args, Cli::command()),
+        Command::Merge(args) => merge::merge_command(&args),
+        Command::Farm(args) => farm::farm_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -276,9 +298,6 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     for w in warnings {
         eprintln!("warning: {w}");
     }
-    for f in plan.other_files(&aovs)? {
-        overwrite::check_not_an_input(&f, &loaded.inputs)?;
-    }
     if let Some(s) = &args.stats_json {
         overwrite::check_not_an_input(s, &loaded.inputs)?;
     }
@@ -287,11 +306,44 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     }
 
-    let settings = &loaded.settings;
+    let frames = frames::plan(&args.frames, &loaded.settings, &output)?;
+    if args.stats_json.is_some() && frames.len() > 1 {
+        return Err(anyhow!(
+            "--stats-json describes one render; with --frames, give --frame I (or --frame-from-env)"
+        ));
+    }
+    for (settings, frame_output) in &frames {
+        overwrite::check_not_an_input(frame_output, &loaded.inputs)?;
+        let plan = plan.for_output(frame_output.clone());
+        for f in plan.other_files(&aovs)? {
+            overwrite::check_not_an_input(&f, &loaded.inputs)?;
+        }
+        render_to(args, &loaded, settings, &plan, &aovs, load_seconds)?;
+    }
+    Ok(())
+}
+
+/// Renders `settings` (the whole image, or the part `args` asks for) and
+/// writes the files of `plan` (a part as `.exr`: a tile file).
+fn render_to(
+    args: &RenderArgs,
+    loaded: &LoadedScene,
+    settings: &RenderSettings,
+    plan: &outputs::Plan,
+    aovs: &[Aov],
+    load_seconds: f64,
+) -> Result<()> {
+    let output = &plan.output;
     let (w, h) = settings.camera.size();
+    let region = args.part.region(w, h)?;
+    if region.is_some() && plan.alpha {
+        return Err(anyhow!(
+            "--alpha is not available for part of an image (--pixel-bounds, --tile); render the whole image"
+        ));
+    }
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
-        let bar = ProgressBar::new(u64::from(h));
+        let bar = ProgressBar::new(u64::from(region.map_or(h, |r| r.0.height())));
         if let Ok(style) = ProgressStyle::with_template(
             "{spinner} rendering [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
         ) {
@@ -311,14 +363,17 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     };
     let hooks = RenderHooks { progress: Some(&progress), cancel: Some(interrupt.flag()) };
     let start = Instant::now();
-    let (image, alpha, passes, stats) = if plan.alpha {
-        let (rgba, passes, stats) = render_with_alpha(&loaded.scene, settings, &aovs, hooks);
+    let (image, alpha, passes, stats) = if let Some((b, _)) = region {
+        let (image, passes, stats) = render_region(&loaded.scene, settings, b, aovs, hooks)?;
+        (image, None, (!aovs.is_empty()).then_some(passes), stats)
+    } else if plan.alpha {
+        let (rgba, passes, stats) = render_with_alpha(&loaded.scene, settings, aovs, hooks);
         (rgba.color, Some(rgba.alpha), (!aovs.is_empty()).then_some(passes), stats)
     } else if aovs.is_empty() {
         let (image, stats) = render(&loaded.scene, settings, hooks);
         (image, None, None, stats)
     } else {
-        let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, &aovs, hooks);
+        let (image, passes, stats) = render_with_aovs(&loaded.scene, settings, aovs, hooks);
         (image, None, Some(passes), stats)
     };
     let wall = start.elapsed().as_secs_f64();
@@ -327,20 +382,36 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     if stats.cancelled {
         let write = || plan.write_image(&image, alpha.as_deref(), passes.as_ref());
-        return Err(interrupt.finish(image.height, &output, args.partial, write));
+        return Err(interrupt.finish(image.height, output, args.partial, write));
     }
     let write_start = Instant::now();
-    plan.write_image(&image, alpha.as_deref(), passes.as_ref())?;
-    let written = match &passes {
-        Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
-        None => Vec::new(),
+    let written = match region {
+        Some((bounds, tile)) if plan.format() == OutputFormat::Exr => {
+            let inputs = prism_scene::inputs_digest(&loaded.inputs)?;
+            let header = tile::TileHeader::new(&args.scene, inputs, settings, aovs, tile);
+            let aovs = passes.unwrap_or(prism_shade::AovImages {
+                width: image.width,
+                height: image.height,
+                passes: Vec::new(),
+            });
+            let tile = tile::Tile { width: w, height: h, bounds, image, aovs, header };
+            tile::write_tile(output, &tile)?;
+            Vec::new()
+        }
+        _ => {
+            plan.write_image(&image, alpha.as_deref(), passes.as_ref())?;
+            match &passes {
+                Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
+                None => Vec::new(),
+            }
+        }
     };
     if let Some(file) = &args.stats_json {
         let phases =
             stats::Phases { load: load_seconds, render: wall, write: write_start.elapsed().as_secs_f64() };
         let outputs: Vec<&Path> =
             std::iter::once(output.as_path()).chain(written.iter().map(PathBuf::as_path)).collect();
-        let json = stats::to_json(&loaded, &args.scene, &outputs, phases, &stats);
+        let json = stats::to_json(loaded, &args.scene, &outputs, phases, &stats);
         prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())?;
     }
     if !args.quiet {

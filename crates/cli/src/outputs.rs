@@ -37,6 +37,7 @@ fn parse_tonemap(s: &str) -> Result<Tonemap, String> {
 }
 
 /// The files of one render and how to write them.
+#[derive(Clone)]
 pub struct Plan {
     /// The image.
     pub output: PathBuf,
@@ -49,6 +50,18 @@ pub struct Plan {
     previews: bool,
     /// Whether passes were asked for.
     has_aovs: bool,
+}
+
+impl Plan {
+    /// The same plan for another image (one frame of a turntable).
+    pub fn for_output(&self, output: PathBuf) -> Plan {
+        Plan { output, ..self.clone() }
+    }
+
+    /// The image's format.
+    pub fn format(&self) -> OutputFormat {
+        self.format
+    }
 }
 
 impl ImageArgs {

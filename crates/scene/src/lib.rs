@@ -68,6 +68,7 @@ mod view;
 pub use error::{Location, SceneError, line_col};
 pub use obj_view::{ObjOptions, ObjView};
 pub use overrides::{Overrides, parse_vec3};
+pub use read::inputs_digest;
 pub use settings::fit_size;
 
 use prism_geometry::Aabb;

@@ -353,3 +353,27 @@ pub(crate) fn obj_alone_path(path: &Path) -> Result<(PathBuf, PathBuf, String), 
     })?;
     Ok((canonical, base, name))
 }
+
+/// A digest of the contents of `files` (in order), such as a loaded
+/// scene's [`crate::LoadedScene::inputs`]: 64-bit FNV-1a over each file's
+/// length and bytes, as 16 hex digits. Two loads agree on it when they
+/// read the same bytes, wherever the files lie (paths do not enter it), so
+/// that the tiles of a render farm can show that they rendered one scene.
+/// Not a cryptographic hash: it detects mistakes, not forgeries.
+///
+/// # Errors
+/// [`SceneError::Read`] naming a file that cannot be read.
+pub fn inputs_digest(files: &[PathBuf]) -> Result<String, SceneError> {
+    let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01B3);
+        }
+    };
+    for f in files {
+        let bytes = std::fs::read(f).map_err(|e| named_error(f, "input file", io_reason(&e)))?;
+        eat(&(bytes.len() as u64).to_le_bytes());
+        eat(&bytes);
+    }
+    Ok(format!("{h:016x}"))
+}

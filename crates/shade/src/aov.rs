@@ -225,7 +225,7 @@ pub fn render_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (AovImages, RenderStats) {
-    let (_, images, _, stats) = render_passes(scene, settings, aovs, false, false, hooks);
+    let (_, images, _, stats) = render_passes(scene, settings, aovs, None, false, false, hooks);
     (images, stats)
 }
 
@@ -241,7 +241,7 @@ pub fn render_with_aovs(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (Image, AovImages, RenderStats) {
-    let (image, passes, _, stats) = render_passes(scene, settings, aovs, true, false, hooks);
+    let (image, passes, _, stats) = render_passes(scene, settings, aovs, None, true, false, hooks);
     (image, passes, stats)
 }
 
@@ -272,15 +272,18 @@ pub fn render_with_alpha(
     aovs: &[Aov],
     hooks: RenderHooks<'_>,
 ) -> (AlphaImage, AovImages, RenderStats) {
-    let (image, passes, alpha, stats) = render_passes(scene, settings, aovs, true, true, hooks);
+    let (image, passes, alpha, stats) = render_passes(scene, settings, aovs, None, true, true, hooks);
     let (color, alpha) = alpha.unwrap_or_else(|| (image.clone(), vec![1.0; image.pixels.len()]));
     (AlphaImage { color, alpha }, passes, stats)
 }
 
-fn render_passes(
+/// The beauty (if `beauty`) and the passes `aovs` of `region` (`None`: the
+/// whole image), one pass over its pixels.
+pub(crate) fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
     aovs: &[Aov],
+    region: Option<crate::PixelBounds>,
     beauty: bool,
     alpha: bool,
     hooks: RenderHooks<'_>,
@@ -292,7 +295,8 @@ fn render_passes(
         }
     }
     let spp = settings.spp.max(1);
-    let (mut image, rows, stats) = render_pixels(scene, settings, 0..spp, beauty, &wanted, alpha, hooks);
+    let (mut image, rows, stats) =
+        render_pixels(scene, settings, 0..spp, region, beauty, &wanted, alpha, hooks);
     scale_to_mean(&mut image, spp);
     let (w, h) = (image.width, image.height);
     let n = w as usize * h as usize;
@@ -353,6 +357,8 @@ pub(crate) struct AovRow<'a> {
     centre_id: Option<f32>,
     /// Coverage and the premultiplied beauty, when alpha is wanted.
     alpha: Option<AlphaRow>,
+    /// The image column of the row's first value (a partial render's `x0`).
+    x0: u32,
     /// Rays traced for the passes.
     pub(crate) rays: u64,
 }
@@ -380,8 +386,14 @@ impl<'a> AovRow<'a> {
                 rgb: vec![Vec3::ZERO; n],
                 alpha: vec![0.0; n],
             }),
+            x0: 0,
             rays: 0,
         }
+    }
+
+    /// The same row, its first value being image column `x0`.
+    pub(crate) fn starting_at(self, x0: u32) -> Self {
+        Self { x0, ..self }
     }
 
     /// One sample's camera ray of the current pixel, and the radiance the
@@ -423,7 +435,7 @@ impl<'a> AovRow<'a> {
         }
         let inv = 1.0 / self.spp as f32;
         let (sums, id) = (self.sums, self.centre_id.unwrap_or(-1.0));
-        let i = i as usize;
+        let i = (i - self.x0) as usize;
         for (a, buf) in self.wanted.iter().zip(&mut self.passes) {
             match a {
                 Aov::Depth => buf[i] = sums.depth * inv,

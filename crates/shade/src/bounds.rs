@@ -38,6 +38,22 @@ pub enum BoundsError {
         /// Image height.
         height: u32,
     },
+    /// A tile index not below the tile count (or no tiles at all).
+    #[error("tile {index} of {count} does not exist: tiles are numbered 0 to N-1, N at least 1")]
+    NoSuchTile {
+        /// The index asked for.
+        index: u32,
+        /// The number of tiles.
+        count: u32,
+    },
+    /// More tiles than rows: some tiles would hold no pixel.
+    #[error("{count} tiles are more than the image's {height} rows; use at most {height}")]
+    TooManyTiles {
+        /// The number of tiles.
+        count: u32,
+        /// Image height.
+        height: u32,
+    },
 }
 
 impl PixelBounds {
@@ -105,6 +121,28 @@ impl PixelBounds {
         self.width() as u64 * self.height() as u64
     }
 
+    /// Tile `index` of `count` of a `width × height` image, the split of
+    /// `prism render --tile I/N`: horizontal bands of whole rows, tile `I`
+    /// covering rows `[⌊I·H/N⌋, ⌊(I+1)·H/N⌋)`, so that tiles differ in
+    /// height by at most one row, cover every pixel exactly once, and tile
+    /// 0 is the top of the image. Bands are rectangles (an OpenEXR data
+    /// window) of whole scan lines.
+    ///
+    /// # Errors
+    /// [`BoundsError::NoSuchTile`] unless `index < count`,
+    /// [`BoundsError::TooManyTiles`] if `count > height`,
+    /// [`BoundsError::Empty`] for an empty image.
+    pub fn tile(width: u32, height: u32, index: u32, count: u32) -> Result<Self, BoundsError> {
+        if index >= count {
+            return Err(BoundsError::NoSuchTile { index, count });
+        }
+        if count > height {
+            return Err(BoundsError::TooManyTiles { count, height });
+        }
+        let row = |k: u32| (u64::from(k) * u64::from(height) / u64::from(count)) as u32;
+        Self::new(0, width, row(index), row(index + 1))
+    }
+
     /// Whether pixel `(x, y)` is inside.
     #[must_use]
     pub const fn contains(&self, x: u32, y: u32) -> bool {
@@ -143,5 +181,38 @@ mod tests {
         let c = PixelBounds::new(5, 20, 3, 9).unwrap();
         assert_eq!(b.intersection(&c), PixelBounds::new(5, 10, 3, 4).ok());
         assert_eq!(b.intersection(&PixelBounds::new(0, 1, 4, 5).unwrap()), None);
+    }
+
+    #[test]
+    fn tiles_cover_every_pixel_exactly_once() {
+        for (width, height) in [(1, 1), (3, 1), (1, 7), (5, 13), (2, 64), (7, 97)] {
+            for count in 1..=height {
+                let mut hits = vec![0u32; (width * height) as usize];
+                let mut sizes = Vec::new();
+                for index in 0..count {
+                    let t = PixelBounds::tile(width, height, index, count).unwrap();
+                    assert_eq!(t.within(width, height), Ok(t));
+                    assert_eq!((t.x0(), t.x1()), (0, width), "bands span the width");
+                    sizes.push(t.height());
+                    for y in t.y0()..t.y1() {
+                        for x in t.x0()..t.x1() {
+                            hits[(y * width + x) as usize] += 1;
+                        }
+                    }
+                }
+                assert!(hits.iter().all(|&h| h == 1), "{width}×{height}, {count} tiles: {hits:?}");
+                let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+                assert!(hi - lo <= 1, "{width}×{height}, {count} tiles: heights {sizes:?}");
+            }
+            assert_eq!(
+                PixelBounds::tile(width, height, 0, height + 1),
+                Err(BoundsError::TooManyTiles { count: height + 1, height })
+            );
+        }
+        // Large images: the arithmetic does not overflow.
+        let last = PixelBounds::tile(16_384, u32::MAX, 99, 100).unwrap();
+        assert_eq!(last.y1(), u32::MAX);
+        assert_eq!(PixelBounds::tile(4, 4, 4, 4), Err(BoundsError::NoSuchTile { index: 4, count: 4 }));
+        assert_eq!(PixelBounds::tile(4, 4, 0, 0), Err(BoundsError::NoSuchTile { index: 0, count: 0 }));
     }
 }

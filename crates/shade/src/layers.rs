@@ -128,17 +128,30 @@ pub struct RenderExr {
 /// wrong type, or a partial data window.
 pub fn read_render_exr(path: &Path) -> Result<RenderExr, OutputError> {
     let exr = read_layered_exr(path)?;
-    let (w, h) = (exr.width, exr.height);
-    if Some(exr.data_window) != PixelBounds::full(w, h) {
+    if Some(exr.data_window) != PixelBounds::full(exr.width, exr.height) {
         return Err(invalid(path, "the data window is not the whole image (a tile? merge it first)"));
     }
+    render_from_exr(&exr, path)
+}
+
+/// The beauty, alpha and passes of `exr`'s data window (a whole image, or
+/// a farm tile), under the channel names of [`render_layers`]; `path`
+/// names the file in errors.
+///
+/// # Errors
+/// [`OutputError::Invalid`] if it has no `R`, `G`, `B`, or a channel of
+/// the wrong type or length.
+pub fn render_from_exr(exr: &LayeredExr, path: &Path) -> Result<RenderExr, OutputError> {
+    let (w, h) = (exr.data_window.width(), exr.data_window.height());
+    let n = w as usize * h as usize;
     let f32s = |layer: &str, ch: &str| -> Result<Option<&[f32]>, OutputError> {
         match exr.channel(layer, ch) {
             None => Ok(None),
             Some(s) => s
                 .as_f32()
+                .filter(|v| v.len() == n)
                 .map(Some)
-                .ok_or_else(|| invalid(path, format!("channel {layer}.{ch} is not float"))),
+                .ok_or_else(|| invalid(path, format!("channel {layer}.{ch} is not {n} floats"))),
         }
     };
     let interleave = |layer: &str, names: &[&str]| -> Result<Option<Vec<f32>>, OutputError> {
@@ -162,7 +175,10 @@ pub fn read_render_exr(path: &Path) -> Result<RenderExr, OutputError> {
             match exr.channel(layer, "id") {
                 None => None,
                 Some(s) => {
-                    let ids = s.as_u32().ok_or_else(|| invalid(path, "channel id is not an unsigned int"))?;
+                    let ids = s
+                        .as_u32()
+                        .filter(|v| v.len() == n)
+                        .ok_or_else(|| invalid(path, format!("channel id is not {n} unsigned ints")))?;
                     Some(ids.iter().map(|&i| if i == NO_ID { -1.0 } else { i as f32 }).collect())
                 }
             }

@@ -76,7 +76,9 @@ pub use exr::{
     ExrAttribute, ExrChannel, ExrLayer, ExrSamples, LayeredExr, read_layered_exr, write_layered_exr,
 };
 pub use integrator::MAX_DEPTH_LIMIT;
-pub use layers::{NO_ID, RenderExr, aov_exr_channels, read_render_exr, render_layers, write_render_exr};
+pub use layers::{
+    NO_ID, RenderExr, aov_exr_channels, read_render_exr, render_from_exr, render_layers, write_render_exr,
+};
 pub use material::Material;
 pub use output::{
     OutputError, OutputFormat, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
@@ -84,7 +86,8 @@ pub use output::{
     write_png_rgb8,
 };
 pub use render::{
-    Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_samples, sample_position,
+    Image, RenderHooks, RenderSettings, RenderStats, linear_to_srgb8, render, render_region, render_samples,
+    sample_position,
 };
 pub use scene::{Fog, FogMode, PointLight, Scene};
 pub use texture::{

@@ -1,7 +1,8 @@
 //! The renderer: rows in parallel, deterministic per-pixel samples.
 
-use crate::aov::{Aov, AovRow};
+use crate::aov::{Aov, AovRow, render_passes};
 use crate::integrator::Tracer;
+use crate::{AovImages, BoundsError, PixelBounds};
 use crate::{Camera, Scene};
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
@@ -155,8 +156,33 @@ pub fn render_samples(
     samples: Range<u32>,
     hooks: RenderHooks<'_>,
 ) -> (Image, RenderStats) {
-    let (image, _, stats) = render_pixels(scene, settings, samples, true, &[], false, hooks);
+    let (image, _, stats) = render_pixels(scene, settings, samples, None, true, &[], false, hooks);
     (image, stats)
+}
+
+/// Renders only the pixels of `region` (a partial render, one tile of a
+/// farm job), with the AOV passes `aovs` (none if empty): an image and
+/// passes of `region`'s size, whose pixel `(x, y)` is pixel
+/// `(region.x0() + x, region.y0() + y)` of the full render.
+///
+/// Every pixel is bit for bit the same as in [`render`] and
+/// [`crate::render_with_aovs`] of the whole image, for any region and any
+/// number of threads: a pixel's samples depend only on the pixel's place
+/// in the full image and the sample index (see [`render`]).
+///
+/// # Errors
+/// [`BoundsError::OutOfRange`] if `region` reaches past the image.
+pub fn render_region(
+    scene: &Scene,
+    settings: &RenderSettings,
+    region: PixelBounds,
+    aovs: &[Aov],
+    hooks: RenderHooks<'_>,
+) -> Result<(Image, AovImages, RenderStats), BoundsError> {
+    let (w, h) = settings.camera.size();
+    let region = region.within(w, h)?;
+    let (image, passes, _, stats) = render_passes(scene, settings, aovs, Some(region), true, false, hooks);
+    Ok((image, passes, stats))
 }
 
 /// The one per-pixel sample loop behind every render: rows in parallel;
@@ -166,13 +192,17 @@ pub fn render_samples(
 /// being `0..spp`). Returns the per-pixel beauty *sums* (an empty image
 /// without `beauty`), one AOV row per image row (empty without `aovs`),
 /// and the statistics. Rows skipped after a cancel hold zero sums and the
-/// AOV miss values. With `alpha`, the rows' sinks also gather coverage and
-/// the premultiplied beauty (from each sample's radiance).
+/// AOV miss values. With a `region`, only its pixels are rendered, into an
+/// image (and rows) of its size; each keeps its place in the full image
+/// for its camera rays and samples.
+/// With `alpha`, the rows' sinks also gather coverage and the
+/// premultiplied beauty (from each sample's radiance).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render_pixels<'a>(
     scene: &Scene,
     settings: &RenderSettings,
     samples: Range<u32>,
+    region: Option<PixelBounds>,
     beauty: bool,
     aovs: &'a [Aov],
     alpha: bool,
@@ -180,7 +210,12 @@ pub(crate) fn render_pixels<'a>(
 ) -> (Image, Vec<AovRow<'a>>, RenderStats) {
     let start = std::time::Instant::now();
     let cam = &settings.camera;
-    let (w, h) = cam.size();
+    let (w, _) = cam.size();
+    let (xs, ys) = match region {
+        Some(b) => (b.x0()..b.x1(), b.y0()..b.y1()),
+        None => (0..w, 0..cam.size().1),
+    };
+    let (rw, rh) = (xs.len() as u32, ys.len() as u32);
     let spp = settings.spp.max(1);
     let pattern = SamplePattern::new(spp);
     let see_through = beauty && Tracer::scene_is_see_through(scene);
@@ -188,20 +223,21 @@ pub(crate) fn render_pixels<'a>(
     let [camera_rays, shadow_rays, aov_rays_all] = [(); 3].map(|()| AtomicU64::new(0));
     let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
-    let mut pixels = vec![Vec3::ZERO; if beauty { w as usize * h as usize } else { 0 }];
+    let mut pixels = vec![Vec3::ZERO; if beauty { rw as usize * rh as usize } else { 0 }];
     let mut aov_rows: Vec<AovRow<'a>> = if aovs.is_empty() && !alpha {
         Vec::new()
     } else {
-        (0..h).map(|_| AovRow::new(aovs, w, spp, alpha)).collect()
+        (0..rh).map(|_| AovRow::new(aovs, rw, spp, alpha).starting_at(xs.start)).collect()
     };
-    let render_row = |j: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>| {
+    let render_row = |r: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>| {
+        let j = ys.start as usize + r;
         if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             return;
         }
         let mut tracer = Tracer::new(scene, settings, see_through);
         let mut bad = 0u64;
         let row_start = j as u64 * u64::from(w);
-        for i in 0..w as usize {
+        for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
             let index = row_start + i as u64;
             let mut sum = Vec3::ZERO;
             for s in samples.clone() {
@@ -221,7 +257,7 @@ pub(crate) fn render_pixels<'a>(
                     sink.sample(scene, &ray, l);
                 }
             }
-            if let Some(px) = row.get_mut(i) {
+            if let Some(px) = row.get_mut(k) {
                 *px = sum;
             }
             if let Some(sink) = sink.as_deref_mut() {
@@ -240,10 +276,10 @@ pub(crate) fn render_pixels<'a>(
         }
         let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = hooks.progress {
-            p(done as u32, h);
+            p(done as u32, rh);
         }
     };
-    let row_len = w as usize;
+    let row_len = rw as usize;
     in_pool(settings.threads, || match (beauty, aov_rows.is_empty()) {
         (true, true) => {
             pixels.par_chunks_mut(row_len).enumerate().for_each(|(j, row)| render_row(j, row, None));
@@ -268,7 +304,7 @@ pub(crate) fn render_pixels<'a>(
         cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
         nonfinite_samples: nonfinite.into_inner(),
     };
-    (Image { width: w, height: h, pixels }, aov_rows, stats)
+    (Image { width: rw, height: rh, pixels }, aov_rows, stats)
 }
 
 /// Runs `f` on a pool of `threads` workers (`None`: the global pool, every

@@ -221,3 +221,27 @@ fn the_documented_example_and_every_shipped_scene_load() {
     }
     assert!(n >= 10, "{n} scenes");
 }
+
+#[test]
+fn inputs_digest_follows_every_input_file_not_its_place() {
+    let dir = tempfile::tempdir().unwrap();
+    for d in ["a", "b"] {
+        let sub = dir.path().join(d);
+        fs::create_dir_all(&sub).unwrap();
+        fs::write(sub.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let text = format!("{BASE}[[objects]]\ntype = \"mesh\"\npath = \"tri.obj\"\nmaterial = \"red\"\n");
+        fs::write(sub.join("s.toml"), text).unwrap();
+    }
+    let digest =
+        |d: &str| inputs_digest(&load_scene(&dir.path().join(d).join("s.toml")).unwrap().inputs).unwrap();
+    let a = digest("a");
+    assert_eq!(a.len(), 16);
+    assert_eq!(a, digest("b"), "the same bytes in another directory");
+    // One byte of the mesh (not the scene file) changes it.
+    fs::write(dir.path().join("b/tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 2 0\nf 1 2 3\n").unwrap();
+    assert_ne!(a, digest("b"));
+    let e = inputs_digest(&[dir.path().join("missing.obj")]).unwrap_err().to_string();
+    assert!(e.contains("missing.obj") && e.contains("no such file"), "{e}");
+    // FNV-1a of nothing at all is its offset basis.
+    assert_eq!(inputs_digest(&[]).unwrap(), "cbf29ce484222325");
+}
