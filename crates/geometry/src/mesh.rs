@@ -20,6 +20,8 @@ pub struct TriangleMesh {
     normals: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
     indices: Vec<[u32; 3]>,
+    /// Bounds of the vertices that faces use (cached).
+    bounds: Aabb,
 }
 
 impl TriangleMesh {
@@ -62,7 +64,8 @@ impl TriangleMesh {
                 )));
             }
         }
-        Ok(Self { positions, normals, uvs, indices })
+        let bounds = indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(positions[i as usize]));
+        Ok(Self { positions, normals, uvs, indices, bounds })
     }
 
     /// Vertex positions.
@@ -186,7 +189,7 @@ impl Intersect for TriangleMesh {
     }
 
     fn bounds(&self) -> Aabb {
-        self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(self.positions[i as usize]))
+        self.bounds
     }
 }
 

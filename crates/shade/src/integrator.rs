@@ -44,7 +44,7 @@ fn is_closed(scene: &Scene, object: u32) -> bool {
 fn albedo(scene: &Scene, mat: &Material, h: &SceneHit) -> Vec3 {
     match &mat.texture {
         Texture::Solid(c) => *c,
-        t => t.color_at(h.hit.point, h.hit.uv, &scene.to_object(h.object)),
+        t => t.color_at(h.hit.point, h.hit.uv, &scene.texture_to_object(h.object, t)),
     }
 }
 

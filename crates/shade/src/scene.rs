@@ -4,6 +4,7 @@
 
 use crate::{Material, ShadeError};
 use prism_bvh::{Accel, Object, SceneHit};
+use prism_geometry::Intersect;
 use prism_geometry::glam::{Affine3A, Vec3};
 
 /// A point light.
@@ -264,6 +265,35 @@ impl Scene {
         }
     }
 
+    /// The world-to-texture map of object `object` for `texture`:
+    /// [`Scene::to_object`], except under [`crate::Mapping::Cylindrical`],
+    /// where the object's own height (its object-space bounds, `y` from
+    /// `min` to `max`) is then scaled to `[0, 1]`, so that the image covers
+    /// the object from bottom to top. Unbounded objects (planes) keep their
+    /// object-space `y`.
+    #[must_use]
+    pub fn texture_to_object(&self, object: u32, texture: &crate::Texture) -> Affine3A {
+        let to_object = self.to_object(object);
+        if !matches!(texture, crate::Texture::Image { mapping: crate::Mapping::Cylindrical, .. }) {
+            return to_object;
+        }
+        let bounds = match self.accel.objects().get(object as usize) {
+            Some(Object::Shape(inst)) => inst.shape.bounds(),
+            Some(Object::Mesh { mesh, .. }) => match self.accel.meshes().get(*mesh as usize) {
+                Some(m) => m.bounds(),
+                None => return to_object,
+            },
+            None => return to_object,
+        };
+        let (lo, height) = (bounds.min.y, bounds.max.y - bounds.min.y);
+        if !(lo.is_finite() && height.is_finite() && height > 0.0) {
+            return to_object;
+        }
+        let scale = Affine3A::from_scale(Vec3::new(1.0, 1.0 / height, 1.0))
+            * Affine3A::from_translation(Vec3::new(0.0, -lo, 0.0));
+        scale * to_object
+    }
+
     /// The surface colour (albedo, linear) at a hit: the material's texture
     /// evaluated there. Also what an albedo AOV shows.
     #[must_use]
@@ -271,7 +301,7 @@ impl Scene {
         let m = self.material_of(hit.object);
         match &m.texture {
             crate::Texture::Solid(c) => *c,
-            t => t.color_at(hit.hit.point, hit.hit.uv, &self.to_object(hit.object)),
+            t => t.color_at(hit.hit.point, hit.hit.uv, &self.texture_to_object(hit.object, t)),
         }
     }
 }

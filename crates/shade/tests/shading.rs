@@ -332,7 +332,7 @@ fn fog_covers_misses_and_reflected_segments() {
 }
 
 #[test]
-fn sphere_texture_follows_the_reports_formula() {
+fn sphere_texture_follows_the_documented_formula() {
     let image = distinct_texture();
     let tex = |mapping| Texture::Image {
         image: image.clone(),
@@ -350,7 +350,7 @@ fn sphere_texture_follows_the_reports_formula() {
             let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
             let Some(t) = sphere_t(ray.origin, ray.dir, Vec3::ZERO, 1.0) else { continue };
             let d = ray.at(t).normalize();
-            let u = 0.5 + d.z.atan2(d.x) / (2.0 * std::f32::consts::PI);
+            let u = 0.5 + d.x.atan2(d.z) / (2.0 * std::f32::consts::PI);
             let v = 0.5 - d.y.asin() / std::f32::consts::PI;
             let want = image.sample(prism_geometry::glam::Vec2::new(u, v));
             assert_close(px(&img, i, j), want, 2e-3);
