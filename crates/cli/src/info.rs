@@ -71,6 +71,9 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
         Some(f) => {
             let mode = match f.mode {
                 FogMode::Linear { start, end } => format!("linear from {} to {}", trim(start), trim(end)),
+                FogMode::LinearDistance { start, end } => {
+                    format!("linear by distance from {} to {}", trim(start), trim(end))
+                }
                 FogMode::Exponential { density } => format!("exponential, density {}", trim(density)),
                 FogMode::ExponentialSquared { density } => {
                     format!("exponential squared, density {}", trim(density))

@@ -98,10 +98,19 @@ pub enum FogModeDef {
     ExponentialSquared,
 }
 
+/// `[fog] measure`: what linear fog's distance is.
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum FogMeasureDef {
+    Depth,
+    Distance,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FogDef {
     pub mode: Option<Spanned<FogModeDef>>,
+    pub measure: Option<Spanned<FogMeasureDef>>,
     pub start: Option<Num>,
     pub end: Option<Num>,
     pub density: Option<Num>,

@@ -27,6 +27,10 @@ pub(crate) struct Tracer<'a> {
     max_depth: u32,
     min_contribution: f32,
     fog: Option<(FogMode, Vec3)>,
+    /// The camera's view axis when fog is measured by eye-space depth.
+    depth_axis: Option<Vec3>,
+    /// The unit direction of the camera ray being traced.
+    primary: Vec3,
     /// Whether any material lets light through (else shadows are yes/no).
     see_through: bool,
     /// Rays traced so far (camera, secondary, shadow).
@@ -62,6 +66,8 @@ impl<'a> Tracer<'a> {
             max_depth: settings.max_depth.min(MAX_DEPTH_LIMIT),
             min_contribution,
             fog: scene.fog.filter(|_| settings.fog).map(|f| (f.mode, f.color)),
+            depth_axis: scene.fog.filter(|f| settings.fog && f.by_depth()).map(|_| settings.camera.forward()),
+            primary: Vec3::ZERO,
             see_through,
             rays: 0,
         }
@@ -71,6 +77,7 @@ impl<'a> Tracer<'a> {
     /// direction).
     #[inline]
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
+        self.primary = ray.dir;
         self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT)
     }
 
@@ -79,6 +86,20 @@ impl<'a> Tracer<'a> {
     fn worth(&self, w: Vec3) -> bool {
         let m = w.max_element();
         m > 0.0 && m >= self.min_contribution
+    }
+
+    /// The fog distance of a segment of length `seg` along `ray`: its
+    /// eye-space depth when fog is measured by depth and the ray runs along
+    /// the camera ray's line, else its length (see [`FogMode`]).
+    #[inline]
+    fn fog_length(&self, ray: &Ray, seg: f32) -> f32 {
+        match self.depth_axis {
+            Some(axis) => {
+                let d = ray.dir.normalize_or_zero();
+                if d.dot(self.primary) >= 1.0 - 1e-6 { seg * d.dot(axis).max(0.0) } else { seg }
+            }
+            None => seg,
+        }
     }
 
     /// Fog transmittance of the path segment `[a, b]`.
@@ -99,7 +120,8 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance arriving at `ray.origin` along `ray`, `depth` bounces from
-    /// the camera, with path weight `weight` and path length `path` so far.
+    /// the camera, with path weight `weight` and fog distance `path` so far
+    /// (path length, or depth: [`FogMode`]).
     /// When the ray leaves object `skip_exit` through its back face (the
     /// unbent continuation through a transparent solid), it goes on from
     /// the far side without shading the exit.
@@ -110,7 +132,7 @@ impl<'a> Tracer<'a> {
             return self.fog_blend(scene.background, self.fog_t(path, f32::INFINITY));
         };
         let seg = h.hit.t * ray.dir.length();
-        let end = path + seg;
+        let end = path + self.fog_length(ray, seg);
         let fog_t = self.fog_t(path, end);
         let weight = weight * fog_t;
         if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
