@@ -250,6 +250,14 @@ impl<'a> Tracer<'a> {
     /// solid (sphere, cuboid, cylinder, cone) counts once, at the crossing
     /// where the segment enters it; open surfaces (planes, disks,
     /// triangles, meshes) count at every crossing. Opaque occluders give 0.
+    ///
+    /// Light crossing an absorbing dielectric (a closed solid with
+    /// `transmission > 0` and non-zero `absorption`) is also attenuated by
+    /// Beer–Lambert, `exp(−absorption · L)` over the length `L` of the
+    /// segment inside it, as the view through it is: green glass casts a
+    /// green shadow. `L` is the sum of exit minus entry distances (crossings
+    /// come unordered); a segment that starts inside a solid counts from its
+    /// start, one that ends inside (a light in the glass) up to its end.
     fn shadow(&mut self, hit: &Hit, target: Vec3) -> Vec3 {
         let ray = Ray::spawn_to(hit.point, hit.geo_normal, target);
         self.rays += 1;
@@ -258,11 +266,23 @@ impl<'a> Tracer<'a> {
             return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut t = Vec3::ONE;
+        // Optical depth Σ absorption · (±distance), and the absorption of
+        // the solids entered and not left.
+        let (mut tau, mut open) = (Vec3::ZERO, Vec3::ZERO);
         scene.accel.for_each_hit(&ray, |sh| {
-            if !sh.hit.front_face && is_closed(scene, sh.object) {
+            let closed = is_closed(scene, sh.object);
+            let m = scene.material_of(sh.object);
+            if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
+                let s = m.absorption * sh.hit.t;
+                if sh.hit.front_face {
+                    (tau, open) = (tau - s, open + m.absorption);
+                } else {
+                    (tau, open) = (tau + s, open - m.absorption);
+                }
+            }
+            if !sh.hit.front_face && closed {
                 return ControlFlow::Continue(());
             }
-            let m = scene.material_of(sh.object);
             let through = m.transparency + m.transmission;
             if !(through > 0.0) {
                 t = Vec3::ZERO;
@@ -271,6 +291,8 @@ impl<'a> Tracer<'a> {
             t *= (through * albedo(scene, m, sh)).clamp(Vec3::ZERO, Vec3::ONE);
             if t.max_element() > 0.0 { ControlFlow::Continue(()) } else { ControlFlow::Break(()) }
         });
-        t
+        // The shadow ray's direction is unit: `t` is distance.
+        let tau = tau + open.max(Vec3::ZERO) * ray.t_max;
+        t * (-tau.max(Vec3::ZERO)).exp()
     }
 }
