@@ -52,7 +52,7 @@ pub use aabb::Aabb;
 pub use error::GeometryError;
 pub use glam;
 pub use hit::Hit;
-pub use mesh::TriangleMesh;
+pub use mesh::{TriangleMesh, weld_by_position};
 pub use ray::{Ray, offset_ray_origin};
 pub use shape::{Instance, Intersect, Shape};
 pub use shapes::{Cone, Cuboid, Cylinder, Disk, Plane, Sphere, Triangle, TriangleRay, azimuth_u, sphere_uv};

@@ -8,7 +8,7 @@
 
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
-use prism_bvh::{Object, SceneHit};
+use prism_bvh::SceneHit;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Hit, Ray};
 use std::ops::ControlFlow;
@@ -37,11 +37,10 @@ pub(crate) struct Tracer<'a> {
     pub rays: u64,
 }
 
-/// Whether object `object` is a closed solid (its inside is bounded by it):
-/// geometry's answer, [`Object::is_closed`].
+/// Whether object `object` is a closed solid: [`Scene::is_closed`].
 #[inline]
 fn is_closed(scene: &Scene, object: u32) -> bool {
-    scene.accel.objects().get(object as usize).is_some_and(Object::is_closed)
+    scene.is_closed(object)
 }
 
 #[inline]
@@ -247,9 +246,9 @@ impl<'a> Tracer<'a> {
     /// of `hit`: the product over the occluders on the segment of each
     /// one's see-through fraction (`transparency + transmission`) times its
     /// colour at the crossing, clamped to `[0, 1]` per channel. A closed
-    /// solid (sphere, cuboid, cylinder, cone) counts once, at the crossing
+    /// solid (sphere, cuboid, cylinder, cone, closed mesh) counts once, at the crossing
     /// where the segment enters it; open surfaces (planes, disks,
-    /// triangles, meshes) count at every crossing. Opaque occluders give 0.
+    /// triangles, open meshes) count at every crossing. Opaque occluders give 0.
     ///
     /// Light crossing an absorbing dielectric (a closed solid with
     /// `transmission > 0` and non-zero `absorption`) is also attenuated by

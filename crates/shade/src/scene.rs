@@ -281,6 +281,24 @@ impl Scene {
             .unwrap_or(&MISSING_MATERIAL)
     }
 
+    /// Whether object `object` is a closed solid, so that a ray leaving it
+    /// through a back face was inside it: an analytic solid
+    /// ([`Object::is_closed`]) or an instance of a mesh found closed
+    /// (watertight and consistently oriented) when it was built,
+    /// [`prism_geometry::TriangleMesh::is_closed`]. Closed objects are
+    /// shaded once where a ray passes through them and dim a shadow once.
+    #[inline]
+    #[must_use]
+    pub fn is_closed(&self, object: u32) -> bool {
+        match self.accel.objects().get(object as usize) {
+            Some(Object::Mesh { mesh, .. }) => {
+                self.accel.meshes().get(*mesh as usize).is_some_and(|m| m.is_closed())
+            }
+            Some(o) => o.is_closed(),
+            None => false,
+        }
+    }
+
     /// The world-to-object map of object `object` (identity if none).
     #[inline]
     #[must_use]
