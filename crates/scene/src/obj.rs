@@ -44,9 +44,16 @@ pub struct ObjFile {
 /// How vertex normals are chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum NormalMode {
-    /// The file's normals when every vertex has one, else computed smooth.
+    /// The file's normals when every vertex has one, else computed:
+    /// welded by position, smooth within the file's smoothing groups
+    /// (`s`), hard at edges sharper than the default crease angle
+    /// ([`prism_geometry::DEFAULT_CREASE_DEG`]).
     Auto,
-    /// Always computed smooth normals (area-weighted).
+    /// [`NormalMode::Auto`] with another crease angle, in hundredths of a
+    /// degree (`crease_angle`).
+    AutoCrease(u32),
+    /// Always computed normals, welded by position and smooth everywhere
+    /// (no crease, no smoothing groups).
     Smooth,
     /// No vertex normals: each face shaded with its geometric normal.
     Flat,
@@ -98,6 +105,11 @@ pub fn load_obj(
         }
     };
 
+    // Smoothing groups per triangle, if the file has `s` lines and tobj's
+    // models hold its triangles in file order (else they are not used).
+    let total: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    let groups = smoothing_groups(text).filter(|g| g.len() == total);
+    let mut next_tri = 0;
     let mut out = Vec::with_capacity(models.len());
     for model in models {
         let m = model.mesh;
@@ -112,15 +124,28 @@ pub fn load_obj(
         let uvs = (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
         let indices: Vec<[u32; 3]> = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let (given, smooth) = match normals {
-            NormalMode::Auto => (file_normals.clone(), file_normals.is_none()),
-            NormalMode::Smooth => (None, true),
-            NormalMode::Flat => (None, false),
+        // The smoothing groups of this model's triangles, in file order.
+        let tris = indices.len();
+        let model_groups = groups.as_ref().and_then(|g| g.get(next_tri..next_tri + tris));
+        next_tri += tris;
+        // (file normals, computed with (groups, crease angle)).
+        let (given, computed) = match normals {
+            NormalMode::Auto | NormalMode::AutoCrease(_) => {
+                let crease = match normals {
+                    NormalMode::AutoCrease(c) => c as f32 / 100.0,
+                    _ => prism_geometry::DEFAULT_CREASE_DEG,
+                };
+                let computed = file_normals.is_none().then_some((model_groups, crease));
+                (file_normals.clone(), computed)
+            }
+            NormalMode::Smooth => (None, Some((None, 180.0))),
+            NormalMode::Flat => (None, None),
         };
-        let mut mesh = TriangleMesh::new(positions, given, uvs, indices)
-            .map_err(|e| (Location::file(path), format!("model `{}`: {e}", model.name)))?;
-        if smooth {
-            mesh.compute_smooth_normals();
+        let err =
+            |e: prism_geometry::GeometryError| (Location::file(path), format!("model `{}`: {e}", model.name));
+        let mut mesh = TriangleMesh::new(positions, given, uvs, indices).map_err(err)?;
+        if let Some((groups, crease)) = computed {
+            mesh = prism_geometry::with_computed_normals(&mesh, groups, crease).map_err(err)?;
         }
         let degenerate = mesh.degenerate_count();
         out.push(ObjModel { mesh: Arc::new(mesh), material: m.material_id, degenerate });
@@ -132,6 +157,36 @@ pub fn load_obj(
         ));
     }
     Ok(ObjFile { path: path.to_path_buf(), models: out, materials, material_error, mtl_files })
+}
+
+/// The smoothing group of every triangle the file's faces make (a face of
+/// `n` corners makes `n − 2`), in file order, or `None` when the file has
+/// no `s` lines. `s off` and `s 0` are group 0 (flat), `s N` group `N`,
+/// any other `s` value group 1; faces before the first `s` line are flat,
+/// as the OBJ format's default is.
+fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
+    let mut any = false;
+    let mut current = 0u32;
+    let mut out = Vec::new();
+    for raw in text.lines() {
+        let line = raw.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("s") => {
+                any = true;
+                current = match words.next() {
+                    Some("off") | None => 0,
+                    Some(w) => w.parse().unwrap_or(1),
+                };
+            }
+            Some("f") => {
+                let corners = words.count();
+                out.extend(std::iter::repeat_n(current, corners.saturating_sub(2)));
+            }
+            _ => {}
+        }
+    }
+    any.then_some(out)
 }
 
 /// UTF-8 text, with a clear word for the usual wrong encodings.
@@ -304,6 +359,13 @@ mod tests {
         assert_eq!(e.0, 3);
         assert!(e.1.contains("`Kd` needs 3 numbers"), "{}", e.1);
         assert!(precheck_mtl("Ke\n").is_err());
+    }
+
+    #[test]
+    fn smoothing_groups_per_triangle() {
+        assert_eq!(smoothing_groups("v 0 0 0\nf 1 2 3\n"), None);
+        let text = "f 1 2 3\ns 1\nf 1 2 3 4\ns off\nf 1 2 3\ns 7 # comment\nf 1 2 3\ns 0\nf 3 2 1\n";
+        assert_eq!(smoothing_groups(text), Some(vec![0, 1, 1, 0, 7, 0]));
     }
 
     #[test]
