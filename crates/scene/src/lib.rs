@@ -61,6 +61,7 @@ mod overrides;
 mod read;
 mod settings;
 mod view;
+mod wild;
 
 pub use error::{Location, SceneError, line_col};
 pub use overrides::{Overrides, parse_vec3};
