@@ -71,6 +71,9 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
         Some(f) => {
             let mode = match f.mode {
                 FogMode::Linear { start, end } => format!("linear from {} to {}", trim(start), trim(end)),
+                FogMode::LinearDistance { start, end } => {
+                    format!("linear by distance from {} to {}", trim(start), trim(end))
+                }
                 FogMode::Exponential { density } => format!("exponential, density {}", trim(density)),
                 FogMode::ExponentialSquared { density } => {
                     format!("exponential squared, density {}", trim(density))
@@ -127,7 +130,12 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
     let bvh = loaded.scene.accel.stats();
     let fog = i.fog.as_ref().map(|f| {
         let (mode, params) = match f.mode {
-            FogMode::Linear { start, end } => ("linear", json!({ "start": num(start), "end": num(end) })),
+            FogMode::Linear { start, end } => {
+                ("linear", json!({ "start": num(start), "end": num(end), "measure": "depth" }))
+            }
+            FogMode::LinearDistance { start, end } => {
+                ("linear", json!({ "start": num(start), "end": num(end), "measure": "distance" }))
+            }
             FogMode::Exponential { density } => ("exponential", json!({ "density": num(density) })),
             FogMode::ExponentialSquared { density } => {
                 ("exponential_squared", json!({ "density": num(density) }))

@@ -20,6 +20,10 @@ pub struct TriangleMesh {
     normals: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
     indices: Vec<[u32; 3]>,
+    /// Bounds of the vertices that faces use (cached).
+    bounds: Aabb,
+    /// Watertight and consistently oriented ([`TriangleMesh::is_closed`]).
+    closed: bool,
 }
 
 impl TriangleMesh {
@@ -62,7 +66,20 @@ impl TriangleMesh {
                 )));
             }
         }
-        Ok(Self { positions, normals, uvs, indices })
+        let bounds = indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(positions[i as usize]));
+        let closed = is_closed_surface(&positions, &indices);
+        Ok(Self { positions, normals, uvs, indices, bounds, closed })
+    }
+
+    /// Whether the mesh bounds a solid: it has faces, and with vertices
+    /// taken by position (so that copies split at uv or normal seams count
+    /// as one), every edge of a face is shared by exactly one other face,
+    /// which runs it the other way (watertight and consistently oriented).
+    /// Faces with two corners at one position are ignored. Decided once,
+    /// at construction.
+    #[must_use]
+    pub fn is_closed(&self) -> bool {
+        self.closed
     }
 
     /// Vertex positions.
@@ -186,8 +203,35 @@ impl Intersect for TriangleMesh {
     }
 
     fn bounds(&self) -> Aabb {
-        self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(self.positions[i as usize]))
+        self.bounds
     }
+}
+
+/// For each vertex, the index of the first vertex at the same position
+/// (bit-for-bit; `-0.0` and `0.0` are one).
+#[must_use]
+pub fn weld_by_position(positions: &[Vec3]) -> Vec<u32> {
+    let key = |p: Vec3| (p + Vec3::ZERO).to_array().map(f32::to_bits);
+    let mut first = std::collections::HashMap::with_capacity(positions.len());
+    positions.iter().enumerate().map(|(i, &p)| *first.entry(key(p)).or_insert(i as u32)).collect()
+}
+
+/// Whether the faces close up: see [`TriangleMesh::is_closed`].
+fn is_closed_surface(positions: &[Vec3], indices: &[[u32; 3]]) -> bool {
+    let id = weld_by_position(positions);
+    let mut edges: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    let mut faces = 0usize;
+    for tri in indices {
+        let [a, b, c] = tri.map(|i| id[i as usize]);
+        if a == b || b == c || a == c {
+            continue;
+        }
+        faces += 1;
+        for e in [(a, b), (b, c), (c, a)] {
+            *edges.entry(e).or_insert(0) += 1;
+        }
+    }
+    faces > 0 && edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
 }
 
 #[cfg(test)]
@@ -270,5 +314,55 @@ mod tests {
         assert_eq!(m.degenerate_count(), 1);
         let h = m.intersect_brute_force(&Ray::new(Vec3::new(0.5, 0.0, 1.0), Vec3::NEG_Z)).unwrap();
         assert_eq!(h.0, 1);
+    }
+
+    /// A unit cube with every face's corners its own vertices (as a file
+    /// with per-face uvs gives them), faces counter-clockwise from outside.
+    fn split_cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let c = |i: u32| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let mut p = Vec::new();
+        let mut idx = Vec::new();
+        for q in quads {
+            let base = p.len() as u32;
+            p.extend(q.map(c));
+            idx.push([base, base + 1, base + 2]);
+            idx.push([base, base + 2, base + 3]);
+        }
+        (p, idx)
+    }
+
+    #[test]
+    fn closed_meshes_are_found_through_split_vertices() {
+        let (p, idx) = split_cube();
+        // Outward normals: the cube is a solid.
+        let m = TriangleMesh::new(p.clone(), None, None, idx.clone()).unwrap();
+        for f in 0..m.len() {
+            let [a, b, c] = m.triangle(f);
+            let n = (b - a).cross(c - a);
+            assert!(n.dot((a + b + c) / 3.0 - Vec3::splat(0.5)) > 0.0, "face {f} faces inward");
+        }
+        assert!(m.is_closed());
+        // A face missing: open.
+        let open = TriangleMesh::new(p.clone(), None, None, idx[..10].to_vec()).unwrap();
+        assert!(!open.is_closed());
+        // One face turned over: not consistently oriented.
+        let mut flipped = idx.clone();
+        flipped[0] = [flipped[0][0], flipped[0][2], flipped[0][1]];
+        flipped[1] = [flipped[1][0], flipped[1][2], flipped[1][1]];
+        assert!(!TriangleMesh::new(p.clone(), None, None, flipped).unwrap().is_closed());
+        // A face used twice: an edge shared by three faces.
+        let mut doubled = idx.clone();
+        doubled.push(idx[0]);
+        assert!(!TriangleMesh::new(p, None, None, doubled).unwrap().is_closed());
+        // A flat quad and an empty mesh are open.
+        assert!(!quad(None, None).is_closed());
+        assert!(!TriangleMesh::new(Vec::new(), None, None, Vec::new()).unwrap().is_closed());
+    }
+
+    #[test]
+    fn weld_maps_copies_to_the_first() {
+        let p = [Vec3::X, Vec3::Y, Vec3::X, Vec3::new(-0.0, 0.0, 0.0), Vec3::ZERO];
+        assert_eq!(weld_by_position(&p), [0, 1, 0, 3, 3]);
     }
 }

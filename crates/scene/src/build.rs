@@ -298,6 +298,7 @@ impl<'a> Build<'a> {
             for m in &obj.mtl_files {
                 self.note_input(m);
             }
+            self.warnings.extend(obj.warnings.iter().cloned());
             let mut models = Vec::with_capacity(obj.models.len());
             let (mut triangles, mut degenerate) = (0, 0);
             for model in &obj.models {
@@ -345,6 +346,22 @@ impl<'a> Build<'a> {
         let obj_name = obj.path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let res = self.res;
         let found = res.mtl_texture(&obj.path, k);
+        // A texture file that is missing (or not a file): the material's
+        // colour, with a warning, as for a missing MTL file.
+        let without_texture;
+        let raw = match found {
+            Some(Err(Failure::Read { what, path, reason })) => {
+                self.warnings.push(format!(
+                    "{}: material `{}`: cannot read {what} {}: {reason}; using its colour (Kd) instead",
+                    obj.path.display(),
+                    raw.name,
+                    path.display()
+                ));
+                without_texture = tobj::Material { diffuse_texture: None, ..raw.clone() };
+                &without_texture
+            }
+            _ => raw,
+        };
         let image = || self.image_at(found, named_at.clone(), raw.diffuse_texture.as_deref().unwrap_or(""));
         let m = material::from_mtl(raw, &Location::file(&obj.path), named_at, image)?;
         let i = self.materials.add(format!("{obj_name}/{}", raw.name), m);

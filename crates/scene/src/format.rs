@@ -101,10 +101,19 @@ pub enum FogModeDef {
     ExponentialSquared,
 }
 
+/// `[fog] measure`: what linear fog's distance is.
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum FogMeasureDef {
+    Depth,
+    Distance,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FogDef {
     pub mode: Option<Spanned<FogModeDef>>,
+    pub measure: Option<Spanned<FogMeasureDef>>,
     pub start: Option<Num>,
     pub end: Option<Num>,
     pub density: Option<Num>,
@@ -250,13 +259,20 @@ pub struct ObjectDef {
     pub vertices: Option<Spanned<[[f64; 3]; 3]>>,
     pub path: Option<Spanned<String>>,
     pub normals: Option<Spanned<NormalsDef>>,
+    pub crease_angle: Option<Num>,
 }
 
 impl ObjectDef {
     /// How a mesh's vertex normals are chosen (`auto` unless `normals` says).
     pub fn normal_mode(&self) -> NormalMode {
         match self.normals.as_ref().map(|n| *n.get_ref()) {
-            None | Some(NormalsDef::Auto) => NormalMode::Auto,
+            None | Some(NormalsDef::Auto) => match &self.crease_angle {
+                // Checked in range by the build; hundredths of a degree.
+                Some(n) if n.get_ref().is_finite() => {
+                    NormalMode::AutoCrease((n.get_ref().clamp(0.0, 180.0) * 100.0).round() as u32)
+                }
+                _ => NormalMode::Auto,
+            },
             Some(NormalsDef::Smooth) => NormalMode::Smooth,
             Some(NormalsDef::Flat) => NormalMode::Flat,
         }

@@ -64,6 +64,7 @@ mod set;
 mod settings;
 mod suggest;
 mod view;
+mod wild;
 
 pub use error::{Location, SceneError, line_col};
 pub use obj_view::{ObjOptions, ObjView};

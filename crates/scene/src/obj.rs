@@ -9,6 +9,7 @@
 //! read through a function the caller passes (see `read.rs`).
 
 use crate::error::Location;
+use crate::wild;
 use prism_geometry::TriangleMesh;
 use prism_geometry::glam::{Vec2, Vec3};
 use std::io::BufReader;
@@ -39,14 +40,23 @@ pub struct ObjFile {
     pub material_error: Option<String>,
     /// The MTL files it names (the caller canonicalizes those that exist).
     pub mtl_files: Vec<PathBuf>,
+    /// What was guessed to read it (`FILE:LINE: ...`), for the user.
+    pub warnings: Vec<String>,
 }
 
 /// How vertex normals are chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum NormalMode {
-    /// The file's normals when every vertex has one, else computed smooth.
+    /// The file's normals when every vertex has one, else computed:
+    /// welded by position, smooth within the file's smoothing groups
+    /// (`s`), hard at edges sharper than the default crease angle
+    /// ([`prism_geometry::DEFAULT_CREASE_DEG`]).
     Auto,
-    /// Always computed smooth normals (area-weighted).
+    /// [`NormalMode::Auto`] with another crease angle, in hundredths of a
+    /// degree (`crease_angle`).
+    AutoCrease(u32),
+    /// Always computed normals, welded by position and smooth everywhere
+    /// (no crease, no smoothing groups).
     Smooth,
     /// No vertex normals: each face shaded with its geometric normal.
     Flat,
@@ -62,7 +72,12 @@ pub fn load_obj(
     normals: NormalMode,
     read_mtl: &dyn Fn(&Path) -> Option<Vec<u8>>,
 ) -> Result<ObjFile, (Location, String)> {
-    let text = decode_text(bytes).map_err(|m| (Location::file(path), m))?;
+    let (text, decode_warning) = wild::decode_text(bytes).map_err(|m| (Location::file(path), m))?;
+    let (text, obj_warnings) = wild::fix_obj(&text);
+    let text: &str = &text;
+    let here = |w: String| format!("{}:{}", path.display(), w.strip_prefix("line ").unwrap_or(&w));
+    let mut warnings: Vec<String> = decode_warning.into_iter().chain(obj_warnings).map(here).collect();
+    let mtl_warnings: std::cell::RefCell<Vec<String>> = std::cell::RefCell::new(Vec::new());
     let mtllibs = precheck(text).map_err(|(line, m)| (Location::at_line(path, line), m))?;
 
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -73,13 +88,17 @@ pub fn load_obj(
     let loader = |p: &Path| {
         let path = dir.join(p);
         let bytes = read_mtl(&path).ok_or(tobj::LoadError::OpenFileFailed)?;
-        let text = match decode_text(&bytes) {
+        let (text, decode_warning) = match wild::decode_text(&bytes) {
             Ok(t) => t,
             Err(m) => {
                 *mtl_problem.borrow_mut() = Some(format!("{}: {m}", path.display()));
                 return Err(tobj::LoadError::ReadError);
             }
         };
+        let (text, fixes) = wild::fix_mtl(&text);
+        let at = |w: String| format!("{}:{}", path.display(), w.strip_prefix("line ").unwrap_or(&w));
+        mtl_warnings.borrow_mut().extend(decode_warning.into_iter().chain(fixes).map(at));
+        let text: &str = &text;
         // tobj panics on some malformed lines (`Kd 1 1`); refuse them first.
         if let Err((line, m)) = precheck_mtl(text) {
             *mtl_problem.borrow_mut() = Some(format!("{}:{line}: {m}", path.display()));
@@ -98,6 +117,11 @@ pub fn load_obj(
         }
     };
 
+    // Smoothing groups per triangle, if the file has `s` lines and tobj's
+    // models hold its triangles in file order (else they are not used).
+    let total: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    let groups = smoothing_groups(text).filter(|g| g.len() == total);
+    let mut next_tri = 0;
     let mut out = Vec::with_capacity(models.len());
     for model in models {
         let m = model.mesh;
@@ -112,15 +136,28 @@ pub fn load_obj(
         let uvs = (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
         let indices: Vec<[u32; 3]> = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let (given, smooth) = match normals {
-            NormalMode::Auto => (file_normals.clone(), file_normals.is_none()),
-            NormalMode::Smooth => (None, true),
-            NormalMode::Flat => (None, false),
+        // The smoothing groups of this model's triangles, in file order.
+        let tris = indices.len();
+        let model_groups = groups.as_ref().and_then(|g| g.get(next_tri..next_tri + tris));
+        next_tri += tris;
+        // (file normals, computed with (groups, crease angle)).
+        let (given, computed) = match normals {
+            NormalMode::Auto | NormalMode::AutoCrease(_) => {
+                let crease = match normals {
+                    NormalMode::AutoCrease(c) => c as f32 / 100.0,
+                    _ => prism_geometry::DEFAULT_CREASE_DEG,
+                };
+                let computed = file_normals.is_none().then_some((model_groups, crease));
+                (file_normals.clone(), computed)
+            }
+            NormalMode::Smooth => (None, Some((None, 180.0))),
+            NormalMode::Flat => (None, None),
         };
-        let mut mesh = TriangleMesh::new(positions, given, uvs, indices)
-            .map_err(|e| (Location::file(path), format!("model `{}`: {e}", model.name)))?;
-        if smooth {
-            mesh.compute_smooth_normals();
+        let err =
+            |e: prism_geometry::GeometryError| (Location::file(path), format!("model `{}`: {e}", model.name));
+        let mut mesh = TriangleMesh::new(positions, given, uvs, indices).map_err(err)?;
+        if let Some((groups, crease)) = computed {
+            mesh = prism_geometry::with_computed_normals(&mesh, groups, crease).map_err(err)?;
         }
         let degenerate = mesh.degenerate_count();
         out.push(ObjModel { mesh: Arc::new(mesh), material: m.material_id, degenerate });
@@ -131,32 +168,62 @@ pub fn load_obj(
             "the OBJ file has no faces (lines and points are not rendered)".into(),
         ));
     }
-    Ok(ObjFile { path: path.to_path_buf(), models: out, materials, material_error, mtl_files })
+    warnings.extend(mtl_warnings.into_inner());
+    Ok(ObjFile { path: path.to_path_buf(), models: out, materials, material_error, mtl_files, warnings })
 }
 
-/// UTF-8 text, with a clear word for the usual wrong encodings.
-fn decode_text(bytes: &[u8]) -> Result<&str, String> {
-    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
-        return Err("the file is UTF-16 text; expected UTF-8 (or ASCII) text".into());
+/// The smoothing group of every triangle the file's faces make (a face of
+/// `n` corners makes `n − 2`), in file order, or `None` when the file has
+/// no `s` lines. `s off` and `s 0` are group 0 (flat), `s N` group `N`,
+/// any other `s` value group 1; faces before the first `s` line are flat,
+/// as the OBJ format's default is.
+fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
+    let mut any = false;
+    let mut current = 0u32;
+    let mut out = Vec::new();
+    for raw in text.lines() {
+        let line = raw.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("s") => {
+                any = true;
+                current = match words.next() {
+                    Some("off") | None => 0,
+                    Some(w) => w.parse().unwrap_or(1),
+                };
+            }
+            Some("f") => {
+                let corners = words.count();
+                out.extend(std::iter::repeat_n(current, corners.saturating_sub(2)));
+            }
+            _ => {}
+        }
     }
-    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    std::str::from_utf8(bytes).map_err(|e| {
-        format!(
-            "the file is not UTF-8 text (invalid byte at offset {}); is it a binary file?",
-            e.valid_up_to()
-        )
-    })
+    any.then_some(out)
 }
 
-/// Checks the MTL lines that tobj would panic on: colours (`Ka`, `Kd`,
-/// `Ks`, `Ke`) need three values. Errors carry the 1-based line.
+/// Checks the MTL lines that tobj would panic on or that prism would
+/// refuse later without a line: colours (`Ka`, `Kd`, `Ks`, `Ke`) need
+/// three numbers (one is read as grey before this, see `wild.rs`), finite
+/// and `>= 0`; `Ns`, `Ni`, `d` and `Tr` a finite number `>= 0`. Errors
+/// carry the 1-based line.
 fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
     for (i, raw) in text.lines().enumerate() {
-        let mut words = raw.split_whitespace();
-        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() {
-            let found = words.count();
-            if found < 3 {
-                return Err((i + 1, format!("`{key}` needs 3 numbers (r g b), found {found}")));
+        let line = raw.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        let (key, want) = match words.next() {
+            Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) => (key, 3),
+            Some(key @ ("Ns" | "Ni" | "d" | "Tr")) => (key, 1),
+            _ => continue,
+        };
+        let values: Vec<&str> = words.collect();
+        if values.len() < want {
+            let what = if want == 3 { "3 numbers (r g b)" } else { "a number" };
+            return Err((i + 1, format!("`{key}` needs {what}, found {}", values.len())));
+        }
+        for v in &values[..want] {
+            if !v.parse::<f32>().is_ok_and(|x| x.is_finite() && x >= 0.0) {
+                return Err((i + 1, format!("`{key}` value `{v}` must be a finite number >= 0")));
             }
         }
     }
@@ -304,11 +371,17 @@ mod tests {
         assert_eq!(e.0, 3);
         assert!(e.1.contains("`Kd` needs 3 numbers"), "{}", e.1);
         assert!(precheck_mtl("Ke\n").is_err());
+        let e = precheck_mtl("newmtl a\nKd 1 -1 1\n").unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.contains("`-1`"), "{}", e.1);
+        assert_eq!(precheck_mtl("Ns nan\n").unwrap_err().0, 1);
+        assert!(precheck_mtl("d 0.5 # half\nNs 10\n").is_ok());
     }
 
     #[test]
-    fn utf16_and_binary_are_named() {
-        assert!(decode_text(&[0xFF, 0xFE, b'v', 0]).unwrap_err().contains("UTF-16"));
-        assert!(decode_text(&[0x80, 0x81, 0x00]).unwrap_err().contains("not UTF-8"));
+    fn smoothing_groups_per_triangle() {
+        assert_eq!(smoothing_groups("v 0 0 0\nf 1 2 3\n"), None);
+        let text = "f 1 2 3\ns 1\nf 1 2 3 4\ns off\nf 1 2 3\ns 7 # comment\nf 1 2 3\ns 0\nf 3 2 1\n";
+        assert_eq!(smoothing_groups(text), Some(vec![0, 1, 1, 0, 7, 0]));
     }
 }

@@ -96,6 +96,7 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
         ("vertices", span_of(&d.vertices)),
         ("path", span_of(&d.path)),
         ("normals", span_of(&d.normals)),
+        ("crease_angle", span_of(&d.crease_angle)),
     ];
     let allowed = shape_keys(kind);
     match first_foreign(&present, allowed) {
@@ -107,7 +108,7 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
                 allowed.join(", ")
             ),
         )),
-        None => Ok(()),
+        None => check_crease(ctx, d),
     }
 }
 
@@ -121,8 +122,23 @@ pub(crate) fn shape_keys(kind: ObjectKind) -> &'static [&'static str] {
         ObjectKind::Cylinder | ObjectKind::Cone => &["base", "radius", "height"],
         ObjectKind::Disk => &["center", "normal", "radius"],
         ObjectKind::Triangle => &["vertices"],
-        ObjectKind::Mesh => &["path", "normals"],
+        ObjectKind::Mesh => &["path", "normals", "crease_angle"],
     }
+}
+
+/// `crease_angle`: degrees in `[0, 180]`, with `normals = "auto"` only.
+fn check_crease(ctx: &Ctx, d: &ObjectDef) -> Result<()> {
+    let Some(n) = &d.crease_angle else { return Ok(()) };
+    if d.normals.as_ref().is_some_and(|m| *m.get_ref() != crate::format::NormalsDef::Auto) {
+        return Err(
+            ctx.invalid(&n.span(), "`crease_angle` applies to `normals = \"auto\"` (computed normals) only")
+        );
+    }
+    let deg = ctx.non_negative(n, "crease_angle")?;
+    if deg > 180.0 {
+        return Err(ctx.invalid(&n.span(), format!("crease_angle must be at most 180 (degrees), got {deg}")));
+    }
+    Ok(())
 }
 
 /// A cuboid from `min` and `max`, or `size` and `center`.

@@ -191,7 +191,13 @@ impl<'a> Reader<'a> {
                 continue;
             }
             if let Some(tex) = obj.materials.get(k).and_then(|m| m.diffuse_texture.as_ref()) {
-                let t = mtl_texture_path(&dir, tex).and_then(|p| self.image(p, Wrap::Repeat));
+                // Relative to the MTL file (the first library's folder where
+                // it is found), else to the OBJ file.
+                let dirs = obj.mtl_files.iter().filter_map(|m| m.parent());
+                let found = dirs.map(|m| mtl_texture_path(m, tex)).find(Result::is_ok);
+                let t = found
+                    .unwrap_or_else(|| mtl_texture_path(&dir, tex))
+                    .and_then(|p| self.image(p, Wrap::Repeat));
                 self.res.mtl_textures.insert(key, t);
             }
         }

@@ -5,7 +5,7 @@
 use crate::Overrides;
 use crate::check::{Ctx, Result};
 use crate::error::SceneError;
-use crate::format::{CameraDef, FogDef, FogModeDef};
+use crate::format::{CameraDef, FogDef, FogMeasureDef, FogModeDef};
 use prism_geometry::Aabb;
 use prism_geometry::glam::Vec3;
 use prism_shade::{Camera, Fog, FogMode};
@@ -178,9 +178,18 @@ pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Fog, bool)> {
                     format!("fog end ({end}) must be greater than fog start ({start})"),
                 ));
             }
-            FogMode::Linear { start, end }
+            match d.measure.as_ref().map(|m| *m.get_ref()) {
+                Some(FogMeasureDef::Distance) => FogMode::LinearDistance { start, end },
+                Some(FogMeasureDef::Depth) | None => FogMode::Linear { start, end },
+            }
         }
         FogModeDef::Exponential | FogModeDef::ExponentialSquared => {
+            if let Some(m) = &d.measure {
+                return Err(ctx.invalid(
+                    &m.span(),
+                    "`measure` belongs to linear fog; exponential fog is measured along the ray",
+                ));
+            }
             if let Some(n) = d.start.as_ref().or(d.end.as_ref()) {
                 return Err(ctx.invalid(
                     &n.span(),

@@ -8,7 +8,7 @@
 
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
-use prism_bvh::{Object, SceneHit};
+use prism_bvh::SceneHit;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Hit, Ray};
 use std::ops::ControlFlow;
@@ -27,6 +27,10 @@ pub(crate) struct Tracer<'a> {
     max_depth: u32,
     min_contribution: f32,
     fog: Option<(FogMode, Vec3)>,
+    /// The camera's view axis when fog is measured by eye-space depth.
+    depth_axis: Option<Vec3>,
+    /// The unit direction of the camera ray being traced.
+    primary: Vec3,
     /// Whether any material lets light through (else shadows are yes/no).
     see_through: bool,
     /// Rays traced so far (camera, secondary, shadow).
@@ -35,18 +39,17 @@ pub(crate) struct Tracer<'a> {
     pub shadow_rays: u64,
 }
 
-/// Whether object `object` is a closed solid (its inside is bounded by it):
-/// geometry's answer, [`Object::is_closed`].
+/// Whether object `object` is a closed solid: [`Scene::is_closed`].
 #[inline]
 fn is_closed(scene: &Scene, object: u32) -> bool {
-    scene.accel.objects().get(object as usize).is_some_and(Object::is_closed)
+    scene.is_closed(object)
 }
 
 #[inline]
 fn albedo(scene: &Scene, mat: &Material, h: &SceneHit) -> Vec3 {
     match &mat.texture {
         Texture::Solid(c) => *c,
-        t => t.color_at(h.hit.point, h.hit.uv, &scene.to_object(h.object)),
+        t => t.color_at(h.hit.point, h.hit.uv, &scene.texture_to_object(h.object, t)),
     }
 }
 
@@ -64,6 +67,8 @@ impl<'a> Tracer<'a> {
             max_depth: settings.max_depth.min(MAX_DEPTH_LIMIT),
             min_contribution,
             fog: scene.fog.filter(|_| settings.fog).map(|f| (f.mode, f.color)),
+            depth_axis: scene.fog.filter(|f| settings.fog && f.by_depth()).map(|_| settings.camera.forward()),
+            primary: Vec3::ZERO,
             see_through,
             rays: 0,
             shadow_rays: 0,
@@ -74,6 +79,7 @@ impl<'a> Tracer<'a> {
     /// direction).
     #[inline]
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
+        self.primary = ray.dir;
         self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT)
     }
 
@@ -82,6 +88,20 @@ impl<'a> Tracer<'a> {
     fn worth(&self, w: Vec3) -> bool {
         let m = w.max_element();
         m > 0.0 && m >= self.min_contribution
+    }
+
+    /// The fog distance of a segment of length `seg` along `ray`: its
+    /// eye-space depth when fog is measured by depth and the ray runs along
+    /// the camera ray's line, else its length (see [`FogMode`]).
+    #[inline]
+    fn fog_length(&self, ray: &Ray, seg: f32) -> f32 {
+        match self.depth_axis {
+            Some(axis) => {
+                let d = ray.dir.normalize_or_zero();
+                if d.dot(self.primary) >= 1.0 - 1e-6 { seg * d.dot(axis).max(0.0) } else { seg }
+            }
+            None => seg,
+        }
     }
 
     /// Fog transmittance of the path segment `[a, b]`.
@@ -102,7 +122,8 @@ impl<'a> Tracer<'a> {
     }
 
     /// Radiance arriving at `ray.origin` along `ray`, `depth` bounces from
-    /// the camera, with path weight `weight` and path length `path` so far.
+    /// the camera, with path weight `weight` and fog distance `path` so far
+    /// (path length, or depth: [`FogMode`]).
     /// When the ray leaves object `skip_exit` through its back face (the
     /// unbent continuation through a transparent solid), it goes on from
     /// the far side without shading the exit.
@@ -113,7 +134,7 @@ impl<'a> Tracer<'a> {
             return self.fog_blend(scene.background, self.fog_t(path, f32::INFINITY));
         };
         let seg = h.hit.t * ray.dir.length();
-        let end = path + seg;
+        let end = path + self.fog_length(ray, seg);
         let fog_t = self.fog_t(path, end);
         let weight = weight * fog_t;
         if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
@@ -228,9 +249,17 @@ impl<'a> Tracer<'a> {
     /// of `hit`: the product over the occluders on the segment of each
     /// one's see-through fraction (`transparency + transmission`) times its
     /// colour at the crossing, clamped to `[0, 1]` per channel. A closed
-    /// solid (sphere, cuboid, cylinder, cone) counts once, at the crossing
+    /// solid (sphere, cuboid, cylinder, cone, closed mesh) counts once, at the crossing
     /// where the segment enters it; open surfaces (planes, disks,
-    /// triangles, meshes) count at every crossing. Opaque occluders give 0.
+    /// triangles, open meshes) count at every crossing. Opaque occluders give 0.
+    ///
+    /// Light crossing an absorbing dielectric (a closed solid with
+    /// `transmission > 0` and non-zero `absorption`) is also attenuated by
+    /// Beer–Lambert, `exp(−absorption · L)` over the length `L` of the
+    /// segment inside it, as the view through it is: green glass casts a
+    /// green shadow. `L` is the sum of exit minus entry distances (crossings
+    /// come unordered); a segment that starts inside a solid counts from its
+    /// start, one that ends inside (a light in the glass) up to its end.
     fn shadow(&mut self, hit: &Hit, target: Vec3) -> Vec3 {
         let ray = Ray::spawn_to(hit.point, hit.geo_normal, target);
         self.rays += 1;
@@ -240,11 +269,23 @@ impl<'a> Tracer<'a> {
             return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut t = Vec3::ONE;
+        // Optical depth Σ absorption · (±distance), and the absorption of
+        // the solids entered and not left.
+        let (mut tau, mut open) = (Vec3::ZERO, Vec3::ZERO);
         scene.accel.for_each_hit(&ray, |sh| {
-            if !sh.hit.front_face && is_closed(scene, sh.object) {
+            let closed = is_closed(scene, sh.object);
+            let m = scene.material_of(sh.object);
+            if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
+                let s = m.absorption * sh.hit.t;
+                if sh.hit.front_face {
+                    (tau, open) = (tau - s, open + m.absorption);
+                } else {
+                    (tau, open) = (tau + s, open - m.absorption);
+                }
+            }
+            if !sh.hit.front_face && closed {
                 return ControlFlow::Continue(());
             }
-            let m = scene.material_of(sh.object);
             let through = m.transparency + m.transmission;
             if !(through > 0.0) {
                 t = Vec3::ZERO;
@@ -253,6 +294,8 @@ impl<'a> Tracer<'a> {
             t *= (through * albedo(scene, m, sh)).clamp(Vec3::ZERO, Vec3::ONE);
             if t.max_element() > 0.0 { ControlFlow::Continue(()) } else { ControlFlow::Break(()) }
         });
-        t
+        // The shadow ray's direction is unit: `t` is distance.
+        let tau = tau + open.max(Vec3::ZERO) * ray.t_max;
+        t * (-tau.max(Vec3::ZERO)).exp()
     }
 }

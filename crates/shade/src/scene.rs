@@ -4,6 +4,7 @@
 
 use crate::{Material, ShadeError};
 use prism_bvh::{Accel, Object, SceneHit};
+use prism_geometry::Intersect;
 use prism_geometry::glam::{Affine3A, Vec3};
 
 /// A point light.
@@ -17,11 +18,31 @@ pub struct PointLight {
     pub intensity: f32,
 }
 
-/// How fog thickens with distance `d` along each ray segment.
+/// How fog thickens with the fog distance `d`.
+///
+/// For every law but [`FogMode::Linear`], `d` is the length of the ray
+/// path. For [`FogMode::Linear`] it is **eye-space depth**: a segment along
+/// the camera ray's own line (the camera ray and its unbent continuations
+/// through transparent surfaces) counts its length times the cosine to the
+/// camera's view axis, so that the point it reaches counts by its depth
+/// `z`; a segment in any other direction (a reflection, a bent refraction)
+/// counts its full length. A surface seen directly is fogged by its depth,
+/// one seen in a mirror by the mirror's depth plus the reflected path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FogMode {
-    /// The report's fog: weight `(d − start) / (end − start)`, clamped to `[0, 1]`.
+    /// The report's fog: weight `(z − start) / (end − start)`, clamped to
+    /// `[0, 1]`, on eye-space depth `z` (see above): a wall facing the
+    /// camera is evenly fogged.
     Linear {
+        /// Depth where fog begins.
+        start: f32,
+        /// Depth where fog is total.
+        end: f32,
+    },
+    /// [`FogMode::Linear`]'s law on the length of the ray path instead of
+    /// depth (`measure = "distance"`): a wall facing the camera gets more
+    /// fog toward its corners.
+    LinearDistance {
         /// Distance where fog begins.
         start: f32,
         /// Distance where fog is total.
@@ -46,7 +67,7 @@ impl FogMode {
     #[must_use]
     pub fn weight(&self, d: f32) -> f32 {
         let w = match *self {
-            FogMode::Linear { start, end } => {
+            FogMode::Linear { start, end } | FogMode::LinearDistance { start, end } => {
                 if end > start {
                     (d - start) / (end - start)
                 } else if d >= start {
@@ -91,7 +112,7 @@ impl FogMode {
                 (-(b * b - a * a)).exp()
             }
             FogMode::Exponential { .. } | FogMode::ExponentialSquared { .. } => 1.0,
-            FogMode::Linear { .. } => {
+            FogMode::Linear { .. } | FogMode::LinearDistance { .. } => {
                 let left = if a > 0.0 { 1.0 - self.weight(a) } else { 1.0 };
                 if left > 0.0 { (1.0 - self.weight(b)) / left } else { 0.0 }
             }
@@ -118,6 +139,13 @@ pub struct Fog {
 }
 
 impl Fog {
+    /// Whether the fog distance is eye-space depth ([`FogMode::Linear`])
+    /// rather than path length.
+    #[must_use]
+    pub fn by_depth(&self) -> bool {
+        matches!(self.mode, FogMode::Linear { .. })
+    }
+
     /// Checks parameters.
     ///
     /// # Errors
@@ -129,7 +157,7 @@ impl Fog {
             return Err(ShadeError::Scene(format!("fog colour must be finite and >= 0, got {}", self.color)));
         }
         match self.mode {
-            FogMode::Linear { start, end } => {
+            FogMode::Linear { start, end } | FogMode::LinearDistance { start, end } => {
                 if !(start.is_finite() && end.is_finite() && end > start) {
                     return Err(ShadeError::Scene(format!(
                         "linear fog needs finite start < end, got start {start}, end {end}"
@@ -253,6 +281,24 @@ impl Scene {
             .unwrap_or(&MISSING_MATERIAL)
     }
 
+    /// Whether object `object` is a closed solid, so that a ray leaving it
+    /// through a back face was inside it: an analytic solid
+    /// ([`Object::is_closed`]) or an instance of a mesh found closed
+    /// (watertight and consistently oriented) when it was built,
+    /// [`prism_geometry::TriangleMesh::is_closed`]. Closed objects are
+    /// shaded once where a ray passes through them and dim a shadow once.
+    #[inline]
+    #[must_use]
+    pub fn is_closed(&self, object: u32) -> bool {
+        match self.accel.objects().get(object as usize) {
+            Some(Object::Mesh { mesh, .. }) => {
+                self.accel.meshes().get(*mesh as usize).is_some_and(|m| m.is_closed())
+            }
+            Some(o) => o.is_closed(),
+            None => false,
+        }
+    }
+
     /// The world-to-object map of object `object` (identity if none).
     #[inline]
     #[must_use]
@@ -264,6 +310,35 @@ impl Scene {
         }
     }
 
+    /// The world-to-texture map of object `object` for `texture`:
+    /// [`Scene::to_object`], except under [`crate::Mapping::Cylindrical`],
+    /// where the object's own height (its object-space bounds, `y` from
+    /// `min` to `max`) is then scaled to `[0, 1]`, so that the image covers
+    /// the object from bottom to top. Unbounded objects (planes) keep their
+    /// object-space `y`.
+    #[must_use]
+    pub fn texture_to_object(&self, object: u32, texture: &crate::Texture) -> Affine3A {
+        let to_object = self.to_object(object);
+        if !matches!(texture, crate::Texture::Image { mapping: crate::Mapping::Cylindrical, .. }) {
+            return to_object;
+        }
+        let bounds = match self.accel.objects().get(object as usize) {
+            Some(Object::Shape(inst)) => inst.shape.bounds(),
+            Some(Object::Mesh { mesh, .. }) => match self.accel.meshes().get(*mesh as usize) {
+                Some(m) => m.bounds(),
+                None => return to_object,
+            },
+            None => return to_object,
+        };
+        let (lo, height) = (bounds.min.y, bounds.max.y - bounds.min.y);
+        if !(lo.is_finite() && height.is_finite() && height > 0.0) {
+            return to_object;
+        }
+        let scale = Affine3A::from_scale(Vec3::new(1.0, 1.0 / height, 1.0))
+            * Affine3A::from_translation(Vec3::new(0.0, -lo, 0.0));
+        scale * to_object
+    }
+
     /// The surface colour (albedo, linear) at a hit: the material's texture
     /// evaluated there. Also what an albedo AOV shows.
     #[must_use]
@@ -271,7 +346,7 @@ impl Scene {
         let m = self.material_of(hit.object);
         match &m.texture {
             crate::Texture::Solid(c) => *c,
-            t => t.color_at(hit.hit.point, hit.hit.uv, &self.to_object(hit.object)),
+            t => t.color_at(hit.hit.point, hit.hit.uv, &self.texture_to_object(hit.object, t)),
         }
     }
 }
@@ -311,6 +386,13 @@ mod tests {
             assert!((product - (1.0 - mode.weight(13.0))).abs() < 1e-5, "{mode:?}");
             assert_eq!(mode.transmittance(0.0, f32::INFINITY), 0.0);
             assert_eq!(mode.transmittance(5.0, 5.0), 1.0);
+        }
+        // The distance law is the depth law's formula.
+        let (lin, dist) =
+            (FogMode::Linear { start: 2.0, end: 6.0 }, FogMode::LinearDistance { start: 2.0, end: 6.0 });
+        for d in [0.0, 2.5, 4.0, 7.0] {
+            assert_eq!(lin.weight(d), dist.weight(d));
+            assert_eq!(lin.transmittance(1.0, d), dist.transmittance(1.0, d));
         }
         // Past the end of linear fog nothing gets through, without 0/0.
         let lin = FogMode::Linear { start: 0.0, end: 1.0 };

@@ -2,8 +2,7 @@
 
 use crate::ShadeError;
 use prism_geometry::glam::{Affine3A, Vec2, Vec3};
-use prism_geometry::sphere_uv;
-use std::f32::consts::PI;
+use prism_geometry::{azimuth_u, sphere_uv};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -23,9 +22,13 @@ pub enum Mapping {
     /// `p`: the report's `u = 0.5 + atan2(d.z, d.x) / 2π`,
     /// `v = 0.5 − asin(d.y) / π` with `d = p / |p|`.
     Spherical,
-    /// Cylindrical about the object's Y axis: `u = 0.5 + atan2(p.z, p.x) / 2π`
-    /// (the angle), `v = 1 − p.y` (the height, so that the image stands
-    /// upright over `y` in `[0, 1]`).
+    /// Cylindrical about the object's Y axis: `u` =
+    /// [`prism_geometry::azimuth_u`] of `p` (the angle: 0.5 at +Z, growing
+    /// toward +X, seam at −Z, as on spheres), `v = 1 − p.y` (the height, so
+    /// that the image stands upright). The renderer passes a point whose
+    /// `y` is scaled so that the object's own height spans `[0, 1]`
+    /// ([`crate::Scene::texture_to_object`]): the image covers the object
+    /// from bottom to top.
     Cylindrical,
     /// Planar: `(u, v) = (p.x, p.z)` of the object-space point.
     Planar,
@@ -81,7 +84,7 @@ impl Mapping {
         match self {
             Mapping::Uv => uv,
             Mapping::Spherical => sphere_uv(p.normalize_or(Vec3::Y)),
-            Mapping::Cylindrical => Vec2::new(0.5 + p.z.atan2(p.x) / (2.0 * PI), 1.0 - p.y),
+            Mapping::Cylindrical => Vec2::new(azimuth_u(p), 1.0 - p.y),
             Mapping::Planar => Vec2::new(p.x, p.z),
         }
     }
@@ -358,11 +361,11 @@ mod tests {
         assert_eq!(Mapping::Uv.uv(uv, Vec3::ONE), uv);
         assert_eq!(Mapping::Planar.uv(uv, Vec3::new(2.0, 5.0, -3.0)), Vec2::new(2.0, -3.0));
         let c = Mapping::Cylindrical.uv(uv, Vec3::new(0.0, 0.25, 2.0));
-        assert!((c - Vec2::new(0.75, 0.75)).length() < 1e-6);
+        assert!((c - Vec2::new(0.5, 0.75)).length() < 1e-6);
         let s = Mapping::Spherical.uv(uv, Vec3::new(0.0, 3.0, 0.0));
         assert!((s - Vec2::new(0.5, 0.0)).length() < 1e-6);
         let s = Mapping::Spherical.uv(uv, Vec3::new(-2.0, 0.0, 0.0));
-        assert!((s.y - 0.5).abs() < 1e-6 && (s.x - 1.0).abs() < 1e-6);
+        assert!((s.y - 0.5).abs() < 1e-6 && (s.x - 0.25).abs() < 1e-6);
         // The centre itself maps somewhere finite.
         assert!(Mapping::Spherical.uv(uv, Vec3::ZERO).is_finite());
     }

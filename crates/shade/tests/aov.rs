@@ -224,8 +224,9 @@ fn textured_sphere_albedo_is_the_texture_lookup() {
             }
             let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
             let n = (ray.origin + ray.dir * d).normalize();
-            // The report's equations 7 and 8.
-            let u = 0.5 + n.z.atan2(n.x) / (2.0 * PI);
+            // Azimuth from +Z growing toward +X (docs/scene-format.md), and
+            // the report's equation 8.
+            let u = 0.5 + n.x.atan2(n.z) / (2.0 * PI);
             let v = 0.5 - n.y.asin() / PI;
             let want = image.sample(Vec2::new(u, v)) * tint;
             assert_close(got, want, 2e-3);

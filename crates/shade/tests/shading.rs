@@ -127,6 +127,23 @@ fn clear_glass_sphere_casts_no_shadow_and_tinted_glass_a_tinted_one() {
 }
 
 #[test]
+fn absorbing_glass_casts_a_shadow_tinted_by_beer_lambert() {
+    // White glass that absorbs red and blue: the light's path through the
+    // sphere is its diameter, 0.6 (the segment passes through the centre).
+    let absorption = Vec3::new(3.0, 0.2, 3.0);
+    let green = Material { absorption, ..glass(1.5) };
+    let (shadow, _) = floor_under(sphere(Vec3::new(2.0, 2.0, 0.0), 0.3), green.clone());
+    assert_close(shadow, (-absorption * 0.6).exp(), 1e-4);
+    assert!(shadow.y > 3.0 * shadow.x, "a green shadow: {shadow}");
+    // A box across the segment: the path inside is the box's chord. The
+    // segment (t, t, 0) crosses x = 1.5..2.5 and y = 1.8..2.2: t from 1.8
+    // to 2.2, length 0.4·√2.
+    let slab = cuboid(Vec3::new(1.5, 1.8, -0.5), Vec3::new(2.5, 2.2, 0.5));
+    let (shadow, _) = floor_under(slab, green);
+    assert_close(shadow, (-absorption * 0.4 * 2f32.sqrt()).exp(), 1e-4);
+}
+
+#[test]
 fn open_surfaces_count_every_crossing() {
     // A transparent disk across the segment: one crossing.
     let disk = Disk::new(Vec3::new(2.0, 2.0, 0.0), Vec3::new(1.0, 1.0, 0.0), 0.5).expect("valid disk");
@@ -332,7 +349,7 @@ fn fog_covers_misses_and_reflected_segments() {
 }
 
 #[test]
-fn sphere_texture_follows_the_reports_formula() {
+fn sphere_texture_follows_the_documented_formula() {
     let image = distinct_texture();
     let tex = |mapping| Texture::Image {
         image: image.clone(),
@@ -350,7 +367,7 @@ fn sphere_texture_follows_the_reports_formula() {
             let ray = cam.ray(i as f32 + 0.5, j as f32 + 0.5);
             let Some(t) = sphere_t(ray.origin, ray.dir, Vec3::ZERO, 1.0) else { continue };
             let d = ray.at(t).normalize();
-            let u = 0.5 + d.z.atan2(d.x) / (2.0 * std::f32::consts::PI);
+            let u = 0.5 + d.x.atan2(d.z) / (2.0 * std::f32::consts::PI);
             let v = 0.5 - d.y.asin() / std::f32::consts::PI;
             let want = image.sample(prism_geometry::glam::Vec2::new(u, v));
             assert_close(px(&img, i, j), want, 2e-3);

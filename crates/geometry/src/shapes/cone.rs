@@ -1,6 +1,7 @@
 //! Finite cones with a base cap.
 
-use super::upright::{Part, Upright, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
+use super::azimuth_u;
+use super::upright::{Part, Upright, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -16,8 +17,9 @@ use glam::{Vec2, Vec3};
 /// below the apex is `(radial + k·Y) / √(1 + k²)` with `k = radius / height`
 /// (at the apex itself, `+Y`).
 ///
-/// uv: on the side, `u = 0.5 + atan2(z, x) / 2π`, `v = (y − base.y) / height`;
-/// on the cap as [`crate::Cylinder`]'s caps, `((x / r + 1) / 2, (z / r + 1) / 2)`.
+/// uv: on the side, `u` = [`crate::azimuth_u`], `v = 1 − (y − base.y) / height`
+/// (the image's top row at the apex); on the base cap as
+/// [`crate::Cylinder`]'s bottom cap, `((x / r + 1) / 2, (1 − z / r) / 2)`.
 /// The side is accepted up to `1e-6 · height` below the base so that a ray
 /// through the rim cannot slip between the side and cap tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,9 +115,9 @@ impl Intersect for Cone {
                     Some(radial) => (radial + k * Vec3::Y) / (1.0 + k2).sqrt(),
                     None => Vec3::Y,
                 };
-                (Vec3::new(rel.x, y, rel.z), n, Vec2::new(azimuth_u(radial), y / h))
+                (Vec3::new(rel.x, y, rel.z), n, Vec2::new(azimuth_u(radial), 1.0 - y / h))
             }
-            Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r)),
+            Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r, false)),
         };
         Some(Hit::new(t, self.0.base + rel, n, uv, d))
     }
@@ -143,9 +145,9 @@ mod tests {
     fn side_from_outside() {
         // At y = 1 the radius is 1/2.
         let h = cone().intersect(&Ray::new(Vec3::new(5.0, 1.0, 0.0), Vec3::NEG_X)).unwrap();
-        check_hit(&h, 4.5, Vec3::new(0.5, 1.0, 0.0), side_normal(1.0, 0.0), Vec2::new(0.5, 0.5), true);
+        check_hit(&h, 4.5, Vec3::new(0.5, 1.0, 0.0), side_normal(1.0, 0.0), Vec2::new(0.75, 0.5), true);
         let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, -4.0), Vec3::Z)).unwrap();
-        check_hit(&h, 3.25, Vec3::new(0.0, 0.5, -0.75), side_normal(0.0, -1.0), Vec2::new(0.25, 0.25), true);
+        check_hit(&h, 3.25, Vec3::new(0.0, 0.5, -0.75), side_normal(0.0, -1.0), Vec2::new(1.0, 0.75), true);
     }
 
     #[test]
@@ -157,17 +159,17 @@ mod tests {
     #[test]
     fn from_inside() {
         let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::X)).unwrap();
-        check_hit(&h, 0.75, Vec3::new(0.75, 0.5, 0.0), side_normal(1.0, 0.0), Vec2::new(0.5, 0.25), false);
+        check_hit(&h, 0.75, Vec3::new(0.75, 0.5, 0.0), side_normal(1.0, 0.0), Vec2::new(0.75, 0.75), false);
         let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::NEG_Y)).unwrap();
         check_hit(&h, 0.5, Vec3::ZERO, Vec3::NEG_Y, Vec2::new(0.5, 0.5), false);
         let h = cone().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::Y)).unwrap();
-        check_hit(&h, 1.5, Vec3::new(0.0, 2.0, 0.0), Vec3::Y, Vec2::new(0.5, 1.0), false);
+        check_hit(&h, 1.5, Vec3::new(0.0, 2.0, 0.0), Vec3::Y, Vec2::new(0.5, 0.0), false);
     }
 
     #[test]
     fn along_the_axis_hits_the_apex() {
         let h = cone().intersect(&Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
-        check_hit(&h, 3.0, Vec3::new(0.0, 2.0, 0.0), Vec3::Y, Vec2::new(0.5, 1.0), true);
+        check_hit(&h, 3.0, Vec3::new(0.0, 2.0, 0.0), Vec3::Y, Vec2::new(0.5, 0.0), true);
         // Another base position and height, where rounding differs.
         let c = Cone::new(Vec3::new(0.3, -0.7, 1.1), 0.7, 1.3).unwrap();
         let h = c.intersect(&Ray::new(Vec3::new(0.3, 3.0, 1.1), Vec3::NEG_Y)).unwrap();
@@ -200,14 +202,14 @@ mod tests {
         assert!(c.intersect(&Ray::new(Vec3::new(5.0, 3.0, 0.0), Vec3::NEG_X)).is_none());
         // Down, off-axis: skips the upper nappe at y = 2.2, hits the lower at 1.8.
         let h = c.intersect(&Ray::new(Vec3::new(0.1, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
-        check_hit(&h, 3.2, Vec3::new(0.1, 1.8, 0.0), side_normal(1.0, 0.0), Vec2::new(0.5, 0.9), true);
+        check_hit(&h, 3.2, Vec3::new(0.1, 1.8, 0.0), side_normal(1.0, 0.0), Vec2::new(0.75, 0.1), true);
     }
 
     #[test]
     fn parallel_to_a_generator() {
         // Direction (1/2, −1, 0) makes the quadratic linear (a = 0).
         let h = cone().intersect(&Ray::new(Vec3::new(-1.0, 2.0, 0.0), Vec3::new(0.5, -1.0, 0.0))).unwrap();
-        check_hit(&h, 1.0, Vec3::new(-0.5, 1.0, 0.0), side_normal(-1.0, 0.0), Vec2::new(1.0, 0.5), true);
+        check_hit(&h, 1.0, Vec3::new(-0.5, 1.0, 0.0), side_normal(-1.0, 0.0), Vec2::new(0.25, 0.5), true);
     }
 
     #[test]

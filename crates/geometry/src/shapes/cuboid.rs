@@ -6,9 +6,14 @@ use glam::{Vec2, Vec3};
 /// A solid box `[min, max]`, axis-aligned in its object space; rotate or
 /// shear it with a [`crate::Transform`].
 ///
-/// uv: on each face, the two in-face coordinates normalised to `[0, 1]`,
-/// in axis order (the face normal to X uses `(y, z)`, to Y `(x, z)`, to Z
-/// `(x, y)`).
+/// uv: on each face, the two in-face coordinates normalised to `[0, 1]`
+/// (`rel = (p − min) / (max − min)`), oriented so that an image seen from
+/// outside reads as in an image viewer: on the four side faces the image's
+/// top is at +Y and it is not mirrored (+Z: `(x, 1 − y)`, −Z: `(1 − x, 1 − y)`,
+/// +X: `(1 − z, 1 − y)`, −X: `(z, 1 − y)`); the top face (+Y) is `(x, z)`,
+/// its image's top toward −Z, and the bottom face (−Y) is `(x, 1 − z)`, its
+/// image's top toward +Z, so that both continue the front (+Z) face as in a
+/// cross-shaped unfolding.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cuboid {
     min: Vec3,
@@ -59,10 +64,13 @@ impl Cuboid {
         let mut n = Vec3::ZERO;
         n[axis] = if positive { 1.0 } else { -1.0 };
         let rel = (p - self.min) / (self.max - self.min);
-        let uv = match axis {
-            0 => Vec2::new(rel.y, rel.z),
-            1 => Vec2::new(rel.x, rel.z),
-            _ => Vec2::new(rel.x, rel.y),
+        let uv = match (axis, positive) {
+            (0, true) => Vec2::new(1.0 - rel.z, 1.0 - rel.y),
+            (0, false) => Vec2::new(rel.z, 1.0 - rel.y),
+            (1, true) => Vec2::new(rel.x, rel.z),
+            (1, false) => Vec2::new(rel.x, 1.0 - rel.z),
+            (_, true) => Vec2::new(rel.x, 1.0 - rel.y),
+            (_, false) => Vec2::new(1.0 - rel.x, 1.0 - rel.y),
         };
         Hit::new(t, p, n, uv, ray.dir)
     }
@@ -141,9 +149,9 @@ mod tests {
     fn hit_from_outside_on_each_axis() {
         let c = cube();
         let h = c.intersect(&Ray::new(Vec3::new(0.5, -0.5, 5.0), Vec3::NEG_Z)).unwrap();
-        check_hit(&h, 4.0, Vec3::new(0.5, -0.5, 1.0), Vec3::Z, Vec2::new(0.75, 0.25), true);
+        check_hit(&h, 4.0, Vec3::new(0.5, -0.5, 1.0), Vec3::Z, Vec2::new(0.75, 0.75), true);
         let h = c.intersect(&Ray::new(Vec3::new(-3.0, 0.5, 0.0), Vec3::new(2.0, 0.0, 0.0))).unwrap();
-        check_hit(&h, 1.0, Vec3::new(-1.0, 0.5, 0.0), Vec3::NEG_X, Vec2::new(0.75, 0.5), true);
+        check_hit(&h, 1.0, Vec3::new(-1.0, 0.5, 0.0), Vec3::NEG_X, Vec2::new(0.5, 0.25), true);
         let h = c.intersect(&Ray::new(Vec3::new(0.0, 4.0, -0.5), Vec3::NEG_Y)).unwrap();
         check_hit(&h, 3.0, Vec3::new(0.0, 1.0, -0.5), Vec3::Y, Vec2::new(0.5, 0.25), true);
     }
@@ -151,7 +159,7 @@ mod tests {
     #[test]
     fn hit_from_inside_is_the_exit_face() {
         let h = cube().intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), Vec3::X)).unwrap();
-        check_hit(&h, 1.0, Vec3::new(1.0, 0.5, 0.0), Vec3::X, Vec2::new(0.75, 0.5), false);
+        check_hit(&h, 1.0, Vec3::new(1.0, 0.5, 0.0), Vec3::X, Vec2::new(0.5, 0.25), false);
         let h = cube().intersect(&Ray::new(Vec3::ZERO, Vec3::new(0.0, -1.0, -1.0))).unwrap();
         close(h.t, 1.0, 1e-6);
         close3(h.point, Vec3::new(0.0, -1.0, -1.0), 1e-6);
@@ -162,14 +170,14 @@ mod tests {
     fn oblique_hit() {
         // From (3, 2, 0) along (−1, −0.5, 0): reaches x = 1 at t = 2, y = 1 (an edge).
         let h = cube().intersect(&Ray::new(Vec3::new(3.0, 1.5, 0.25), Vec3::new(-1.0, -0.25, 0.0))).unwrap();
-        check_hit(&h, 2.0, Vec3::new(1.0, 1.0, 0.25), Vec3::X, Vec2::new(1.0, 0.625), true);
+        check_hit(&h, 2.0, Vec3::new(1.0, 1.0, 0.25), Vec3::X, Vec2::new(0.375, 0.0), true);
     }
 
     #[test]
     fn grazing_along_a_face_and_corner() {
         // In the plane of the top face (zero y component): enters at the x = −1 face.
         let h = cube().intersect(&Ray::new(Vec3::new(-5.0, 1.0, 0.0), Vec3::X)).unwrap();
-        check_hit(&h, 4.0, Vec3::new(-1.0, 1.0, 0.0), Vec3::NEG_X, Vec2::new(1.0, 0.5), true);
+        check_hit(&h, 4.0, Vec3::new(-1.0, 1.0, 0.0), Vec3::NEG_X, Vec2::new(0.5, 0.0), true);
         // Straight at a corner.
         let h = cube().intersect(&Ray::new(Vec3::splat(5.0), Vec3::splat(-1.0))).unwrap();
         close(h.t, 4.0, 1e-6);

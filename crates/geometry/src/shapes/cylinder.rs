@@ -1,6 +1,7 @@
 //! Finite cylinders with both caps.
 
-use super::upright::{Part, Upright, azimuth_u, cap_t, cap_uv, keep, roots_from_disc, side_t};
+use super::azimuth_u;
+use super::upright::{Part, Upright, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -9,11 +10,13 @@ use glam::{Vec2, Vec3};
 /// `(x − base.x)² + (z − base.z)² = radius²` for `base.y ≤ y ≤ base.y +
 /// height`, the caps the disks of that radius at both ends.
 ///
-/// uv: on the side, `u = 0.5 + atan2(z, x) / 2π` about the axis and
-/// `v = (y − base.y) / height`; on a cap, `((x / r + 1) / 2, (z / r + 1) / 2)`
-/// with `x, z` relative to the axis. All of `u`, `v` lie in `[0, 1]`; `u`
-/// grows from the seam at −X through −Z (`u = 0.25`), +X (`0.5`) and +Z
-/// (`0.75`), as on [`crate::Sphere`].
+/// uv: on the side, `u` = [`crate::azimuth_u`] about the axis (0.5 at +Z,
+/// growing toward +X, seam at −Z, as on [`crate::Sphere`]) and
+/// `v = 1 − (y − base.y) / height` (the image's top row at the top); on the
+/// top cap `((x / r + 1) / 2, (z / r + 1) / 2)` (image top toward −Z), on
+/// the bottom cap `((x / r + 1) / 2, (1 − z / r) / 2)` (image top toward
+/// +Z), with `x, z` relative to the axis. All of `u`, `v` lie in `[0, 1]`,
+/// and an image seen from outside reads as in an image viewer.
 ///
 /// The side is accepted up to `1e-6 · height` beyond either cap so that a
 /// ray through the rim cannot slip between the side and cap tests.
@@ -95,10 +98,10 @@ impl Intersect for Cylinder {
             Part::Side => {
                 let radial = Vec3::new(rel.x, 0.0, rel.z).normalize_or(Vec3::X);
                 let p = Vec3::new(radial.x * r, rel.y.clamp(0.0, h), radial.z * r);
-                (p, radial, Vec2::new(azimuth_u(radial), p.y / h))
+                (p, radial, Vec2::new(azimuth_u(radial), 1.0 - p.y / h))
             }
-            Part::Bottom => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r)),
-            Part::Top => (Vec3::new(rel.x, h, rel.z), Vec3::Y, cap_uv(rel, r)),
+            Part::Bottom => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r, false)),
+            Part::Top => (Vec3::new(rel.x, h, rel.z), Vec3::Y, cap_uv(rel, r, true)),
         };
         Some(Hit::new(t, self.0.base + rel, n, uv, d))
     }
@@ -121,9 +124,9 @@ mod tests {
     #[test]
     fn side_from_outside() {
         let h = cyl().intersect(&Ray::new(Vec3::new(5.0, 0.0, 0.0), Vec3::NEG_X)).unwrap();
-        check_hit(&h, 4.0, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.5, 0.5), true);
+        check_hit(&h, 4.0, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.75, 0.5), true);
         let h = cyl().intersect(&Ray::new(Vec3::new(0.0, 0.5, 3.0), Vec3::NEG_Z)).unwrap();
-        check_hit(&h, 2.0, Vec3::new(0.0, 0.5, 1.0), Vec3::Z, Vec2::new(0.75, 0.75), true);
+        check_hit(&h, 2.0, Vec3::new(0.0, 0.5, 1.0), Vec3::Z, Vec2::new(0.5, 0.25), true);
     }
 
     #[test]
@@ -131,18 +134,18 @@ mod tests {
         let h = cyl().intersect(&Ray::new(Vec3::new(0.5, 5.0, 0.0), Vec3::NEG_Y)).unwrap();
         check_hit(&h, 4.0, Vec3::new(0.5, 1.0, 0.0), Vec3::Y, Vec2::new(0.75, 0.5), true);
         let h = cyl().intersect(&Ray::new(Vec3::new(0.0, -3.0, -0.5), Vec3::Y)).unwrap();
-        check_hit(&h, 2.0, Vec3::new(0.0, -1.0, -0.5), Vec3::NEG_Y, Vec2::new(0.5, 0.25), true);
+        check_hit(&h, 2.0, Vec3::new(0.0, -1.0, -0.5), Vec3::NEG_Y, Vec2::new(0.5, 0.75), true);
     }
 
     #[test]
     fn from_inside() {
         let h = cyl().intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
-        check_hit(&h, 1.0, Vec3::new(0.0, 0.0, 1.0), Vec3::Z, Vec2::new(0.75, 0.5), false);
+        check_hit(&h, 1.0, Vec3::new(0.0, 0.0, 1.0), Vec3::Z, Vec2::new(0.5, 0.5), false);
         let h = cyl().intersect(&Ray::new(Vec3::ZERO, Vec3::Y)).unwrap();
         check_hit(&h, 1.0, Vec3::new(0.0, 1.0, 0.0), Vec3::Y, Vec2::new(0.5, 0.5), false);
         // Diagonal from inside out through the side, below the top.
         let h = cyl().intersect(&Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.5, 0.0))).unwrap();
-        check_hit(&h, 1.0, Vec3::new(1.0, 0.5, 0.0), Vec3::X, Vec2::new(0.5, 0.75), false);
+        check_hit(&h, 1.0, Vec3::new(1.0, 0.5, 0.0), Vec3::X, Vec2::new(0.75, 0.25), false);
     }
 
     #[test]
@@ -153,7 +156,7 @@ mod tests {
         check_hit(&h, 1.5, Vec3::new(0.0, 1.0, 0.0), Vec3::Y, Vec2::new(0.5, 0.5), true);
         let inside = Ray::with_interval(Vec3::new(-1.5, 2.5, 0.0), Vec3::new(1.0, -1.0, 0.0), 1.6, f32::MAX);
         let h = cyl().intersect(&inside).unwrap();
-        check_hit(&h, 2.5, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.5, 0.5), false);
+        check_hit(&h, 2.5, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.75, 0.5), false);
     }
 
     #[test]
@@ -170,7 +173,7 @@ mod tests {
     #[test]
     fn grazing_the_side() {
         let h = cyl().intersect(&Ray::new(Vec3::new(1.0, 0.0, -5.0), Vec3::Z)).unwrap();
-        check_hit(&h, 5.0, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.5, 0.5), false);
+        check_hit(&h, 5.0, Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec2::new(0.75, 0.5), false);
         assert!(cyl().intersect(&Ray::new(Vec3::new(1.000_001, 0.0, -5.0), Vec3::Z)).is_none());
     }
 

@@ -14,7 +14,7 @@ pub use cuboid::Cuboid;
 pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use plane::Plane;
-pub use sphere::{Sphere, sphere_uv};
+pub use sphere::{Sphere, azimuth_u, sphere_uv};
 pub use triangle::{Triangle, TriangleRay};
 
 use crate::{GeometryError, Ray};

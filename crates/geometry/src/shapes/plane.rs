@@ -7,9 +7,12 @@ use glam::{Vec2, Vec3};
 /// An infinite plane through `point` with unit normal `normal`.
 ///
 /// uv: world-unit coordinates along two tangent axes: `u` along
-/// [`Plane::tangent`], `v` along `normal × tangent`, measured from `point`.
+/// [`Plane::tangent`], `v` along `tangent × normal`, measured from `point`,
+/// so that an image seen from the normal's side is not mirrored.
 /// The tangent is +X projected onto the plane (+Z when the normal is near
-/// ±X), so for a floor with `normal = +Y`, `u` runs along +X and `v` along −Z.
+/// ±X), so for a floor with `normal = +Y`, `u` runs along +X and `v` along
+/// +Z (the image's top toward −Z), and for a wall facing +Z, `u` runs along
+/// +X and `v` along −Y (the image's top up).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
     point: Vec3,
@@ -31,7 +34,7 @@ impl Plane {
         // Tangent: +X projected onto the plane, or +Z when the normal is ~X.
         let seed = if normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Z };
         let tangent = (seed - normal * normal.dot(seed)).normalize();
-        let bitangent = normal.cross(tangent);
+        let bitangent = tangent.cross(normal);
         Ok(Self { point, normal, tangent, bitangent })
     }
 
@@ -92,13 +95,13 @@ mod tests {
     fn hit_from_above_with_world_unit_uv() {
         let h = floor().intersect(&Ray::new(Vec3::new(1.0, 2.0, 3.0), Vec3::NEG_Y)).unwrap();
         // u along +X, v along −Z.
-        check_hit(&h, 2.0, Vec3::new(1.0, 0.0, 3.0), Vec3::Y, Vec2::new(1.0, -3.0), true);
+        check_hit(&h, 2.0, Vec3::new(1.0, 0.0, 3.0), Vec3::Y, Vec2::new(1.0, 3.0), true);
     }
 
     #[test]
     fn hit_from_below_keeps_the_declared_normal() {
         let h = floor().intersect(&Ray::new(Vec3::new(0.0, -2.0, 0.0), Vec3::new(0.0, 1.0, -1.0))).unwrap();
-        check_hit(&h, 2.0, Vec3::new(0.0, 0.0, -2.0), Vec3::Y, Vec2::new(0.0, 2.0), false);
+        check_hit(&h, 2.0, Vec3::new(0.0, 0.0, -2.0), Vec3::Y, Vec2::new(0.0, -2.0), false);
     }
 
     #[test]
@@ -113,13 +116,13 @@ mod tests {
     fn tilted_plane_and_tangent_frame() {
         let p = Plane::new(Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
         let h = p.intersect(&Ray::new(Vec3::new(0.5, 0.25, 0.0), Vec3::NEG_Z)).unwrap();
-        check_hit(&h, 2.0, Vec3::new(0.5, 0.25, -2.0), Vec3::Z, Vec2::new(0.5, 0.25), true);
+        check_hit(&h, 2.0, Vec3::new(0.5, 0.25, -2.0), Vec3::Z, Vec2::new(0.5, -0.25), true);
         // Normal near ±X: the tangent falls back to +Z; the frame is orthonormal.
         let side = Plane::new(Vec3::ZERO, Vec3::NEG_X).unwrap();
         close3(side.tangent(), Vec3::Z, 1e-6);
         let h = side.intersect(&Ray::new(Vec3::new(-1.0, 2.0, 3.0), Vec3::X)).unwrap();
         // The ray comes from −X, the side the normal points to.
-        check_hit(&h, 1.0, Vec3::new(0.0, 2.0, 3.0), Vec3::NEG_X, Vec2::new(3.0, 2.0), true);
+        check_hit(&h, 1.0, Vec3::new(0.0, 2.0, 3.0), Vec3::NEG_X, Vec2::new(3.0, -2.0), true);
     }
 
     #[test]

@@ -7,22 +7,34 @@ use std::f32::consts::PI;
 
 /// A sphere.
 ///
-/// uv: with `d` the unit outward normal, `u = 0.5 + atan2(d.z, d.x) / 2π`,
-/// `v = 0.5 − asin(d.y) / π` (the report's equations 7 and 8): `v = 0` at
-/// the north pole (+Y), `v = 1` at the south pole.
+/// uv: with `d` the unit outward normal, `u = 0.5 + atan2(d.x, d.z) / 2π`,
+/// `v = 0.5 − asin(d.y) / π` ([`sphere_uv`]): `v = 0` at the north pole
+/// (+Y), `v = 1` at the south pole; `u = 0.5` faces +Z (the default
+/// camera), and `u` grows eastward, toward +X seen from +Z, so that an
+/// image seen from outside reads as in an image viewer (an Earth map
+/// makes a globe, not its mirror image). The seam `u = 0 | 1` faces −Z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
     center: Vec3,
     radius: f32,
 }
 
-/// The spherical mapping of a unit direction `d` to `(u, v)`:
-/// `u = 0.5 + atan2(d.z, d.x) / 2π`, `v = 0.5 − asin(d.y) / π` (the
-/// report's equations 7 and 8; `d.y` is clamped to `[−1, 1]`).
+/// The azimuth of `d` about the Y axis as `u` in `[0, 1]`:
+/// `0.5 + atan2(d.x, d.z) / 2π`. It is 0.5 at +Z, 0.75 at +X, 0.25 at −X,
+/// and 0 or 1 at the seam, −Z; seen from outside (from +Y's side, looking
+/// at the axis) it grows to the right.
+#[inline]
+#[must_use]
+pub fn azimuth_u(d: Vec3) -> f32 {
+    0.5 + d.x.atan2(d.z) / (2.0 * PI)
+}
+
+/// The spherical mapping of a unit direction `d` to `(u, v)`: `u` is
+/// [`azimuth_u`], `v = 0.5 − asin(d.y) / π` (the report's equation 8).
 #[inline]
 #[must_use]
 pub fn sphere_uv(d: Vec3) -> Vec2 {
-    let u = 0.5 + d.z.atan2(d.x) / (2.0 * PI);
+    let u = azimuth_u(d);
     let v = 0.5 - d.y.clamp(-1.0, 1.0).asin() / PI;
     Vec2::new(u, v)
 }
@@ -108,8 +120,8 @@ mod tests {
     #[test]
     fn hit_from_outside_head_on() {
         let h = sphere().intersect(&Ray::new(Vec3::ZERO, Vec3::NEG_Z)).unwrap();
-        // d = +Z: u = 0.5 + atan2(1, 0)/2π = 0.75, v = 0.5.
-        check_hit(&h, 4.0, Vec3::new(0.0, 0.0, -4.0), Vec3::Z, Vec2::new(0.75, 0.5), true);
+        // d = +Z faces the default camera: u = 0.5 + atan2(0, 1)/2π = 0.5, v = 0.5.
+        check_hit(&h, 4.0, Vec3::new(0.0, 0.0, -4.0), Vec3::Z, Vec2::new(0.5, 0.5), true);
     }
 
     #[test]
@@ -121,21 +133,28 @@ mod tests {
     #[test]
     fn hit_from_inside_is_the_far_side_with_outward_normal() {
         let h = sphere().intersect(&Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::X)).unwrap();
-        check_hit(&h, 1.0, Vec3::new(1.0, 0.0, -5.0), Vec3::X, Vec2::new(0.5, 0.5), false);
+        check_hit(&h, 1.0, Vec3::new(1.0, 0.0, -5.0), Vec3::X, Vec2::new(0.75, 0.5), false);
     }
 
     #[test]
-    fn poles_and_seam_follow_the_report_mapping() {
+    fn poles_seam_and_east_are_where_documented() {
         let s = sphere();
         let top = s.intersect(&Ray::new(Vec3::new(0.0, 5.0, -5.0), Vec3::NEG_Y)).unwrap();
         check_hit(&top, 4.0, Vec3::new(0.0, 1.0, -5.0), Vec3::Y, Vec2::new(0.5, 0.0), true);
         let bottom = s.intersect(&Ray::new(Vec3::new(0.0, -5.0, -5.0), Vec3::Y)).unwrap();
         check_hit(&bottom, 4.0, Vec3::new(0.0, -1.0, -5.0), Vec3::NEG_Y, Vec2::new(0.5, 1.0), true);
-        // +X is u = 0.5, −Z is u = 0.25 (atan2(−1, 0) = −π/2).
+        // +X is u = 0.75, −X is 0.25, the seam −Z is 0 or 1 (atan2(0, −1) = π).
         let back = s.intersect(&Ray::new(Vec3::new(0.0, 0.0, -10.0), Vec3::Z)).unwrap();
-        check_hit(&back, 4.0, Vec3::new(0.0, 0.0, -6.0), Vec3::NEG_Z, Vec2::new(0.25, 0.5), true);
-        let u = sphere_uv(Vec3::new(-1.0, 0.0, 0.0)).x;
-        assert!(u == 1.0 || u == 0.0, "seam at −X, got {u}");
+        check_hit(&back, 4.0, Vec3::new(0.0, 0.0, -6.0), Vec3::NEG_Z, Vec2::new(1.0, 0.5), true);
+        assert_eq!(sphere_uv(Vec3::new(-1.0, 0.0, 0.0)).x, 0.25);
+        assert_eq!(sphere_uv(Vec3::X).x, 0.75);
+        // Seen from +Z, a step to the right (+X) is a step east (u grows):
+        // not mirrored.
+        let (a, b) = (
+            sphere_uv(Vec3::new(-0.1, 0.0, 1.0).normalize()),
+            sphere_uv(Vec3::new(0.1, 0.0, 1.0).normalize()),
+        );
+        assert!(b.x > a.x, "{a} {b}");
     }
 
     #[test]
@@ -158,7 +177,7 @@ mod tests {
         let s = sphere();
         assert!(s.intersect(&Ray::with_interval(Vec3::ZERO, Vec3::NEG_Z, 0.0, 3.9)).is_none());
         let far = s.intersect(&Ray::with_interval(Vec3::ZERO, Vec3::NEG_Z, 4.5, 100.0)).unwrap();
-        check_hit(&far, 6.0, Vec3::new(0.0, 0.0, -6.0), Vec3::NEG_Z, Vec2::new(0.25, 0.5), false);
+        check_hit(&far, 6.0, Vec3::new(0.0, 0.0, -6.0), Vec3::NEG_Z, Vec2::new(1.0, 0.5), false);
     }
 
     #[test]

@@ -5,7 +5,6 @@
 use super::{SEAL, check_finite, check_positive};
 use crate::{Aabb, GeometryError, Ray};
 use glam::{Vec2, Vec3};
-use std::f32::consts::PI;
 
 /// Candidate hit kept while testing the side and the caps.
 #[derive(Clone, Copy)]
@@ -38,16 +37,14 @@ pub(crate) fn cap_t(ray: &Ray, o: Vec3, y: f32, r: f32) -> Option<f32> {
     (x * x + z * z <= r * r).then_some(t)
 }
 
-/// uv on a cap of radius `r`, from the point relative to the axis.
+/// uv on a cap of radius `r`, from the point relative to the axis: seen
+/// from outside, the top cap's image has its top toward −Z, the bottom
+/// cap's toward +Z (each continues the side's `u = 0.5` column, as a box's
+/// top and bottom continue its front face).
 #[inline]
-pub(crate) fn cap_uv(rel: Vec3, r: f32) -> Vec2 {
-    Vec2::new((rel.x / r + 1.0) * 0.5, (rel.z / r + 1.0) * 0.5)
-}
-
-/// `u` about the Y axis, matching the sphere's convention.
-#[inline]
-pub(crate) fn azimuth_u(rel: Vec3) -> f32 {
-    0.5 + rel.z.atan2(rel.x) / (2.0 * PI)
+pub(crate) fn cap_uv(rel: Vec3, r: f32, top: bool) -> Vec2 {
+    let z = if top { rel.z } else { -rel.z };
+    Vec2::new((rel.x / r + 1.0) * 0.5, (z / r + 1.0) * 0.5)
 }
 
 /// Roots of `a t² + 2 hb t + c = 0` given its discriminant `hb² − a c`, in

@@ -44,6 +44,7 @@ fn triangle_obj(material_error: Option<&str>) -> Arc<ObjFile> {
         materials: Vec::new(),
         material_error: material_error.map(str::to_owned),
         mtl_files: Vec::new(),
+        warnings: Vec::new(),
     })
 }
 

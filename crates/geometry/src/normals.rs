@@ -1,0 +1,185 @@
+//! Computed vertex normals for meshes without them: welded by position,
+//! split at creases and between smoothing groups.
+
+use crate::mesh::weld_by_position;
+use crate::{GeometryError, TriangleMesh};
+use glam::{Vec2, Vec3};
+use std::collections::HashMap;
+
+/// The default crease angle in degrees: faces meeting at a sharper angle
+/// than this keep a hard edge.
+pub const DEFAULT_CREASE_DEG: f32 = 60.0;
+
+/// `mesh` with computed vertex normals.
+///
+/// Faces are taken to meet wherever their corners share a **position**
+/// (so that copies of a vertex split at uv seams, or repeated in the file,
+/// still join). The normal at a corner of face `f` is the mean of the
+/// normals, weighted by each face's angle at that corner (so that how a
+/// surface was cut into triangles does not tilt it), of the faces around that position which may be
+/// smoothed with `f`: those in the same smoothing group (`groups[f]`, one
+/// per face; group 0 is "off": such a face is flat) whose normal is within
+/// `crease_deg` degrees of `f`'s. Where corners of one vertex get
+/// different normals, the vertex is split (positions and uvs copied); the
+/// faces keep their order. Without `groups`, every face is in group 1.
+///
+/// # Errors
+/// [`GeometryError::InvalidMesh`] if `groups` does not have one entry per
+/// face.
+pub fn with_computed_normals(
+    mesh: &TriangleMesh,
+    groups: Option<&[u32]>,
+    crease_deg: f32,
+) -> Result<TriangleMesh, GeometryError> {
+    if let Some(g) = groups
+        && g.len() != mesh.len()
+    {
+        return Err(GeometryError::InvalidMesh(format!(
+            "{} smoothing groups for {} faces",
+            g.len(),
+            mesh.len()
+        )));
+    }
+    let group = |f: usize| groups.map_or(1, |g| g[f]);
+    let cos_crease = crease_deg.clamp(0.0, 180.0).to_radians().cos();
+    let positions = mesh.positions();
+    let indices = mesh.indices();
+    let id = weld_by_position(positions);
+    let unit: Vec<Vec3> = (0..mesh.len())
+        .map(|f| {
+            let [a, b, c] = mesh.triangle(f);
+            (b - a).cross(c - a).normalize_or_zero()
+        })
+        .collect();
+    // The angle of face `g` at its corner on welded position `w`.
+    let angle = |g: usize, w: usize| {
+        let t = indices[g];
+        let c = (0..3).find(|&j| id[t[j] as usize] as usize == w).unwrap_or(0);
+        let p = |j: usize| positions[t[(c + j) % 3] as usize];
+        let (e1, e2) = (p(1) - p(0), p(2) - p(0));
+        if e1 == Vec3::ZERO || e2 == Vec3::ZERO { 0.0 } else { e1.angle_between(e2) }
+    };
+    // Faces around each welded position (compressed rows).
+    let mut start = vec![0u32; positions.len() + 1];
+    for tri in indices {
+        for &v in tri {
+            start[id[v as usize] as usize + 1] += 1;
+        }
+    }
+    for i in 0..positions.len() {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut around = vec![0u32; start[positions.len()] as usize];
+    for (f, tri) in indices.iter().enumerate() {
+        for &v in tri {
+            let w = id[v as usize] as usize;
+            around[fill[w] as usize] = f as u32;
+            fill[w] += 1;
+        }
+    }
+    let mut new_pos = Vec::with_capacity(positions.len());
+    let mut new_uv = mesh.uvs().map(|_| Vec::with_capacity(positions.len()));
+    let mut new_n = Vec::with_capacity(positions.len());
+    let mut new_idx = Vec::with_capacity(indices.len());
+    // One output vertex per (input vertex, normal).
+    let mut made: HashMap<(u32, [u32; 3]), u32> = HashMap::new();
+    for (f, tri) in indices.iter().enumerate() {
+        let mut out = [0u32; 3];
+        for (k, &v) in tri.iter().enumerate() {
+            let w = id[v as usize] as usize;
+            let n = if group(f) == 0 || unit[f] == Vec3::ZERO {
+                unit[f]
+            } else {
+                let mut sum = Vec3::ZERO;
+                for &g in &around[start[w] as usize..start[w + 1] as usize] {
+                    let g = g as usize;
+                    if group(g) == group(f) && unit[g].dot(unit[f]) >= cos_crease {
+                        sum += unit[g] * angle(g, w);
+                    }
+                }
+                sum.normalize_or_zero()
+            };
+            let key = (v, n.to_array().map(f32::to_bits));
+            out[k] = *made.entry(key).or_insert_with(|| {
+                new_pos.push(positions[v as usize]);
+                if let (Some(dst), Some(src)) = (new_uv.as_mut(), mesh.uvs()) {
+                    dst.push(src[v as usize]);
+                }
+                new_n.push(n);
+                (new_pos.len() - 1) as u32
+            });
+        }
+        new_idx.push(out);
+    }
+    let new_uv: Option<Vec<Vec2>> = new_uv;
+    TriangleMesh::new(new_pos, Some(new_n), new_uv, new_idx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A ring of `n` quads around the Y axis (a prism's side, radius 1),
+    /// each quad with its own four vertices (uv seams everywhere).
+    fn split_ring(n: usize) -> TriangleMesh {
+        let mut p = Vec::new();
+        let mut uv = Vec::new();
+        let mut idx = Vec::new();
+        for i in 0..n {
+            let a = |j: usize| {
+                let t = (j % n) as f32 / n as f32 * std::f32::consts::TAU;
+                Vec3::new(t.sin(), 0.0, t.cos())
+            };
+            let base = p.len() as u32;
+            p.extend([a(i), a(i + 1), a(i + 1) + Vec3::Y, a(i) + Vec3::Y]);
+            uv.extend([Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
+            idx.push([base, base + 1, base + 2]);
+            idx.push([base, base + 2, base + 3]);
+        }
+        TriangleMesh::new(p, None, Some(uv), idx).unwrap()
+    }
+
+    /// The shading normal where face `f` touches `point`.
+    fn normal_at(m: &TriangleMesh, f: usize, point: Vec3) -> Vec3 {
+        let tri = m.indices()[f];
+        let k = tri.iter().position(|&v| m.positions()[v as usize] == point).unwrap();
+        m.normals().unwrap()[tri[k] as usize]
+    }
+
+    #[test]
+    fn smooth_across_split_vertices_within_the_crease() {
+        // 12 sides: neighbours meet at 30°, within the default crease.
+        let m = with_computed_normals(&split_ring(12), None, DEFAULT_CREASE_DEG).unwrap();
+        let seam = m.triangle(0)[1];
+        let (left, right) = (normal_at(&m, 0, seam), normal_at(&m, 2, seam));
+        assert!((left - right).length() < 1e-6, "{left} vs {right}");
+        // The shared normal points straight out from the axis.
+        assert!((left - Vec3::new(seam.x, 0.0, seam.z).normalize()).length() < 1e-5);
+        // A 30° crease angle is not sharper than 30°: still smooth; 20° is.
+        let hard = with_computed_normals(&split_ring(12), None, 20.0).unwrap();
+        assert!((normal_at(&hard, 0, seam) - normal_at(&hard, 2, seam)).length() > 0.1);
+        // A square prism has 90° edges: hard under the default.
+        let sq = with_computed_normals(&split_ring(4), None, DEFAULT_CREASE_DEG).unwrap();
+        let edge = sq.triangle(0)[1];
+        assert!((normal_at(&sq, 0, edge) - normal_at(&sq, 2, edge)).length() > 1.0);
+    }
+
+    #[test]
+    fn smoothing_groups_decide_what_joins() {
+        let ring = split_ring(12);
+        // Group 0 is flat; faces of different groups do not join.
+        let flat = with_computed_normals(&ring, Some(&[0; 24]), 180.0).unwrap();
+        for f in 0..flat.len() {
+            let [a, b, c] = flat.triangle(f);
+            let n = (b - a).cross(c - a).normalize();
+            assert!((normal_at(&flat, f, a) - n).length() < 1e-6);
+        }
+        let mut groups = [1u32; 24];
+        groups[2..4].fill(2);
+        let split = with_computed_normals(&ring, Some(&groups), 180.0).unwrap();
+        let seam = ring.triangle(0)[1];
+        assert!((normal_at(&split, 0, seam) - normal_at(&split, 2, seam)).length() > 0.1);
+        assert!(with_computed_normals(&ring, Some(&[1; 3]), 60.0).is_err());
+    }
+}

@@ -1,0 +1,148 @@
+//! OBJ and MTL text as other tools write it, made readable for tobj: text
+//! that is not UTF-8 read as Latin-1, Windows paths (`.\tex.jpg`), colours
+//! given as one value (`Ks 0`), empty material names. Each guess is a
+//! warning naming the file and line; the line count never changes, so
+//! later messages keep their lines.
+
+use std::borrow::Cow;
+
+/// The name given to a material whose `newmtl`/`usemtl` name is empty.
+pub(crate) const UNNAMED: &str = "(unnamed)";
+
+/// The text of `bytes`: UTF-8 (a byte-order mark dropped), or, for bytes
+/// that are not UTF-8 but hold no NUL, Latin-1 with a warning. UTF-16 and
+/// binary data (NUL bytes) are errors.
+pub(crate) fn decode_text(bytes: &[u8]) -> Result<(Cow<'_, str>, Option<String>), String> {
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Err("the file is UTF-16 text; expected UTF-8 (or ASCII) text".into());
+    }
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(t) => Ok((Cow::Borrowed(t), None)),
+        Err(e) if !bytes.contains(&0) => {
+            let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+            let text: String = bytes.iter().map(|&b| char::from(b)).collect();
+            Ok((
+                Cow::Owned(text),
+                Some(format!("line {line}: the text is not UTF-8; read it as Latin-1 (ISO 8859-1)")),
+            ))
+        }
+        Err(e) => Err(format!(
+            "the file is not UTF-8 text (invalid byte at offset {}); is it a binary file?",
+            e.valid_up_to()
+        )),
+    }
+}
+
+/// A path with Windows separators (`\`) turned into `/`, if it has any.
+fn unixify(path: &str) -> Option<String> {
+    path.contains('\\').then(|| path.replace('\\', "/"))
+}
+
+/// Rewrites the OBJ lines tobj cannot take: `mtllib` with Windows
+/// separators, `usemtl` without a name. Returns the text and the warnings
+/// (`line N: ...`).
+pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
+    fix_lines(text, |no, key, rest| match key {
+        "mtllib" => unixify(rest).map(|p| {
+            (
+                format!("mtllib {p}"),
+                format!("line {no}: `mtllib {rest}` has Windows separators; read as `{p}`"),
+            )
+        }),
+        "usemtl" if rest.is_empty() => Some((
+            format!("usemtl {UNNAMED}"),
+            format!("line {no}: `usemtl` without a name; using the material named `{UNNAMED}`"),
+        )),
+        _ => None,
+    })
+}
+
+/// Rewrites the MTL lines tobj cannot take: colours with one value (grey),
+/// `newmtl` without a name, texture paths with Windows separators.
+/// Returns the text and the warnings (`line N: ...`).
+pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
+    fix_lines(text, |no, key, rest| match key {
+        "Ka" | "Kd" | "Ks" | "Ke" | "Tf" if rest.split_whitespace().count() == 1 => Some((
+            format!("{key} {rest} {rest} {rest}"),
+            format!("line {no}: `{key} {rest}` has one value; read as grey `{key} {rest} {rest} {rest}`"),
+        )),
+        "newmtl" if rest.is_empty() => Some((
+            format!("newmtl {UNNAMED}"),
+            format!("line {no}: `newmtl` without a name; naming the material `{UNNAMED}`"),
+        )),
+        k if k.starts_with("map_") || k == "bump" || k == "disp" || k == "decal" => unixify(rest).map(|p| {
+            (format!("{key} {p}"), format!("line {no}: `{key} {rest}` has Windows separators; read as `{p}`"))
+        }),
+        _ => None,
+    })
+}
+
+/// Applies `fix(line number, key, rest of the line, trimmed)` to every
+/// line; a `Some((new line, warning))` replaces the line.
+fn fix_lines(
+    text: &str,
+    fix: impl Fn(usize, &str, &str) -> Option<(String, String)>,
+) -> (Cow<'_, str>, Vec<String>) {
+    let mut warnings = Vec::new();
+    let mut out: Option<String> = None;
+    let mut done = 0;
+    for (i, line) in text.split_inclusive('\n').enumerate() {
+        let body = line.trim_end_matches(['\n', '\r']);
+        let trimmed = body.trim_start();
+        let key = trimmed.split_whitespace().next().unwrap_or("");
+        let rest = trimmed[key.len()..].split('#').next().unwrap_or("").trim();
+        if let Some((new, warning)) = fix(i + 1, key, rest) {
+            let o = out.get_or_insert_with(|| String::with_capacity(text.len() + 64));
+            let start = line.as_ptr() as usize - text.as_ptr() as usize;
+            o.push_str(&text[done..start]);
+            o.push_str(&new);
+            o.push_str(&line[body.len()..]);
+            done = start + line.len();
+            warnings.push(warning);
+        }
+    }
+    match out {
+        Some(mut o) => {
+            o.push_str(&text[done..]);
+            (Cow::Owned(o), warnings)
+        }
+        None => (Cow::Borrowed(text), warnings),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latin1_is_read_with_a_warning_and_binary_refused() {
+        let (t, w) = decode_text(b"# caf\xe9\nusemtl m\xe9tal\n").unwrap();
+        assert_eq!(t, "# café\nusemtl métal\n");
+        assert!(w.unwrap().starts_with("line 1:"));
+        assert_eq!(decode_text(b"\xEF\xBB\xBFv 1 2 3").unwrap(), (Cow::Borrowed("v 1 2 3"), None));
+        assert!(decode_text(&[0x80, 0x81, 0x00]).unwrap_err().contains("not UTF-8"));
+        assert!(decode_text(&[0xFF, 0xFE, b'v', 0]).unwrap_err().contains("UTF-16"));
+    }
+
+    #[test]
+    fn obj_lines_are_fixed_in_place() {
+        let (t, w) = fix_obj("v 0 0 0\r\nmtllib .\\mats\\a.mtl\r\nusemtl \r\nusemtl b\n");
+        assert_eq!(t, "v 0 0 0\r\nmtllib ./mats/a.mtl\r\nusemtl (unnamed)\r\nusemtl b\n");
+        assert_eq!(w.len(), 2);
+        assert!(w[0].starts_with("line 2:") && w[1].starts_with("line 3:"), "{w:?}");
+        let (t, w) = fix_obj("v 0 0 0\nf 1 1 1");
+        assert!(matches!(t, Cow::Borrowed(_)) && w.is_empty());
+    }
+
+    #[test]
+    fn mtl_lines_are_fixed_in_place() {
+        let (t, w) = fix_mtl("newmtl\nKs 0\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 .\\tex.jpg\nKa 0.25 # grey\n");
+        assert_eq!(
+            t,
+            "newmtl (unnamed)\nKs 0 0 0\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 ./tex.jpg\nKa 0.25 0.25 0.25\n"
+        );
+        let lines: Vec<&str> = w.iter().map(|w| &w[..7]).collect();
+        assert_eq!(lines, ["line 1:", "line 2:", "line 4:", "line 5:"]);
+    }
+}

@@ -1,0 +1,117 @@
+//! Computed mesh normals: welded by position, so that the shading normal
+//! is continuous across uv seams (the torus asset, `spot.obj` from the
+//! shared meshes); smoothing groups and the crease angle keep hard edges
+//! hard.
+
+use prism_geometry::TriangleMesh;
+use prism_geometry::glam::Vec3;
+use prism_scene::{LoadOptions, load_path, parse_scene_str};
+use std::collections::HashMap;
+use std::fs;
+use std::path::Path;
+
+/// `(positions with several vertices, of those where the normals differ)`.
+fn seams(m: &TriangleMesh) -> (usize, usize) {
+    let normals = m.normals().expect("computed normals");
+    let mut by_pos: HashMap<[u32; 3], Vec<Vec3>> = HashMap::new();
+    for (p, n) in m.positions().iter().zip(normals) {
+        by_pos.entry(p.to_array().map(f32::to_bits)).or_default().push(*n);
+    }
+    let split: Vec<&Vec<Vec3>> = by_pos.values().filter(|v| v.len() > 1).collect();
+    let differ = split.iter().filter(|v| v.iter().any(|n| (*n - v[0]).length() > 1e-6)).count();
+    (split.len(), differ)
+}
+
+/// The meshes of the OBJ file `obj` used by a scene, with `keys` added to
+/// its object.
+fn meshes_of(obj: &Path, keys: &str) -> Vec<std::sync::Arc<TriangleMesh>> {
+    let text = format!(
+        "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"mesh\"\npath = {:?}\n{keys}\n",
+        obj.display().to_string()
+    );
+    let loaded = parse_scene_str(&text, Path::new("."), Path::new("n.toml")).expect("loads");
+    loaded.scene.accel.meshes().to_vec()
+}
+
+#[test]
+fn the_torus_is_smooth_across_its_uv_seam() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/torus.obj");
+    let loaded = load_path(&path, &LoadOptions::default()).expect("the torus loads");
+    let m = &loaded.scene.accel.meshes()[0];
+    let (split, differ) = seams(m);
+    // The uv seam splits vertices (the file has uvs), yet every copy of a
+    // position has the same normal: the shading normal is continuous.
+    assert!(split > 10, "the torus has a uv seam ({split} split positions)");
+    assert_eq!(differ, 0, "normals differ at {differ} of {split} seam positions");
+}
+
+#[test]
+fn spot_is_smooth_across_its_uv_seams() {
+    let Some(dir) = prism_testkit::shared_data() else { return };
+    let spot = dir.join("spot.obj");
+    if !spot.is_file() {
+        prism_testkit::skip(&format!("{} is absent", spot.display()));
+        return;
+    }
+    let meshes = meshes_of(&spot, "crease_angle = 180");
+    let (split, differ) = seams(&meshes[0]);
+    assert!(split > 100, "{split}");
+    assert_eq!(differ, 0, "normals differ at {differ} of {split} seam positions");
+}
+
+/// A 12-sided prism side (neighbours meet at 30°) and a cube-like 90° edge
+/// ring (4 sides), with the smoothing line `s`, faces split per quad.
+fn ring_obj(sides: usize, s: &str) -> String {
+    let mut text = String::from("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+    for i in 0..sides {
+        let t = i as f32 / sides as f32 * std::f32::consts::TAU;
+        text += &format!("v {} 0 {}\nv {} 1 {}\n", t.sin(), t.cos(), t.sin(), t.cos());
+    }
+    text += s;
+    text += "\n";
+    for i in 0..sides {
+        let (a, b) = (2 * i + 1, 2 * ((i + 1) % sides) + 1);
+        text += &format!("f {a}/1 {b}/2 {}/3 {}/4\n", b + 1, a + 1);
+    }
+    text
+}
+
+#[test]
+fn smoothing_groups_and_the_crease_angle() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let write = |name: &str, text: String| {
+        let p = d.join(name);
+        fs::write(&p, text).expect("write");
+        p
+    };
+    // No `s` lines: smooth at 30°, hard at 90° (the default crease, 60°).
+    let (split, differ) = seams(&meshes_of(&write("r12.obj", ring_obj(12, "")), "")[0]);
+    assert_eq!((split > 0, differ), (true, 0));
+    let (_, differ) = seams(&meshes_of(&write("r4.obj", ring_obj(4, "")), "")[0]);
+    assert_eq!(differ, 8, "every position of the square ring has a hard edge");
+    // A smaller crease angle makes the 30° edges hard too.
+    let (_, differ) = seams(&meshes_of(&d.join("r12.obj"), "crease_angle = 20")[0]);
+    assert_eq!(differ, 24);
+    // `s off`: flat, whatever the angle; `s 1`: smooth.
+    let (_, differ) = seams(&meshes_of(&write("off.obj", ring_obj(12, "s off")), "")[0]);
+    assert_eq!(differ, 24);
+    let (_, differ) = seams(&meshes_of(&write("on.obj", ring_obj(12, "s 1")), "")[0]);
+    assert_eq!(differ, 0);
+    // `normals = "smooth"` joins everything, even 90° edges.
+    let (_, differ) = seams(&meshes_of(&d.join("r4.obj"), "normals = \"smooth\"")[0]);
+    assert_eq!(differ, 0);
+    // Bad crease angles are refused at their place.
+    for (keys, words) in [
+        ("crease_angle = 200", "at most 180"),
+        ("crease_angle = -1", "crease_angle"),
+        ("normals = \"flat\"\ncrease_angle = 30", "applies to"),
+    ] {
+        let text = format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"mesh\"\npath = \"r4.obj\"\n{keys}\n"
+        );
+        let Err(e) = parse_scene_str(&text, d, Path::new("n.toml")) else { panic!("{keys} accepted") };
+        let e = e.to_string();
+        assert!(e.contains(words) && e.starts_with("n.toml:"), "{keys}: {e}");
+    }
+}
