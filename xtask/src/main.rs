@@ -1,7 +1,7 @@
 //! Project automation: `cargo xtask <command>`.
 //!
 //! Commands: `render [SCENE] [prism flags…]`, `assets [--check]`,
-//! `bench […]`, `bless`, `fuzz [TARGET] [--seconds N]`, `ci`. Each lives in its own module with a
+//! `bench […]`, `bless`, `fuzz [TARGET] [--seconds N]`, `rmse A B`, `ci`. Each lives in its own module with a
 //! `run(args)` entry point; this file only dispatches.
 
 mod assets;
@@ -10,6 +10,7 @@ mod bless;
 mod ci;
 mod fuzz;
 mod render;
+mod rmse;
 #[cfg(test)]
 mod tidy;
 
@@ -29,6 +30,7 @@ fn main() -> Result<()> {
         Some("bench") => bench::run(&rest),
         Some("bless") => bless::run(&rest),
         Some("fuzz") => fuzz::run(&rest),
+        Some("rmse") => rmse::run(&rest),
         Some("help" | "-h" | "--help") | None => {
             print_help();
             Ok(())
@@ -49,6 +51,7 @@ fn print_help() {
          bench [ARGS…]           BVH and render benchmarks (release); see docs/benchmarks.md\n  \
          bless                   re-render the golden reference images after an intended change\n  \
          fuzz [TARGET] [--seconds N]  run the cargo-fuzz targets (scene, obj, texture); see docs/fuzzing.md\n  \
+         rmse A.png B.png        RMSE of two images (sRGB values in [0, 1]), whole and by thirds\n  \
          ci                      fmt --check, clippy -D warnings, tests (with tidy), docs, fuzz build: what CI runs\n"
     );
 }

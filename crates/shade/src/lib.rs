@@ -42,6 +42,7 @@
 //!     max_depth: 4,
 //!     min_contribution: 1e-3,
 //!     threads: None,
+//!     antialias: Default::default(),
 //! };
 //! let (image, stats) = prism_shade::render(&scene, &settings, RenderHooks::default());
 //! // The light is straight behind the eye: ambient 0.1 + Lambert 0.9 · cos 0.
@@ -54,8 +55,11 @@
 
 mod aov;
 mod camera;
+mod filter;
+mod footprint;
 mod integrator;
 mod material;
+mod mipmap;
 pub mod optics;
 mod output;
 mod render;
@@ -64,6 +68,8 @@ mod texture;
 
 pub use aov::{Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_aovs};
 pub use camera::Camera;
+pub use filter::{ADAPTIVE_BASE_SAMPLES, Antialias, FilterParseError, FilterSampler, PixelFilter};
+pub use footprint::Footprint;
 pub use integrator::MAX_DEPTH_LIMIT;
 pub use material::Material;
 pub use output::{

@@ -2,7 +2,7 @@
 
 use crate::aov::{Aov, AovRow};
 use crate::integrator::Tracer;
-use crate::{Camera, Scene};
+use crate::{Antialias, Camera, Scene};
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -36,6 +36,9 @@ pub struct RenderSettings {
     pub min_contribution: f32,
     /// Worker threads; `None` uses every core.
     pub threads: Option<usize>,
+    /// Anti-aliasing: the pixel filter, adaptive supersampling, texture
+    /// filtering ([`Antialias::default`]: box, off, on).
+    pub antialias: Antialias,
 }
 
 impl RenderSettings {
@@ -166,6 +169,12 @@ pub(crate) fn render_pixels<'a>(
     let (w, h) = cam.size();
     let spp = settings.spp.max(1);
     let pattern = SamplePattern::new(spp);
+    let filter = settings.antialias.filter.sampler();
+    // Adaptive supersampling needs a pixel's whole run of samples, and AOVs see every sample.
+    let adaptive = settings
+        .antialias
+        .adaptive
+        .filter(|_| beauty && aovs.is_empty() && samples == (0..spp) && spp > crate::ADAPTIVE_BASE_SAMPLES);
     let see_through = beauty && Tracer::scene_is_see_through(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
@@ -183,15 +192,30 @@ pub(crate) fn render_pixels<'a>(
         for i in 0..w as usize {
             let index = row_start + i as u64;
             let mut sum = Vec3::ZERO;
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
             for s in samples.clone() {
-                let (dx, dy) = pattern.offset(index, s);
+                if let Some(threshold) = adaptive
+                    && s == crate::ADAPTIVE_BASE_SAMPLES
+                    && !((hi - lo).max_element() > threshold)
+                {
+                    // Flat pixel: the base samples' mean stands for all `spp`.
+                    sum *= spp as f32 / s as f32;
+                    break;
+                }
+                let (dx, dy) = filter.offset(pattern.offset(index, s));
                 let ray = cam.ray(i as f32 + dx, j as f32 + dy);
                 if beauty {
                     let l = tracer.trace_camera(&ray);
-                    if l.is_finite() {
-                        sum += l;
+                    let l = if l.is_finite() {
+                        l
                     } else {
                         bad += 1;
+                        Vec3::ZERO
+                    };
+                    sum += l;
+                    if adaptive.is_some() && s < crate::ADAPTIVE_BASE_SAMPLES {
+                        let c = l.clamp(Vec3::ZERO, Vec3::ONE);
+                        (lo, hi) = (lo.min(c), hi.max(c));
                     }
                 }
                 if let Some(sink) = sink.as_deref_mut() {
@@ -254,7 +278,9 @@ pub(crate) fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + S
 
 /// The image-plane position of sample `s` of pixel `(i, j)` in a render of
 /// `spp` samples per pixel on an image `width` pixels wide: the point that
-/// [`render`] (and [`crate::render_aovs`]) passes to [`crate::Camera::ray`].
+/// [`render`] (and [`crate::render_aovs`]) passes to [`crate::Camera::ray`]
+/// under the box filter (other filters map the offset within the pixel
+/// through [`crate::FilterSampler::offset`]).
 /// It lies in `[i, i + 1) × [j, j + 1)`; with `spp = 1` it is the pixel
 /// centre `(i + 0.5, j + 0.5)`. See [`render`] for the pattern.
 #[must_use]
