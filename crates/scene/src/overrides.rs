@@ -235,5 +235,23 @@ mod cli {
             assert!(parse(&["--up", "1,2"]).is_err());
             assert!(parse(&["--width", "-3"]).is_err());
         }
+
+        #[test]
+        fn filter_and_adaptive_flags() {
+            let o = parse(&["--filter", "gaussian", "--adaptive", "0.1"]).unwrap();
+            assert_eq!(o.filter, Some(prism_shade::PixelFilter::Gaussian));
+            assert_eq!(o.adaptive, Some(0.1));
+            assert_eq!(
+                parse(&["--filter", "blackman-harris"]).unwrap().filter,
+                Some(prism_shade::PixelFilter::BlackmanHarris)
+            );
+            let err = parse(&["--filter", "sinc"]).unwrap_err().to_string();
+            assert!(err.contains("unknown pixel filter `sinc`"), "{err}");
+            assert_eq!(
+                parse(&["--adaptive", "-1"]).unwrap().adaptive,
+                Some(-1.0),
+                "range checks are the loader's"
+            );
+        }
     }
 }

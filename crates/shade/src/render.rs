@@ -114,6 +114,13 @@ pub struct RenderStats {
 /// same, bit for bit, for any number of threads. With `spp = 1` the single
 /// sample is the pixel centre, so a 1-spp render measures the scene
 /// exactly.
+///
+/// Under a pixel filter other than the box ([`crate::Antialias::filter`]),
+/// each coordinate of that point is mapped through the filter's inverse
+/// CDF ([`crate::FilterSampler`]), so samples spread over the filter's
+/// support about the pixel centre, each of weight 1: a pixel is still the
+/// mean of its own samples. With [`crate::Antialias::adaptive`], a pixel
+/// whose first [`crate::ADAPTIVE_BASE_SAMPLES`] samples agree stops there.
 pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) -> (Image, RenderStats) {
     let (mut image, stats) = render_samples(scene, settings, 0..settings.spp.max(1), hooks);
     scale_to_mean(&mut image, settings.spp);
