@@ -175,7 +175,6 @@ impl<'a> Tracer<'a> {
         if depth >= self.max_depth {
             return out;
         }
-        let kappa = if cone.spread != 0.0 { curvature(self.scene, h) } else { 0.0 };
         // Dielectric split: Fresnel reflectance F and the refracted direction.
         let (fresnel, refracted) = if mat.transmission > 0.0 {
             let (n1, n2) = if hit.front_face { (1.0, mat.ior) } else { (mat.ior, 1.0) };
@@ -190,7 +189,7 @@ impl<'a> Tracer<'a> {
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 && self.worth(weight * k_mirror) {
             let r = Ray::spawn(hit.point, hit.geo_normal, reflect(d, n));
-            let c = cone.reflect(cone.width, kappa);
+            let c = cone.reflect(cone.width, curvature(self.scene, h));
             out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c);
         }
         if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
@@ -203,7 +202,7 @@ impl<'a> Tracer<'a> {
             if k > 0.0 && self.worth(weight * k) {
                 let r = Ray::spawn(hit.point, hit.geo_normal, t);
                 let eta = if hit.front_face { 1.0 / mat.ior } else { mat.ior };
-                let c = cone.refract(cone.width, eta, kappa);
+                let c = cone.refract(cone.width, eta, curvature(self.scene, h));
                 out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c);
             }
         }
