@@ -3,11 +3,16 @@
 //! (every channel of every pixel), for the whole image and for its top,
 //! middle and bottom thirds (issue 12's measure: a few-sample render
 //! against a many-sample one of the same build; see docs/benchmarks.md).
+//! `--diff OUT.png` also writes the absolute difference, times 8.
 
 use anyhow::{Context, Result, bail};
 
 pub fn run(args: &[String]) -> Result<()> {
-    let [a, b] = args else { bail!("usage: cargo xtask rmse A.png B.png") };
+    let (a, b, diff) = match args {
+        [a, b] => (a, b, None),
+        [a, b, flag, out] if flag == "--diff" => (a, b, Some(out)),
+        _ => bail!("usage: cargo xtask rmse A.png B.png [--diff OUT.png]"),
+    };
     let load = |p: &String| -> Result<image::RgbImage> {
         Ok(image::open(p).with_context(|| format!("cannot read {p}"))?.to_rgb8())
     };
@@ -16,6 +21,12 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!("the images differ in size: {:?} and {:?}", a.dimensions(), b.dimensions());
     }
     let (w, h) = a.dimensions();
+    if let Some(out) = diff {
+        let d: Vec<u8> =
+            a.as_raw().iter().zip(b.as_raw()).map(|(&x, &y)| x.abs_diff(y).saturating_mul(8)).collect();
+        image::save_buffer(out, &d, w, h, image::ExtendedColorType::Rgb8)
+            .with_context(|| format!("cannot write {out}"))?;
+    }
     let row = |y: u32| (y * w * 3) as usize;
     let part = |from: u32, to: u32| rmse(&a.as_raw()[row(from)..row(to)], &b.as_raw()[row(from)..row(to)]);
     println!(

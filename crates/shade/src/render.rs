@@ -108,8 +108,12 @@ pub struct RenderStats {
 /// Sampling: with `spp = n`, pixel `(i, j)` is divided into an `m × m`
 /// grid of strata, `m = ⌈√n⌉`. Sample `s` falls in stratum
 /// `(s · stride) mod m²` (a fixed stride coprime with `m²`, about 0.618·m²,
-/// so that the first samples spread over the pixel), at a point jittered
-/// inside it by a hash of `(pixel index, s)`. A pixel's samples therefore
+/// so that the first samples spread over the pixel), at a point inside it
+/// placed by Kensler's correlated multi-jitter (the sub-cell given by
+/// per-pixel permutations of the stratum's row and column, jittered by a
+/// hash of `(pixel index, s)`), so that a full grid is also stratified in
+/// `x` and in `y` alone: a near-horizontal or near-vertical edge is
+/// estimated from `m²` levels, not `m`. A pixel's samples therefore
 /// depend on nothing but the pixel and the sample index: the image is the
 /// same, bit for bit, for any number of threads. With `spp = 1` the single
 /// sample is the pixel centre, so a 1-spp render measures the scene
@@ -336,9 +340,18 @@ impl SamplePattern {
         let z = splitmix64((pixel << 32) ^ u64::from(s) ^ 0x5851_F42D_4C95_7F2D);
         let jx = (z >> 40) as f32 * (1.0 / 16_777_216.0);
         let jy = ((z >> 16) & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0);
+        // Kensler's correlated multi-jitter: within its stratum, the sample
+        // sits in the sub-column given by its row and the sub-row given by
+        // its column, each through a per-pixel permutation, so that the
+        // samples of a full grid are also stratified in x and in y alone.
+        let p = splitmix64(pixel ^ 0x2545_F491_4F6C_DD1D) as u32;
+        let px = permute(sx, self.m, p.wrapping_mul(0xa511_e9b3));
+        let py = permute(sy, self.m, p.wrapping_mul(0x63d8_3595));
         let m = self.m as f32;
         let below_one = 1.0 - f32::EPSILON / 2.0;
-        (((sx as f32 + jx) / m).min(below_one), ((sy as f32 + jy) / m).min(below_one))
+        let x = (sx as f32 + (py as f32 + jx) / m) / m;
+        let y = (sy as f32 + (px as f32 + jy) / m) / m;
+        (x.min(below_one), y.min(below_one))
     }
 }
 
@@ -347,6 +360,43 @@ fn gcd(mut a: u32, mut b: u32) -> u32 {
         (a, b) = (b, a % b);
     }
     a
+}
+
+/// Kensler's hashed permutation of `0..len` ("Correlated Multi-Jittered
+/// Sampling", Pixar 2013): element `i` of the permutation keyed by `key`.
+fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+    if len <= 1 {
+        return 0;
+    }
+    let mut w = len - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= key;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= key >> 16;
+        i ^= (i & w) >> 4;
+        i ^= key >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= key >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | key >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            return (i + key % len) % len;
+        }
+    }
 }
 
 /// Steele, Lea and Flood's SplitMix64 finaliser: a well-mixed 64-bit hash.
@@ -387,5 +437,39 @@ mod tests {
         // Different pixels get different jitter.
         let p = SamplePattern::new(4);
         assert_ne!(p.offset(1, 0), p.offset(2, 0));
+    }
+
+    /// A full grid of `m²` samples is also stratified along each axis
+    /// alone into `m²` strips (n-rooks), in every pixel.
+    #[test]
+    fn full_grids_are_multi_jittered() {
+        for m in [2u32, 3, 4, 7, 16] {
+            let spp = m * m;
+            let p = SamplePattern::new(spp);
+            for pixel in [0u64, 1, 99, 123_456] {
+                let mut cols = vec![false; spp as usize];
+                let mut rows = vec![false; spp as usize];
+                for s in 0..spp {
+                    let (x, y) = p.offset(pixel, s);
+                    let (c, r) = ((x * spp as f32) as usize, (y * spp as f32) as usize);
+                    assert!(!cols[c] && !rows[r], "m {m} pixel {pixel}: strip taken twice");
+                    (cols[c], rows[r]) = (true, true);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn permutations_are_bijections() {
+        for len in [1u32, 2, 3, 5, 16, 17, 256] {
+            for key in [0u32, 1, 0xdead_beef, u32::MAX] {
+                let mut seen = vec![false; len as usize];
+                for i in 0..len {
+                    let j = permute(i, len, key) as usize;
+                    assert!(!seen[j]);
+                    seen[j] = true;
+                }
+            }
+        }
     }
 }
