@@ -124,7 +124,7 @@ const BINS: usize = 256;
 
 /// Inverse-CDF sampling of a [`PixelFilter`], per axis (the filters are
 /// separable): the profile is tabulated as a piecewise-constant density over
-/// [`BINS`] bins of `[-radius, radius]` (each bin's mass integrated by
+/// 256 bins of `[-radius, radius]` (each bin's mass integrated by
 /// Simpson's rule), and a uniform `u` is mapped through the inverse of its
 /// piecewise-linear CDF. The map is monotone, so stratified uniform offsets
 /// stay stratified in the filter's measure.
