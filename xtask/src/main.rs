@@ -1,7 +1,7 @@
 //! Project automation: `cargo xtask <command>`.
 //!
 //! Commands: `render [SCENE] [prism flags…]`, `assets [--check]`,
-//! `bench […]`, `bless`, `fuzz [TARGET] [--seconds N]`, `man [DIR]`, `ci`. Each lives in its own module with a
+//! `bench […]`, `bless`, `fuzz [TARGET] [--seconds N]`, `man [DIR]`, `rmse A B`, `ci`. Each lives in its own module with a
 //! `run(args)` entry point; this file only dispatches.
 
 mod assets;
@@ -11,6 +11,7 @@ mod ci;
 mod fuzz;
 mod man;
 mod render;
+mod rmse;
 #[cfg(test)]
 mod tidy;
 
@@ -31,6 +32,7 @@ fn main() -> Result<()> {
         Some("bless") => bless::run(&rest),
         Some("fuzz") => fuzz::run(&rest),
         Some("man") => man::run(&rest),
+        Some("rmse") => rmse::run(&rest),
         Some("help" | "-h" | "--help") | None => {
             print_help();
             Ok(())
@@ -52,6 +54,7 @@ fn print_help() {
          bless                   re-render the golden reference images after an intended change\n  \
          fuzz [TARGET] [--seconds N]  run the cargo-fuzz targets (scene, obj, texture); see docs/fuzzing.md\n  \
          man [DIR]               write the man pages of prism (clap_mangen) into DIR (default target/man)\n  \
+         rmse A.png B.png        RMSE of two images (sRGB values in [0, 1]), whole and by thirds\n  \
          ci                      fmt --check, clippy -D warnings, tests (with tidy), docs, fuzz build: what CI runs\n"
     );
 }

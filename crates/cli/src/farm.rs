@@ -104,6 +104,8 @@ pub fn render_flags(o: &Overrides, aov: Option<&str>, limits: &crate::LimitArgs)
     push("--look-at", vec3(o.look_at));
     push("--up", vec3(o.up));
     push("--fov", o.fov.map(|x| x.to_string()));
+    push("--filter", o.filter.map(|f| f.name().to_owned()));
+    push("--adaptive", o.adaptive.map(|x| x.to_string()));
     push("--aov", aov.map(str::to_owned));
     push("--max-side", Some(limits.max_side.to_string()));
     push("--max-pixels", Some(limits.max_pixels.to_string()));
@@ -521,6 +523,8 @@ mod tests {
             look_at: Some(Vec3::new(1.0 / 3.0, 0.0, -0.0)),
             up: Some(Vec3::new(0.0, 1.0, 0.25)),
             fov: Some(33.3),
+            filter: Some(prism_shade::PixelFilter::BlackmanHarris),
+            adaptive: Some(0.05),
         };
         let limits = crate::LimitArgs { max_side: 100, max_pixels: 5000, max_spp: 10 };
         let flags = render_flags(&o, Some("depth,albedo"), &limits);

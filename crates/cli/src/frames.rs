@@ -139,6 +139,7 @@ mod tests {
             max_depth: 1,
             min_contribution: 0.0,
             threads: None,
+            antialias: prism_shade::Antialias::default(),
         };
         let args = |frames, frame| FrameArgs { frames, orbit: Some(90.0), frame, frame_from_env: false };
         assert_eq!(plan(&args(None, None), &settings, Path::new("a.png")).unwrap().len(), 1);

@@ -400,6 +400,7 @@ impl<'a> Build<'a> {
             ambient,
             aovs,
             aov_preview,
+            antialias,
         } = settings;
         let info = SceneInfo {
             file: self.ctx.file.to_path_buf(),
@@ -435,6 +436,7 @@ impl<'a> Build<'a> {
             max_depth,
             min_contribution,
             threads: self.overrides.threads,
+            antialias,
         };
         Ok(LoadedScene {
             scene,

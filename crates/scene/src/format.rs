@@ -74,6 +74,10 @@ pub struct RenderDef {
     /// AOV pass names (`"depth"`, ..., `"all"`), checked with spans.
     pub aov: Option<Spanned<Vec<Spanned<String>>>>,
     pub aov_preview: Option<bool>,
+    /// Pixel filter name (`"box"`, `"gaussian"`, `"blackman-harris"`).
+    pub filter: Option<Spanned<String>>,
+    /// Adaptive supersampling threshold.
+    pub adaptive: Option<Num>,
 }
 
 #[derive(Deserialize)]

@@ -4,6 +4,7 @@
 //! `prism info`.
 
 use prism_geometry::glam::Vec3;
+use prism_shade::PixelFilter;
 
 /// Values given outside the scene file (on the command line) that replace
 /// the file's. The loader applies them once, to
@@ -14,7 +15,8 @@ use prism_geometry::glam::Vec3;
 /// With the `clap` feature this is also the flags' definition
 /// (`#[command(flatten)]`): `--width W`, `--height H`, `--spp N` (also `-s N`, `--samples N`),
 /// `--max-depth N`, `--threads N`, `--fog` / `--no-fog`,
-/// `--camera-pos X,Y,Z`, `--look-at X,Y,Z`, `--up X,Y,Z`, `--fov DEGREES`.
+/// `--camera-pos X,Y,Z`, `--look-at X,Y,Z`, `--up X,Y,Z`, `--fov DEGREES`,
+/// `--filter NAME`, `--adaptive THRESHOLD`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Overrides {
     /// Image width. If only one of width and height is given, the other
@@ -43,6 +45,11 @@ pub struct Overrides {
     /// Vertical field of view in degrees (`--fov`), strictly between 0
     /// and 180.
     pub fov: Option<f32>,
+    /// The pixel filter (`--filter box|gaussian|blackman-harris`).
+    pub filter: Option<PixelFilter>,
+    /// Adaptive supersampling threshold (`--adaptive THRESHOLD`), finite
+    /// and at least 0.
+    pub adaptive: Option<f32>,
 }
 
 /// `X,Y,Z`: three comma-separated numbers (checked to be finite by the
@@ -134,6 +141,21 @@ mod cli {
                     .allow_hyphen_values(true)
                     .help("Vertical field of view in degrees, strictly between 0 and 180"),
             )
+            .arg(
+                Arg::new("filter")
+                    .long("filter")
+                    .value_name("NAME")
+                    .value_parser(|s: &str| s.parse::<prism_shade::PixelFilter>().map_err(|e| e.to_string()))
+                    .help("Pixel filter: box, gaussian or blackman-harris [default: the scene's, else box]"),
+            )
+            .arg(
+                Arg::new("adaptive")
+                    .long("adaptive")
+                    .value_name("THRESHOLD")
+                    .value_parser(value_parser!(f32))
+                    .allow_hyphen_values(true)
+                    .help("Adaptive supersampling: 4 samples per pixel, the rest of --spp only where two differ by more than THRESHOLD"),
+            )
         }
 
         fn augment_args_for_update(cmd: Command) -> Command {
@@ -158,6 +180,8 @@ mod cli {
                 look_at: m.get_one("look-at").copied(),
                 up: m.get_one("up").copied(),
                 fov: m.get_one("fov").copied(),
+                filter: m.get_one("filter").copied(),
+                adaptive: m.get_one("adaptive").copied(),
             })
         }
 
@@ -214,6 +238,24 @@ mod cli {
             assert!(parse(&["--threads", "0"]).is_err());
             assert!(parse(&["--up", "1,2"]).is_err());
             assert!(parse(&["--width", "-3"]).is_err());
+        }
+
+        #[test]
+        fn filter_and_adaptive_flags() {
+            let o = parse(&["--filter", "gaussian", "--adaptive", "0.1"]).unwrap();
+            assert_eq!(o.filter, Some(prism_shade::PixelFilter::Gaussian));
+            assert_eq!(o.adaptive, Some(0.1));
+            assert_eq!(
+                parse(&["--filter", "blackman-harris"]).unwrap().filter,
+                Some(prism_shade::PixelFilter::BlackmanHarris)
+            );
+            let err = parse(&["--filter", "sinc"]).unwrap_err().to_string();
+            assert!(err.contains("unknown pixel filter `sinc`"), "{err}");
+            assert_eq!(
+                parse(&["--adaptive", "-1"]).unwrap().adaptive,
+                Some(-1.0),
+                "range checks are the loader's"
+            );
         }
     }
 }

@@ -7,7 +7,7 @@ use crate::error::SceneError;
 use crate::format::RenderDef;
 use crate::{LoadOptions, Overrides};
 use prism_geometry::glam::Vec3;
-use prism_shade::Aov;
+use prism_shade::{Antialias, Aov, PixelFilter};
 use std::ops::Range;
 use toml::Spanned;
 
@@ -45,6 +45,7 @@ pub(crate) struct Settings {
     pub ambient: Vec3,
     pub aovs: Vec<Aov>,
     pub aov_preview: bool,
+    pub antialias: Antialias,
 }
 
 /// The image size for a scene of `scene_w × scene_h` pixels when the
@@ -131,7 +132,44 @@ pub(crate) fn resolve(
         }
     }
     let aov_preview = render.and_then(|r| r.aov_preview).unwrap_or(false);
-    Ok(Settings { width, height, spp, max_depth, min_contribution, background, ambient, aovs, aov_preview })
+    let antialias = antialias(ctx, render, ov)?;
+    Ok(Settings {
+        width,
+        height,
+        spp,
+        max_depth,
+        min_contribution,
+        background,
+        ambient,
+        aovs,
+        aov_preview,
+        antialias,
+    })
+}
+
+/// `filter` and `adaptive`: the overrides (`--filter`, `--adaptive`), else
+/// the file's, else the box and no adaptive sampling.
+fn antialias(ctx: &Ctx, render: Option<&RenderDef>, ov: Overrides) -> Result<Antialias> {
+    let filter = match (ov.filter, render.and_then(|r| r.filter.as_ref())) {
+        (Some(f), _) => f,
+        (None, Some(name)) => {
+            name.get_ref().parse::<PixelFilter>().map_err(|e| ctx.invalid(&name.span(), e.to_string()))?
+        }
+        (None, None) => PixelFilter::Box,
+    };
+    let check = |v: f32| {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(format!("adaptive threshold must be a finite number >= 0, got {v}"))
+        }
+    };
+    let adaptive = match (ov.adaptive, render.and_then(|r| r.adaptive.as_ref())) {
+        (Some(v), _) => Some(check(v).map_err(|message| SceneError::Option { flag: "--adaptive", message })?),
+        (None, Some(n)) => Some(check(ctx.finite(n, "adaptive")?).map_err(|m| ctx.invalid(&n.span(), m))?),
+        (None, None) => None,
+    };
+    Ok(Antialias { filter, adaptive, point_textures: false })
 }
 
 /// The image size: the overrides first (named by flag), else the file's

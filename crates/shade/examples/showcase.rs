@@ -131,6 +131,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max_depth: 8,
         min_contribution: 1e-3,
         threads: (threads > 0).then_some(threads as usize),
+        antialias: Default::default(),
     };
     let (img, stats) = prism_shade::render(&scene, &settings, RenderHooks::default());
     prism_shade::write_image(

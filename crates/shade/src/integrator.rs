@@ -6,6 +6,7 @@
 //! counts the rays it traces, so that nothing is shared between threads
 //! while a row is traced.
 
+use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
@@ -33,6 +34,8 @@ pub(crate) struct Tracer<'a> {
     primary: Vec3,
     /// Whether any material lets light through (else shadows are yes/no).
     see_through: bool,
+    /// Spread angle of a camera ray's cone (one pixel); 0 point-samples textures.
+    pixel_spread: f32,
     /// Rays traced so far (camera, secondary, shadow).
     pub rays: u64,
     /// Of `rays`, the shadow rays.
@@ -70,6 +73,12 @@ impl<'a> Tracer<'a> {
             depth_axis: scene.fog.filter(|f| settings.fog && f.by_depth()).map(|_| settings.camera.forward()),
             primary: Vec3::ZERO,
             see_through,
+            pixel_spread: if settings.antialias.point_textures {
+                0.0
+            } else {
+                let (_, h) = settings.camera.size();
+                2.0 * (settings.camera.vfov_deg().to_radians() * 0.5).tan() / h.max(1) as f32
+            },
             rays: 0,
             shadow_rays: 0,
         }
@@ -80,7 +89,7 @@ impl<'a> Tracer<'a> {
     #[inline]
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
         self.primary = ray.dir;
-        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT)
+        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, RayCone::camera(self.pixel_spread))
     }
 
     /// Should a ray of path weight `w` be traced?
@@ -126,8 +135,17 @@ impl<'a> Tracer<'a> {
     /// (path length, or depth: [`FogMode`]).
     /// When the ray leaves object `skip_exit` through its back face (the
     /// unbent continuation through a transparent solid), it goes on from
-    /// the far side without shading the exit.
-    fn trace(&mut self, ray: &Ray, depth: u32, weight: Vec3, path: f32, skip_exit: u32) -> Vec3 {
+    /// the far side without shading the exit. `cone` is the ray's footprint
+    /// cone (for texture filtering).
+    fn trace(
+        &mut self,
+        ray: &Ray,
+        depth: u32,
+        weight: Vec3,
+        path: f32,
+        skip_exit: u32,
+        cone: RayCone,
+    ) -> Vec3 {
         self.rays += 1;
         let scene = self.scene;
         let Some(h) = scene.accel.closest_hit(ray) else {
@@ -137,9 +155,10 @@ impl<'a> Tracer<'a> {
         let end = path + self.fog_length(ray, seg);
         let fog_t = self.fog_t(path, end);
         let weight = weight * fog_t;
+        let cone = RayCone { width: cone.width_at(seg), spread: cone.spread };
         if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
             let next = Ray::spawn(h.hit.point, h.hit.geo_normal, ray.dir);
-            let l = self.trace(&next, depth, weight, end, NO_OBJECT);
+            let l = self.trace(&next, depth, weight, end, NO_OBJECT, cone);
             return self.fog_blend(l, fog_t);
         }
         let mat = scene.material_of(h.object);
@@ -150,12 +169,14 @@ impl<'a> Tracer<'a> {
         } else {
             Vec3::ONE
         };
-        let l = self.shade(ray, &h, mat, depth, weight * absorb, end) * absorb;
+        let l = self.shade(ray, &h, mat, depth, weight * absorb, end, cone) * absorb;
         self.fog_blend(l, fog_t)
     }
 
     /// Radiance leaving the hit `h` toward the origin of `ray`, by the
-    /// material formula (see [`Material`]).
+    /// material formula (see [`Material`]); `cone` is the ray's cone, its
+    /// width the one at the hit.
+    #[allow(clippy::too_many_arguments)]
     fn shade(
         &mut self,
         ray: &Ray,
@@ -164,6 +185,7 @@ impl<'a> Tracer<'a> {
         depth: u32,
         weight: Vec3,
         path: f32,
+        cone: RayCone,
     ) -> Vec3 {
         let hit = &h.hit;
         let d = ray.dir.normalize_or(Vec3::NEG_Z);
@@ -171,7 +193,7 @@ impl<'a> Tracer<'a> {
         let mut out = Vec3::ZERO;
         let w_local = mat.local_weight();
         if w_local > 0.0 {
-            let albedo = albedo(self.scene, mat, h);
+            let albedo = self.albedo_over(ray, h, mat, cone.width);
             out += w_local * self.local(mat, albedo, hit, n, -d);
         }
         if depth >= self.max_depth {
@@ -191,21 +213,37 @@ impl<'a> Tracer<'a> {
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 && self.worth(weight * k_mirror) {
             let r = Ray::spawn(hit.point, hit.geo_normal, reflect(d, n));
-            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT);
+            let c = cone.reflect(cone.width, curvature(self.scene, h));
+            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c);
         }
         if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
             let r = Ray::spawn(hit.point, hit.geo_normal, d);
             let skip = if hit.front_face { h.object } else { NO_OBJECT };
-            out += mat.transparency * self.trace(&r, depth + 1, weight * mat.transparency, path, skip);
+            out += mat.transparency * self.trace(&r, depth + 1, weight * mat.transparency, path, skip, cone);
         }
         if let Some(t) = refracted {
             let k = mat.transmission * (1.0 - fresnel);
             if k > 0.0 && self.worth(weight * k) {
                 let r = Ray::spawn(hit.point, hit.geo_normal, t);
-                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT);
+                let eta = if hit.front_face { 1.0 / mat.ior } else { mat.ior };
+                let c = cone.refract(cone.width, eta, curvature(self.scene, h));
+                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c);
             }
         }
         out
+    }
+
+    /// The material's colour at `h` averaged over the footprint of a beam
+    /// of width `width` arriving along `ray` ([`Texture::color_over`]).
+    fn albedo_over(&self, ray: &Ray, h: &SceneHit, mat: &Material, width: f32) -> Vec3 {
+        if let Texture::Solid(c) = &mat.texture {
+            return *c;
+        }
+        let mut fp = Footprint::on_surface(ray.dir, h.hit.geo_normal, width);
+        if fp != Footprint::POINT && mat.texture.needs_uv_footprint() {
+            fp.duv = uv_axes(self.scene, ray.origin, h, fp.dp);
+        }
+        mat.texture.color_over(h.hit.point, h.hit.uv, &self.scene.to_object(h.object), &fp)
     }
 
     /// Ambient + Lambert + Phong over every light, each through its shadow

@@ -42,6 +42,7 @@
 //!     max_depth: 4,
 //!     min_contribution: 1e-3,
 //!     threads: None,
+//!     antialias: Default::default(),
 //! };
 //! let (image, stats) = prism_shade::render(&scene, &settings, RenderHooks::default());
 //! // The light is straight behind the eye: ambient 0.1 + Lambert 0.9 · cos 0.
@@ -57,9 +58,12 @@ mod aov;
 mod bounds;
 mod camera;
 mod exr;
+mod filter;
+mod footprint;
 mod integrator;
 mod layers;
 mod material;
+mod mipmap;
 pub mod optics;
 mod output;
 mod render;
@@ -75,6 +79,8 @@ pub use camera::Camera;
 pub use exr::{
     ExrAttribute, ExrChannel, ExrLayer, ExrSamples, LayeredExr, read_layered_exr, write_layered_exr,
 };
+pub use filter::{ADAPTIVE_BASE_SAMPLES, Antialias, FilterParseError, FilterSampler, PixelFilter};
+pub use footprint::Footprint;
 pub use integrator::MAX_DEPTH_LIMIT;
 pub use layers::{
     NO_ID, RenderExr, aov_exr_channels, read_render_exr, render_from_exr, render_layers, write_render_exr,

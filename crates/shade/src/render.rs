@@ -2,8 +2,7 @@
 
 use crate::aov::{Aov, AovRow, render_passes};
 use crate::integrator::Tracer;
-use crate::{AovImages, BoundsError, PixelBounds};
-use crate::{Camera, Scene};
+use crate::{Antialias, AovImages, BoundsError, Camera, PixelBounds, Scene};
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -37,6 +36,9 @@ pub struct RenderSettings {
     pub min_contribution: f32,
     /// Worker threads; `None` uses every core.
     pub threads: Option<usize>,
+    /// Anti-aliasing: the pixel filter, adaptive supersampling, texture
+    /// filtering ([`Antialias::default`]: box, off, on).
+    pub antialias: Antialias,
 }
 
 impl RenderSettings {
@@ -120,12 +122,23 @@ impl RenderStats {
 /// Sampling: with `spp = n`, pixel `(i, j)` is divided into an `m × m`
 /// grid of strata, `m = ⌈√n⌉`. Sample `s` falls in stratum
 /// `(s · stride) mod m²` (a fixed stride coprime with `m²`, about 0.618·m²,
-/// so that the first samples spread over the pixel), at a point jittered
-/// inside it by a hash of `(pixel index, s)`. A pixel's samples therefore
+/// so that the first samples spread over the pixel), at a point inside it
+/// placed by Kensler's correlated multi-jitter (the sub-cell given by
+/// per-pixel permutations of the stratum's row and column, jittered by a
+/// hash of `(pixel index, s)`), so that a full grid is also stratified in
+/// `x` and in `y` alone: a near-horizontal or near-vertical edge is
+/// estimated from `m²` levels, not `m`. A pixel's samples therefore
 /// depend on nothing but the pixel and the sample index: the image is the
 /// same, bit for bit, for any number of threads. With `spp = 1` the single
 /// sample is the pixel centre, so a 1-spp render measures the scene
 /// exactly.
+///
+/// Under a pixel filter other than the box ([`crate::Antialias::filter`]),
+/// each coordinate of that point is mapped through the filter's inverse
+/// CDF ([`crate::FilterSampler`]), so samples spread over the filter's
+/// support about the pixel centre, each of weight 1: a pixel is still the
+/// mean of its own samples. With [`crate::Antialias::adaptive`], a pixel
+/// whose first [`crate::ADAPTIVE_BASE_SAMPLES`] samples agree stops there.
 pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) -> (Image, RenderStats) {
     let (mut image, stats) = render_samples(scene, settings, 0..settings.spp.max(1), hooks);
     scale_to_mean(&mut image, settings.spp);
@@ -218,6 +231,11 @@ pub(crate) fn render_pixels<'a>(
     let (rw, rh) = (xs.len() as u32, ys.len() as u32);
     let spp = settings.spp.max(1);
     let pattern = SamplePattern::new(spp);
+    let filter = settings.antialias.filter.sampler();
+    // Adaptive supersampling needs a pixel's whole run of samples, and AOVs and alpha see every sample.
+    let adaptive = settings.antialias.adaptive.filter(|_| {
+        beauty && aovs.is_empty() && !alpha && samples == (0..spp) && spp > crate::ADAPTIVE_BASE_SAMPLES
+    });
     let see_through = beauty && Tracer::scene_is_see_through(scene);
     let rays = AtomicU64::new(0);
     let [camera_rays, shadow_rays, aov_rays_all] = [(); 3].map(|()| AtomicU64::new(0));
@@ -240,17 +258,29 @@ pub(crate) fn render_pixels<'a>(
         for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
             let index = row_start + i as u64;
             let mut sum = Vec3::ZERO;
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
             for s in samples.clone() {
-                let (dx, dy) = pattern.offset(index, s);
+                if let Some(threshold) = adaptive
+                    && s == crate::ADAPTIVE_BASE_SAMPLES
+                    && !((hi - lo).max_element() > threshold)
+                {
+                    // Flat pixel: the base samples' mean stands for all `spp`.
+                    sum *= spp as f32 / s as f32;
+                    break;
+                }
+                let (dx, dy) = filter.offset(pattern.offset(index, s));
                 let ray = cam.ray(i as f32 + dx, j as f32 + dy);
                 let mut l = Vec3::ZERO;
                 if beauty {
                     l = tracer.trace_camera(&ray);
-                    if l.is_finite() {
-                        sum += l;
-                    } else {
+                    if !l.is_finite() {
                         bad += 1;
                         l = Vec3::ZERO;
+                    }
+                    sum += l;
+                    if adaptive.is_some() && s < crate::ADAPTIVE_BASE_SAMPLES {
+                        let c = l.clamp(Vec3::ZERO, Vec3::ONE);
+                        (lo, hi) = (lo.min(c), hi.max(c));
                     }
                 }
                 if let Some(sink) = sink.as_deref_mut() {
@@ -321,7 +351,9 @@ pub(crate) fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + S
 
 /// The image-plane position of sample `s` of pixel `(i, j)` in a render of
 /// `spp` samples per pixel on an image `width` pixels wide: the point that
-/// [`render`] (and [`crate::render_aovs`]) passes to [`crate::Camera::ray`].
+/// [`render`] (and [`crate::render_aovs`]) passes to [`crate::Camera::ray`]
+/// under the box filter (other filters map the offset within the pixel
+/// through [`crate::FilterSampler::offset`]).
 /// It lies in `[i, i + 1) × [j, j + 1)`; with `spp = 1` it is the pixel
 /// centre `(i + 0.5, j + 0.5)`. See [`render`] for the pattern.
 #[must_use]
@@ -370,9 +402,18 @@ impl SamplePattern {
         let z = splitmix64((pixel << 32) ^ u64::from(s) ^ 0x5851_F42D_4C95_7F2D);
         let jx = (z >> 40) as f32 * (1.0 / 16_777_216.0);
         let jy = ((z >> 16) & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0);
+        // Kensler's correlated multi-jitter: within its stratum, the sample
+        // sits in the sub-column given by its row and the sub-row given by
+        // its column, each through a per-pixel permutation, so that the
+        // samples of a full grid are also stratified in x and in y alone.
+        let p = splitmix64(pixel ^ 0x2545_F491_4F6C_DD1D) as u32;
+        let px = permute(sx, self.m, p.wrapping_mul(0xa511_e9b3));
+        let py = permute(sy, self.m, p.wrapping_mul(0x63d8_3595));
         let m = self.m as f32;
         let below_one = 1.0 - f32::EPSILON / 2.0;
-        (((sx as f32 + jx) / m).min(below_one), ((sy as f32 + jy) / m).min(below_one))
+        let x = (sx as f32 + (py as f32 + jx) / m) / m;
+        let y = (sy as f32 + (px as f32 + jy) / m) / m;
+        (x.min(below_one), y.min(below_one))
     }
 }
 
@@ -381,6 +422,43 @@ fn gcd(mut a: u32, mut b: u32) -> u32 {
         (a, b) = (b, a % b);
     }
     a
+}
+
+/// Kensler's hashed permutation of `0..len` ("Correlated Multi-Jittered
+/// Sampling", Pixar 2013): element `i` of the permutation keyed by `key`.
+fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+    if len <= 1 {
+        return 0;
+    }
+    let mut w = len - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= key;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= key >> 16;
+        i ^= (i & w) >> 4;
+        i ^= key >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= key >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | key >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            return (i + key % len) % len;
+        }
+    }
 }
 
 /// Steele, Lea and Flood's SplitMix64 finaliser: a well-mixed 64-bit hash.
@@ -421,5 +499,39 @@ mod tests {
         // Different pixels get different jitter.
         let p = SamplePattern::new(4);
         assert_ne!(p.offset(1, 0), p.offset(2, 0));
+    }
+
+    /// A full grid of `m²` samples is also stratified along each axis
+    /// alone into `m²` strips (n-rooks), in every pixel.
+    #[test]
+    fn full_grids_are_multi_jittered() {
+        for m in [2u32, 3, 4, 7, 16] {
+            let spp = m * m;
+            let p = SamplePattern::new(spp);
+            for pixel in [0u64, 1, 99, 123_456] {
+                let mut cols = vec![false; spp as usize];
+                let mut rows = vec![false; spp as usize];
+                for s in 0..spp {
+                    let (x, y) = p.offset(pixel, s);
+                    let (c, r) = ((x * spp as f32) as usize, (y * spp as f32) as usize);
+                    assert!(!cols[c] && !rows[r], "m {m} pixel {pixel}: strip taken twice");
+                    (cols[c], rows[r]) = (true, true);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn permutations_are_bijections() {
+        for len in [1u32, 2, 3, 5, 16, 17, 256] {
+            for key in [0u32, 1, 0xdead_beef, u32::MAX] {
+                let mut seen = vec![false; len as usize];
+                for i in 0..len {
+                    let j = permute(i, len, key) as usize;
+                    assert!(!seen[j]);
+                    seen[j] = true;
+                }
+            }
+        }
     }
 }

@@ -1,6 +1,8 @@
 //! Textures: solid colours, the procedural checker, and images.
 
 use crate::ShadeError;
+use crate::footprint::{Footprint, smaller};
+use crate::mipmap::{Level, build_pyramid, checker_odd_weight, lod, trilinear};
 use prism_geometry::glam::{Affine3A, Vec2, Vec3};
 use prism_geometry::{azimuth_u, sphere_uv};
 use std::path::Path;
@@ -98,21 +100,67 @@ impl Texture {
     #[inline]
     #[must_use]
     pub fn color_at(&self, point: Vec3, uv: Vec2, to_object: &Affine3A) -> Vec3 {
+        self.color_over(point, uv, to_object, &Footprint::POINT)
+    }
+
+    /// The linear colour averaged over the footprint `fp` around a surface
+    /// point (arguments as [`Texture::color_at`], which is this with
+    /// [`Footprint::POINT`]). The checker is box-filtered exactly over the
+    /// footprint's extent along its two axes (world x and z, or u and v);
+    /// images are looked up trilinearly in their mip-map at the level of
+    /// the footprint's longer axis in texels. Object-space mappings get
+    /// their uv footprint by mapping the footprint's axes; [`Mapping::Uv`]
+    /// takes `fp.duv`.
+    #[must_use]
+    pub fn color_over(&self, point: Vec3, uv: Vec2, to_object: &Affine3A, fp: &Footprint) -> Vec3 {
         match self {
             Texture::Solid(c) => *c,
             Texture::Checker { a, b, size, world } => {
-                let (x, y) = if *world { (point.x, point.z) } else { (uv.x, uv.y) };
-                let ix = (x / size).floor() as i64;
-                let iy = (y / size).floor() as i64;
-                if (ix.wrapping_add(iy)) & 1 == 0 { *a } else { *b }
+                let ([x, y], axes) = if *world {
+                    ([point.x, point.z], fp.dp.map(|d| Vec2::new(d.x, d.z)))
+                } else {
+                    ([uv.x, uv.y], fp.duv)
+                };
+                let w = axes[0].abs().max(axes[1].abs()) / *size;
+                let t = checker_odd_weight(x / size, y / size, w.x, w.y);
+                if t <= 0.0 {
+                    *a
+                } else if t >= 1.0 {
+                    *b
+                } else {
+                    *a * (1.0 - t) + *b * t
+                }
             }
             Texture::Image { image, mapping, scale, tint } => {
-                let object_point = match mapping {
-                    Mapping::Uv => point,
-                    _ => to_object.transform_point3(point),
+                let (uv, duv) = match mapping {
+                    Mapping::Uv => (uv, fp.duv),
+                    _ => {
+                        let p = to_object.transform_point3(point);
+                        let at = mapping.uv(uv, p);
+                        let duv = fp.dp.map(|d| {
+                            let e = to_object.transform_vector3(d);
+                            if e == Vec3::ZERO {
+                                return Vec2::ZERO;
+                            }
+                            smaller(Some(mapping.uv(uv, p + e) - at), Some(at - mapping.uv(uv, p - e)))
+                        });
+                        (at, duv)
+                    }
                 };
-                image.sample(mapping.uv(uv, object_point) * *scale) * *tint
+                image.sample_over(uv * *scale, duv.map(|d| d * *scale)) * *tint
             }
+        }
+    }
+
+    /// Whether [`Texture::color_over`] reads `Footprint::duv` (a checker in
+    /// uv, an image under [`Mapping::Uv`]), so that a caller computes it
+    /// only then.
+    #[must_use]
+    pub fn needs_uv_footprint(&self) -> bool {
+        match self {
+            Texture::Checker { world, .. } => !world,
+            Texture::Image { mapping, .. } => *mapping == Mapping::Uv,
+            Texture::Solid(_) => false,
         }
     }
 
@@ -151,12 +199,13 @@ fn check_color(c: Vec3) -> Result<(), ShadeError> {
     }
 }
 
-/// A decoded image in linear RGB, row 0 at the top.
+/// A decoded image in linear RGB, row 0 at the top, with its mip-map
+/// (built once, when the texture is made).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageTexture {
-    width: u32,
-    height: u32,
-    texels: Vec<Vec3>,
+    base: Level,
+    /// Levels 1 onwards, each half the size of the one before.
+    mips: Vec<Level>,
     wrap: Wrap,
 }
 
@@ -173,7 +222,9 @@ impl ImageTexture {
                 texels.len()
             )));
         }
-        Ok(Self { width, height, texels, wrap })
+        let base = Level { width, height, texels };
+        let mips = build_pyramid(&base, wrap);
+        Ok(Self { base, mips, wrap })
     }
 
     /// Loads a PNG, JPEG, BMP or EXR file (the format is guessed from the
@@ -245,29 +296,34 @@ impl ImageTexture {
     #[inline]
     #[must_use]
     pub fn sample(&self, uv: Vec2) -> Vec3 {
-        let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (ix, iy) = (x0 as i64, y0 as i64);
-        let top = self.texel(ix, iy).lerp(self.texel(ix.saturating_add(1), iy), fx);
-        let bottom = self
-            .texel(ix, iy.saturating_add(1))
-            .lerp(self.texel(ix.saturating_add(1), iy.saturating_add(1)), fx);
-        top.lerp(bottom, fy)
+        self.base.bilinear(uv, self.wrap)
+    }
+
+    /// The colour averaged over a footprint whose two axes in uv are
+    /// `duv`: trilinear in the mip-map, at `log2` of the longer axis in
+    /// texels (level 0, plain [`ImageTexture::sample`], for a footprint of
+    /// a texel or less).
+    #[must_use]
+    pub fn sample_over(&self, uv: Vec2, duv: [Vec2; 2]) -> Vec3 {
+        trilinear(&self.base, &self.mips, self.wrap, uv, lod(self.base.width, self.base.height, duv))
+    }
+
+    /// Number of mip-map levels, the full-resolution image included.
+    #[must_use]
+    pub fn levels(&self) -> usize {
+        self.mips.len() + 1
     }
 
     /// Width in texels.
     #[must_use]
     pub fn width(&self) -> u32 {
-        self.width
+        self.base.width
     }
 
     /// Height in texels.
     #[must_use]
     pub fn height(&self) -> u32 {
-        self.height
+        self.base.height
     }
 
     /// Wrap mode.
@@ -279,12 +335,7 @@ impl ImageTexture {
     /// The texel at integer coordinates (wrapped or clamped).
     #[must_use]
     pub fn texel(&self, x: i64, y: i64) -> Vec3 {
-        let (w, h) = (i64::from(self.width), i64::from(self.height));
-        let (x, y) = match self.wrap {
-            Wrap::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
-            Wrap::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
-        };
-        self.texels[(y * w + x) as usize]
+        self.base.texel(x, y, self.wrap)
     }
 }
 

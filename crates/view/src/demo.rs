@@ -60,6 +60,7 @@ pub fn demo_scene(width: u32, height: u32) -> Result<SceneSetup, ViewError> {
             max_depth: 5,
             min_contribution: 1e-3,
             threads: None,
+            antialias: Default::default(),
         },
     })
 }

@@ -449,6 +449,7 @@ mod tests {
             max_depth: 5,
             min_contribution: 0.0,
             threads: Some(1),
+            antialias: Default::default(),
         }
     }
 

@@ -181,3 +181,34 @@ fn fit_size_keeps_the_aspect_rounds_halves_up_and_stays_in_range() {
     assert_eq!(fit_size(0, 7, Some(5), None), (5, 7));
     assert_eq!(fit_size(7, 0, None, Some(5)), (7, 5));
 }
+
+// ----- pixel filter and adaptive sampling ---------------------------------
+
+#[test]
+fn filter_and_adaptive_come_from_the_file_or_the_flags() {
+    use prism_shade::PixelFilter;
+    let aa = |text: &str, overrides: Overrides| {
+        let opts = LoadOptions { overrides, ..LoadOptions::default() };
+        parse_scene_str_with(text, Path::new("."), Path::new("test.toml"), &opts)
+            .map(|l| l.settings.antialias)
+    };
+    let plain = aa(BASE, Overrides::default()).unwrap();
+    assert_eq!((plain.filter, plain.adaptive, plain.point_textures), (PixelFilter::Box, None, false));
+    let file = BASE.replace("spp = 2", "spp = 2\nfilter = \"blackman-harris\"\nadaptive = 0.25");
+    let got = aa(&file, Overrides::default()).unwrap();
+    assert_eq!((got.filter, got.adaptive), (PixelFilter::BlackmanHarris, Some(0.25)));
+    let ov = Overrides { filter: Some(PixelFilter::Gaussian), adaptive: Some(0.0), ..Overrides::default() };
+    let got = aa(&file, ov).unwrap();
+    assert_eq!((got.filter, got.adaptive), (PixelFilter::Gaussian, Some(0.0)));
+    // Errors: at the value in the file, or naming the flag.
+    let bad = BASE.replace("spp = 2", "spp = 2\nfilter = \"mitchell\"");
+    let err = aa(&bad, Overrides::default()).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:6:10:") && err.contains("blackman-harris"), "{err}");
+    let bad = BASE.replace("spp = 2", "spp = 2\nadaptive = -1");
+    let err = aa(&bad, Overrides::default()).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:6:12:") && err.contains(">= 0"), "{err}");
+    for v in [-0.5, f32::NAN, f32::INFINITY] {
+        let err = aa(BASE, Overrides { adaptive: Some(v), ..Overrides::default() }).unwrap_err().to_string();
+        assert!(err.starts_with("--adaptive: "), "{err}");
+    }
+}

@@ -29,7 +29,9 @@ impl std::ops::DerefMut for Shot {
 
 impl Shot {
     /// Settings for `spp` samples and recursion `max_depth`, one thread,
-    /// no contribution cut-off.
+    /// no contribution cut-off, box filter, and textures point-sampled (the
+    /// analytic tests compare pixels with texture lookups at a point; the
+    /// footprint tests turn filtering back on).
     pub fn settings(&self, spp: u32, max_depth: u32) -> RenderSettings {
         RenderSettings {
             camera: self.camera,
@@ -38,6 +40,7 @@ impl Shot {
             max_depth,
             min_contribution: 0.0,
             threads: Some(1),
+            antialias: prism_shade::Antialias { point_textures: true, ..Default::default() },
         }
     }
 }
