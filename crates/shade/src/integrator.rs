@@ -243,7 +243,12 @@ impl<'a> Tracer<'a> {
         if fp != Footprint::POINT && mat.texture.needs_uv_footprint() {
             fp.duv = uv_axes(self.scene, ray.origin, h, fp.dp);
         }
-        mat.texture.color_over(h.hit.point, h.hit.uv, &self.scene.to_object(h.object), &fp)
+        mat.texture.color_over(
+            h.hit.point,
+            h.hit.uv,
+            &self.scene.texture_to_object(h.object, &mat.texture),
+            &fp,
+        )
     }
 
     /// Ambient + Lambert + Phong over every light, each through its shadow
