@@ -6,6 +6,7 @@
 //! counts the rays it traces, so that nothing is shared between threads
 //! while a row is traced.
 
+use crate::light::{Target, sample_seed};
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::{Object, SceneHit};
@@ -106,8 +107,15 @@ impl<'a> Tracer<'a> {
     fn trace(&mut self, ray: &Ray, depth: u32, weight: Vec3, path: f32, skip_exit: u32) -> Vec3 {
         self.rays += 1;
         let scene = self.scene;
-        let Some(h) = scene.accel.closest_hit(ray) else {
-            return self.fog_blend(scene.background, self.fog_t(path, f32::INFINITY));
+        let hit = scene.accel.closest_hit(ray);
+        // An area light nearer than the surface (or than nothing) is seen.
+        if let Some((t, l)) = self.light_hit(ray, hit.as_ref().map_or(ray.t_max, |h| h.hit.t)) {
+            let end = path + t * ray.dir.length();
+            return self.fog_blend(l, self.fog_t(path, end));
+        }
+        let Some(h) = hit else {
+            let sky = scene.environment.as_ref().map_or(scene.background, |e| e.radiance(ray.dir));
+            return self.fog_blend(sky, self.fog_t(path, f32::INFINITY));
         };
         let seg = h.hit.t * ray.dir.length();
         let end = path + seg;
@@ -144,7 +152,7 @@ impl<'a> Tracer<'a> {
         let hit = &h.hit;
         let d = ray.dir.normalize_or(Vec3::NEG_Z);
         let n = hit.facing_normal();
-        let mut out = Vec3::ZERO;
+        let mut out = mat.emission;
         let w_local = mat.local_weight();
         if w_local > 0.0 {
             let albedo = albedo(self.scene, mat, h);
@@ -184,39 +192,62 @@ impl<'a> Tracer<'a> {
         out
     }
 
-    /// Ambient + Lambert + Phong over every light, each through its shadow
-    /// transmittance. `n` is the shading normal facing the viewer, `v` the
-    /// unit direction toward the viewer.
+    /// The nearest area light `ray` meets before `t_max`: its distance
+    /// (in the ray's parameter) and the radiance seen there.
+    fn light_hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec3)> {
+        let mut best: Option<(f32, Vec3)> = None;
+        for light in &self.scene.lights {
+            if let Some((t, l)) = light.intersect(ray, best.map_or(t_max, |b| b.0)) {
+                best = Some((t, l));
+            }
+        }
+        best
+    }
+
+    /// Ambient + Lambert + Phong over every light sample, each through its
+    /// shadow transmittance. `n` is the shading normal facing the viewer,
+    /// `v` the unit direction toward the viewer. An adaptive area light is
+    /// probed at four rim points first; when all four see the same
+    /// transmittance (fully lit or fully hidden) its samples take that
+    /// instead of tracing their own shadow rays.
     fn local(&mut self, mat: &Material, albedo: Vec3, hit: &Hit, n: Vec3, v: Vec3) -> Vec3 {
         let scene = self.scene;
         let mut c = mat.ambient * albedo * scene.ambient;
-        for light in &scene.lights {
-            let radiance = light.color * light.intensity;
-            if !(radiance.max_element() > 0.0) {
+        for (index, light) in scene.lights.iter().enumerate() {
+            if !(light.radiance().max_element() > 0.0) {
                 continue;
             }
-            let to = light.position - hit.point;
-            let dist = to.length();
-            if !(dist > 0.0) {
+            let p = hit.point;
+            let shared = light.probes(p).and_then(|probes| {
+                let first = self.shadow(hit, Target::Point(probes[0]));
+                probes[1..].iter().all(|q| self.shadow(hit, Target::Point(*q)) == first).then_some(first)
+            });
+            if shared == Some(Vec3::ZERO) {
                 continue;
             }
-            let l = to / dist;
-            let n_dot_l = n.dot(l);
-            if !(n_dot_l > 0.0) {
-                continue;
-            }
-            let shadow = self.shadow(hit, light.position);
-            if !(shadow.max_element() > 0.0) {
-                continue;
-            }
-            let mut s = mat.diffuse * n_dot_l * albedo;
-            if mat.specular > 0.0 {
-                let r_dot_v = (2.0 * n_dot_l * n - l).dot(v);
-                if r_dot_v > 0.0 {
-                    s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+            let seed = sample_seed(p, index);
+            for k in 0..light.sample_count() {
+                let Some(ls) = light.sample(p, k, seed) else { continue };
+                let n_dot_l = n.dot(ls.dir);
+                if !(n_dot_l > 0.0) {
+                    continue;
                 }
+                let shadow = match shared {
+                    Some(s) => s,
+                    None => self.shadow(hit, ls.target),
+                };
+                if !(shadow.max_element() > 0.0) {
+                    continue;
+                }
+                let mut s = mat.diffuse * n_dot_l * albedo;
+                if mat.specular > 0.0 {
+                    let r_dot_v = (2.0 * n_dot_l * n - ls.dir).dot(v);
+                    if r_dot_v > 0.0 {
+                        s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+                    }
+                }
+                c += shadow * ls.e * s;
             }
-            c += shadow * radiance * s;
         }
         c
     }
@@ -228,8 +259,11 @@ impl<'a> Tracer<'a> {
     /// solid (sphere, cuboid, cylinder, cone) counts once, at the crossing
     /// where the segment enters it; open surfaces (planes, disks,
     /// triangles, meshes) count at every crossing. Opaque occluders give 0.
-    fn shadow(&mut self, hit: &Hit, target: Vec3) -> Vec3 {
-        let ray = Ray::spawn_to(hit.point, hit.geo_normal, target);
+    fn shadow(&mut self, hit: &Hit, target: Target) -> Vec3 {
+        let ray = match target {
+            Target::Point(q) => Ray::spawn_to(hit.point, hit.geo_normal, q),
+            Target::Away(dir) => Ray::spawn(hit.point, hit.geo_normal, dir),
+        };
         self.rays += 1;
         let scene = self.scene;
         if !self.see_through {

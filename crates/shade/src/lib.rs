@@ -29,9 +29,10 @@
 //!     accel: Accel::build(Vec::new(), vec![Object::Shape(sphere)])?,
 //!     object_materials: vec![0],
 //!     materials: vec![Material { ambient: 0.1, diffuse: 0.9, ..Material::diffuse(Vec3::X) }],
-//!     lights: vec![PointLight { position: Vec3::new(0.0, 0.0, 10.0), color: Vec3::ONE, intensity: 1.0 }],
+//!     lights: vec![PointLight { position: Vec3::new(0.0, 0.0, 10.0), color: Vec3::ONE, intensity: 1.0 }.into()],
 //!     ambient: Vec3::ONE,
 //!     background: Vec3::ZERO,
+//!     environment: None,
 //!     fog: None,
 //! };
 //! scene.validate()?;
@@ -54,7 +55,9 @@
 
 mod aov;
 mod camera;
+mod environment;
 mod integrator;
+mod light;
 mod material;
 pub mod optics;
 mod output;
@@ -63,8 +66,10 @@ mod scene;
 mod texture;
 
 pub use aov::{Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_aovs};
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
+pub use environment::Environment;
 pub use integrator::MAX_DEPTH_LIMIT;
+pub use light::{AreaLight, AreaShape, Falloff, Light, LightKind, spot_weight};
 pub use material::Material;
 pub use output::{
     OutputError, OutputFormat, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,
