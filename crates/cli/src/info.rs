@@ -2,7 +2,7 @@
 
 use prism_geometry::glam::Vec3;
 use prism_scene::LoadedScene;
-use prism_shade::FogMode;
+use prism_shade::{AreaShape, Falloff, FogMode, LightKind};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -62,7 +62,22 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
     let _ = writeln!(s, "materials  {}: {}", i.materials.len(), i.materials.join(", "));
     let _ = writeln!(s, "lights     {}", i.lights.len());
     for l in &i.lights {
-        let _ = writeln!(s, "           at {}, colour {} × {}", v(l.position), v(l.color), trim(l.intensity));
+        let place = match l.kind {
+            LightKind::Point { position, falloff } => format!("at {}{}", v(position), falloff_text(falloff)),
+            LightKind::Spot { position, direction, falloff, .. } => {
+                format!("spot at {}, toward {}{}", v(position), v(direction), falloff_text(falloff))
+            }
+            LightKind::Directional { direction } => format!("directional toward {}", v(direction)),
+            LightKind::Area(a) => {
+                let shape = match a.shape {
+                    AreaShape::Quad { corner, .. } => format!("quad at {}", v(corner)),
+                    AreaShape::Disk { center, .. } => format!("disk at {}", v(center)),
+                    AreaShape::Sphere { center, .. } => format!("sphere at {}", v(center)),
+                };
+                format!("{shape}, {} samples", a.samples)
+            }
+        };
+        let _ = writeln!(s, "           {place}, colour {} × {}", v(l.color), trim(l.intensity));
     }
     match &i.fog {
         None => {
@@ -105,4 +120,12 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
         if loaded.inputs.len() == 1 { "" } else { "s" }
     );
     s
+}
+
+/// ", inverse-square" for a light that dims with distance.
+fn falloff_text(f: Falloff) -> &'static str {
+    match f {
+        Falloff::None => "",
+        Falloff::InverseSquare => ", inverse-square",
+    }
 }

@@ -95,12 +95,14 @@ impl<'a> Ctx<'a> {
     }
 
     pub fn color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
-        match vec3_of(&c.get_ref().0) {
+        self.color_at(&c.span(), c.get_ref(), what)
+    }
+
+    /// The colour `c` written at `span`, checked.
+    pub fn color_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
+        match vec3_of(&c.0) {
             Some(v) if v.min_element() >= 0.0 => Ok(v),
-            _ => Err(self.invalid(
-                &c.span(),
-                format!("{what} must be three finite numbers >= 0, got {:?}", c.get_ref().0),
-            )),
+            _ => Err(self.invalid(span, format!("{what} must be three finite numbers >= 0, got {:?}", c.0))),
         }
     }
 

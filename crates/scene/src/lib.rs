@@ -54,6 +54,7 @@ mod build;
 mod check;
 mod error;
 mod format;
+mod light;
 mod material;
 mod obj;
 mod object;
@@ -63,11 +64,11 @@ mod settings;
 mod view;
 
 pub use error::{Location, SceneError, line_col};
-pub use overrides::{Overrides, parse_vec3};
+pub use overrides::{CameraName, Overrides, parse_vec3};
 pub use settings::fit_size;
 
 use prism_geometry::Aabb;
-use prism_shade::{Aov, Camera, Fog, PointLight, RenderSettings, Scene};
+use prism_shade::{Aov, Camera, Fog, Light, RenderSettings, Scene};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -148,7 +149,7 @@ pub struct SceneInfo {
     /// Material names, in index order (MTL materials as `file.obj/name`).
     pub materials: Vec<String>,
     /// The lights.
-    pub lights: Vec<PointLight>,
+    pub lights: Vec<Light>,
     /// Bounds of every bounded object (planes excluded).
     pub bounds: Aabb,
     /// The fog, if any.
