@@ -4,7 +4,9 @@
 #     (libfuzzer-sys's build script);
 #   - for the viewer's real-window test (crates/cli/tests/view_window.rs):
 #     Xvfb, xdotool, ImageMagick's `import` (screenshots), and the X client
-#     libraries that minifb loads at run time.
+#     libraries that minifb loads at run time;
+#   - python3 with venv, for the Mitsuba 3 comparison
+#     (crates/cli/tests/mitsuba.rs makes its own venv and pip-installs mitsuba).
 # Idempotent: does nothing when everything is there. Where it cannot install
 # (no apt-get, not root and no sudo, or apt fails), it says what is missing;
 # under CI (`CI` set to anything but empty, `0` or `false`, as .ci/run does)
@@ -34,6 +36,7 @@ missing() {
     done
     has_lib libX11 || m+=("libX11")
     has_lib libXcursor || m+=("libXcursor")
+    python3 -c "import venv, ensurepip" >/dev/null 2>&1 || m+=("python3-venv")
     echo "${m[*]}"
 }
 
@@ -47,7 +50,7 @@ give_up() {
 }
 
 if [ -z "$(missing)" ]; then
-    echo "install-deps: c++, Xvfb, xdotool, import and the X libraries are present"
+    echo "install-deps: c++, Xvfb, xdotool, import, the X libraries and python3-venv are present"
     exit 0
 fi
 
@@ -64,7 +67,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 
 export DEBIAN_FRONTEND=noninteractive
-packages=(g++ xvfb xdotool imagemagick libx11-6 libxcursor1)
+packages=(g++ xvfb xdotool imagemagick libx11-6 libxcursor1 python3 python3-venv)
 # A mirror can fail for a moment: try a few times before giving up.
 for attempt in 1 2 3; do
     if "${sudo[@]}" apt-get update -qq \
