@@ -141,3 +141,21 @@ pub(crate) fn first_foreign<'k>(
 ) -> Option<(&'k str, Range<usize>)> {
     keys.iter().find_map(|(key, span)| span.clone().filter(|_| !allowed.contains(key)).map(|s| (*key, s)))
 }
+
+/// Refuses the first of `keys` (name, span if given) that is given but not
+/// in `allowed`: "`key` is not a key of a {what} (it takes: ..., plus {common})".
+pub(crate) fn refuse_foreign(
+    ctx: &Ctx,
+    keys: &[(&str, Option<Range<usize>>)],
+    allowed: &[&str],
+    what: &str,
+    common: &str,
+) -> Result<()> {
+    match first_foreign(keys, allowed) {
+        Some((key, span)) => Err(ctx.invalid(
+            &span,
+            format!("`{key}` is not a key of a {what} (it takes: {}, plus {common})", allowed.join(", ")),
+        )),
+        None => Ok(()),
+    }
+}

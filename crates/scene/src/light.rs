@@ -1,7 +1,7 @@
 //! `[[lights]]`: point, spot, directional and area lights (quad, disk,
 //! sphere), the keys each type takes, checked with their places. No I/O.
 
-use crate::check::{Ctx, Result, first_foreign, span_of};
+use crate::check::{Ctx, Result, refuse_foreign, span_of};
 use crate::format::{FalloffDef, LightDef, LightKindDef, Num, V3};
 use prism_geometry::glam::Vec3;
 use prism_shade::{AreaLight, AreaShape, Falloff, Light, LightKind};
@@ -202,15 +202,5 @@ fn check_keys(ctx: &Ctx, d: &LightDef, kind: LightKindDef) -> Result<()> {
         LightKindDef::Disk => &["center", "normal", "radius", "samples", "two_sided", "adaptive"],
         LightKindDef::Sphere => &["center", "radius", "samples", "adaptive"],
     };
-    match first_foreign(&present, allowed) {
-        Some((key, span)) => Err(ctx.invalid(
-            &span,
-            format!(
-                "`{key}` is not a key of a {} light (it takes: {}, plus color or radiance, intensity)",
-                kind.name(),
-                allowed.join(", ")
-            ),
-        )),
-        None => Ok(()),
-    }
+    refuse_foreign(ctx, &present, allowed, &format!("{} light", kind.name()), "color or radiance, intensity")
 }

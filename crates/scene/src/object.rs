@@ -2,7 +2,7 @@
 //! instanced from their files by the build), the keys each kind takes, and
 //! the `transform` steps. No I/O.
 
-use crate::check::{Ctx, Result, first_foreign, span_of, vec3_of};
+use crate::check::{Ctx, Result, refuse_foreign, span_of, vec3_of};
 use crate::format::{Num, ObjectDef, ObjectKind, Step};
 use prism_geometry::glam::{Mat4, Vec3};
 use prism_geometry::{Cone, Cuboid, Cylinder, Disk, Plane, Shape, Shear, Sphere, Transform, Triangle};
@@ -106,17 +106,7 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
         ObjectKind::Triangle => &["vertices"],
         ObjectKind::Mesh => &["path", "normals"],
     };
-    match first_foreign(&present, allowed) {
-        Some((key, span)) => Err(ctx.invalid(
-            &span,
-            format!(
-                "`{key}` is not a key of a {} (it takes: {}, plus material, transform, name)",
-                kind.name(),
-                allowed.join(", ")
-            ),
-        )),
-        None => Ok(()),
-    }
+    refuse_foreign(ctx, &present, allowed, kind.name(), "material, transform, name")
 }
 
 /// A cuboid from `min` and `max`, or `size` and `center`.

@@ -225,7 +225,7 @@ impl<'a> Tracer<'a> {
             if shared == Some(Vec3::ZERO) {
                 continue;
             }
-            let seed = sample_seed(p, index);
+            let seed = sample_seed(p, index, light.sample_count());
             for k in 0..light.sample_count() {
                 let Some(ls) = light.sample(p, k, seed) else { continue };
                 let n_dot_l = n.dot(ls.dir);

@@ -231,7 +231,7 @@ impl Light {
     /// sends no light to `p` (behind a one-sided light, outside a spot's
     /// cone, `p` at the light or inside a sphere light).
     #[must_use]
-    pub(crate) fn sample(&self, p: Vec3, k: u32, seed: u64) -> Option<LightSample> {
+    pub(crate) fn sample(&self, p: Vec3, k: u32, seed: SampleSeed) -> Option<LightSample> {
         let radiance = self.radiance();
         match self.kind {
             LightKind::Point { position, falloff } => point_sample(p, position, radiance, falloff),
@@ -470,13 +470,12 @@ pub(crate) fn concentric_disk(u: f32, v: f32) -> (f32, f32) {
 /// the estimate is stratified in both directions and unbiased. One sample
 /// is the centre.
 #[must_use]
-pub(crate) fn lattice_point(k: u32, n: u32, seed: u64) -> (f32, f32) {
+pub(crate) fn lattice_point(k: u32, n: u32, seed: SampleSeed) -> (f32, f32) {
     if n <= 1 {
         return (0.5, 0.5);
     }
-    let g = golden_stride(n);
-    let kv = ((u64::from(k) * u64::from(g)) % u64::from(n)) as u32;
-    let z = splitmix64(seed ^ (u64::from(k).wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+    let kv = ((u64::from(k) * u64::from(seed.stride)) % u64::from(n)) as u32;
+    let z = splitmix64(seed.hash ^ (u64::from(k).wrapping_mul(0x9E37_79B9_7F4A_7C15)));
     let (ju, jv) = unit_pair(z);
     let below_one = 1.0 - f32::EPSILON / 2.0;
     let inv = 1.0 / n as f32;
@@ -489,18 +488,63 @@ pub(crate) fn unit_pair(z: u64) -> (f32, f32) {
     ((z >> 40) as f32 * (1.0 / 16_777_216.0), ((z >> 16) & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0))
 }
 
+/// What a shading point's samples of one light share: the jitter's seed
+/// and the lattice's stride.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SampleSeed {
+    hash: u64,
+    stride: u32,
+}
+
 /// The seed of the light samples at shading point `p` for light number
-/// `light`: a hash of the point's bits, so the same camera sample always
-/// meets the same light samples, whatever the thread.
+/// `light` of `n` samples: a hash of the point's bits, so the same camera
+/// sample always meets the same light samples, whatever the thread.
 #[inline]
 #[must_use]
-pub(crate) fn sample_seed(p: Vec3, light: usize) -> u64 {
+pub(crate) fn sample_seed(p: Vec3, light: usize, n: u32) -> SampleSeed {
     let [x, y, z] = p.to_array().map(f32::to_bits);
-    splitmix64(
+    let stride = if n > 1 { golden_stride(n) } else { 1 };
+    let hash = splitmix64(
         u64::from(x)
             ^ (u64::from(y) << 21)
             ^ (u64::from(z) << 42)
             ^ ((light as u64) << 56)
             ^ 0xA076_1D64_78BD_642F,
-    )
+    );
+    SampleSeed { hash, stride }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lattice_points_fill_every_row_and_column_once() {
+        for n in [2u32, 3, 9, 16, 17, 64] {
+            let seed = sample_seed(Vec3::new(0.25, -1.5, 3.0), 2, n);
+            let (mut rows, mut cols) = (vec![false; n as usize], vec![false; n as usize]);
+            for k in 0..n {
+                let (u, v) = lattice_point(k, n, seed);
+                assert!((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v));
+                let (i, j) = ((u * n as f32) as usize, (v * n as f32) as usize);
+                assert!(!cols[i] && !rows[j], "n {n}: sample {k} shares a row or column");
+                (cols[i], rows[j]) = (true, true);
+                assert_eq!(lattice_point(k, n, seed), (u, v), "deterministic");
+            }
+        }
+        assert_eq!(lattice_point(0, 1, sample_seed(Vec3::ZERO, 0, 1)), (0.5, 0.5));
+        // Another shading point jitters differently.
+        let a = lattice_point(3, 16, sample_seed(Vec3::ZERO, 0, 16));
+        let b = lattice_point(3, 16, sample_seed(Vec3::X, 0, 16));
+        assert_ne!(a, b);
+    }
+
+    #[test]
+    fn concentric_disk_stays_in_the_disk() {
+        for (u, v) in [(0.0, 0.0), (0.5, 0.5), (0.999, 0.1), (0.3, 0.999)] {
+            let (x, y) = concentric_disk(u, v);
+            assert!(x * x + y * y <= 1.0 + 1e-6);
+        }
+        assert_eq!(concentric_disk(0.5, 0.5), (0.0, 0.0));
+    }
 }

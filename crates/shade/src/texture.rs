@@ -198,7 +198,9 @@ impl ImageTexture {
         limits.max_alloc = Some(1024 * 1024 * 1024);
         reader.limits(limits);
         if reader.format().is_none() {
-            return Err(err("not a recognised image format (PNG, JPEG, BMP, EXR or Radiance HDR expected)".into()));
+            return Err(err(
+                "not a recognised image format (PNG, JPEG, BMP, EXR or Radiance HDR expected)".into()
+            ));
         }
         let decoded = reader.decode().map_err(|e| err(e.to_string()))?;
         let (width, height) = (decoded.width(), decoded.height());
