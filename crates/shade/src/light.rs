@@ -217,7 +217,8 @@ impl Light {
         self.color * self.intensity
     }
 
-    /// How many samples [`Light::sample`] takes at each shading point.
+    /// How many samples the renderer takes of this light at each shading
+    /// point (`samples` of an area light, else 1).
     #[must_use]
     pub fn sample_count(&self) -> u32 {
         match self.kind {
