@@ -222,3 +222,19 @@ fn background_images_are_built_with_their_rotation_and_refused_when_unreadable()
         .to_string();
     assert!(err.contains("picture"), "{err}");
 }
+
+#[test]
+fn a_radiance_hdr_background_is_read_linear() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 4 × 2 Radiance HDR sky, every texel (2, 0.5, 0.25): brighter than 1, linear.
+    let texels = vec![image::Rgb([2.0f32, 0.5, 0.25]); 8];
+    let file = std::fs::File::create(dir.path().join("sky.hdr")).unwrap();
+    image::codecs::hdr::HdrEncoder::new(file).encode(&texels, 4, 2).unwrap();
+    let text = BASE.replace("spp = 2", "spp = 2\nbackground = { image = \"sky.hdr\", rotation = -45 }");
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("t.toml")).unwrap();
+    let env = loaded.scene.environment.expect("an environment image");
+    assert_eq!((env.image.width(), env.image.height(), env.rotation_deg), (4, 2, -45.0));
+    let c = env.radiance(Vec3::new(0.3, 0.2, -1.0));
+    assert!((c - Vec3::new(2.0, 0.5, 0.25)).abs().max_element() < 0.02, "{c}");
+    assert!(loaded.inputs.iter().any(|p| p.ends_with("sky.hdr")), "the image is an input");
+}
