@@ -7,6 +7,8 @@
 #     libraries that minifb loads at run time;
 #   - for the render-farm test (crates/cli/tests/farm_slurm.rs): a real
 #     single-node Slurm (slurmctld, slurmd, sbatch...) and munge.
+#   - python3 with venv, for the Mitsuba 3 comparison
+#     (crates/cli/tests/mitsuba.rs makes its own venv and pip-installs mitsuba).
 # Idempotent: does nothing when everything is there. Where it cannot install
 # (no apt-get, not root and no sudo, or apt fails), it says what is missing;
 # under CI (`CI` set to anything but empty, `0` or `false`, as .ci/run does)
@@ -39,6 +41,7 @@ missing() {
     for tool in slurmctld slurmd sbatch munged; do
         command -v "$tool" >/dev/null 2>&1 || m+=("$tool")
     done
+    python3 -c "import venv, ensurepip" >/dev/null 2>&1 || m+=("python3-venv")
     echo "${m[*]}"
 }
 
@@ -52,7 +55,7 @@ give_up() {
 }
 
 if [ -z "$(missing)" ]; then
-    echo "install-deps: c++, Xvfb, xdotool, import, the X libraries, Slurm and munge are present"
+    echo "install-deps: c++, Xvfb, xdotool, import, the X libraries, Slurm, munge and python3-venv are present"
     exit 0
 fi
 
@@ -69,7 +72,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 
 export DEBIAN_FRONTEND=noninteractive
-packages=(g++ xvfb xdotool imagemagick libx11-6 libxcursor1 slurm-wlm munge)
+packages=(g++ xvfb xdotool imagemagick libx11-6 libxcursor1 slurm-wlm munge python3 python3-venv)
 # A mirror can fail for a moment: try a few times before giving up.
 for attempt in 1 2 3; do
     if "${sudo[@]}" apt-get update -qq \

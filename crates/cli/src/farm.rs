@@ -106,6 +106,7 @@ pub fn render_flags(o: &Overrides, aov: Option<&str>, limits: &crate::LimitArgs)
     push("--fov", o.fov.map(|x| x.to_string()));
     push("--filter", o.filter.map(|f| f.name().to_owned()));
     push("--adaptive", o.adaptive.map(|x| x.to_string()));
+    push("--camera", o.camera.map(|c| c.to_string()));
     push("--aov", aov.map(str::to_owned));
     push("--max-side", Some(limits.max_side.to_string()));
     push("--max-pixels", Some(limits.max_pixels.to_string()));
@@ -525,6 +526,7 @@ mod tests {
             fov: Some(33.3),
             filter: Some(prism_shade::PixelFilter::BlackmanHarris),
             adaptive: Some(0.05),
+            camera: prism_scene::CameraName::new("top view").ok(),
         };
         let limits = crate::LimitArgs { max_side: 100, max_pixels: 5000, max_spp: 10 };
         let flags = render_flags(&o, Some("depth,albedo"), &limits);

@@ -2,7 +2,7 @@
 
 use prism_geometry::glam::Vec3;
 use prism_scene::LoadedScene;
-use prism_shade::FogMode;
+use prism_shade::{AreaShape, Falloff, FogMode, LightKind};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -62,7 +62,22 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
     let _ = writeln!(s, "materials  {}: {}", i.materials.len(), i.materials.join(", "));
     let _ = writeln!(s, "lights     {}", i.lights.len());
     for l in &i.lights {
-        let _ = writeln!(s, "           at {}, colour {} × {}", v(l.position), v(l.color), trim(l.intensity));
+        let place = match l.kind {
+            LightKind::Point { position, falloff } => format!("at {}{}", v(position), falloff_text(falloff)),
+            LightKind::Spot { position, direction, falloff, .. } => {
+                format!("spot at {}, toward {}{}", v(position), v(direction), falloff_text(falloff))
+            }
+            LightKind::Directional { direction } => format!("directional toward {}", v(direction)),
+            LightKind::Area(a) => {
+                let shape = match a.shape {
+                    AreaShape::Quad { corner, .. } => format!("quad at {}", v(corner)),
+                    AreaShape::Disk { center, .. } => format!("disk at {}", v(center)),
+                    AreaShape::Sphere { center, .. } => format!("sphere at {}", v(center)),
+                };
+                format!("{shape}, {} samples", a.samples)
+            }
+        };
+        let _ = writeln!(s, "           {place}, colour {} × {}", v(l.color), trim(l.intensity));
     }
     match &i.fog {
         None => {
@@ -168,11 +183,7 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
         })).collect::<Vec<_>>(),
         "triangles": { "stored": i.stored_triangles, "instanced": i.instanced_triangles },
         "materials": i.materials,
-        "lights": i.lights.iter().map(|l| json!({
-            "position": arr(l.position),
-            "color": arr(l.color),
-            "intensity": num(l.intensity),
-        })).collect::<Vec<_>>(),
+        "lights": i.lights.iter().map(light_json).collect::<Vec<_>>(),
         "fog": fog,
         "bounds": (!i.bounds.is_empty()).then(|| json!({ "min": arr(i.bounds.min), "max": arr(i.bounds.max) })),
         "bvh": {
@@ -186,4 +197,55 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
         "inputs": loaded.inputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         "warnings": loaded.warnings,
     })
+}
+
+/// One light for `info --json`: `type`, its placement keys as in the
+/// scene file, `color` and `intensity`.
+fn light_json(l: &prism_shade::Light) -> serde_json::Value {
+    use serde_json::json;
+    let falloff = |f: Falloff| match f {
+        Falloff::None => "none",
+        Falloff::InverseSquare => "inverse_square",
+    };
+    let mut v = match l.kind {
+        LightKind::Point { position, falloff: f } => {
+            json!({ "type": "point", "position": arr(position), "falloff": falloff(f) })
+        }
+        LightKind::Spot { position, direction, cos_inner, cos_outer, falloff: f } => json!({
+            "type": "spot",
+            "position": arr(position),
+            "direction": arr(direction),
+            "inner_angle": num(cos_inner.clamp(-1.0, 1.0).acos().to_degrees()),
+            "outer_angle": num(cos_outer.clamp(-1.0, 1.0).acos().to_degrees()),
+            "falloff": falloff(f),
+        }),
+        LightKind::Directional { direction } => json!({ "type": "directional", "direction": arr(direction) }),
+        LightKind::Area(a) => {
+            let mut v = match a.shape {
+                AreaShape::Quad { corner, edge_u, edge_v } => json!({
+                    "type": "quad", "corner": arr(corner), "edge_u": arr(edge_u), "edge_v": arr(edge_v),
+                }),
+                AreaShape::Disk { center, normal, radius } => json!({
+                    "type": "disk", "center": arr(center), "normal": arr(normal), "radius": num(radius),
+                }),
+                AreaShape::Sphere { center, radius } => {
+                    json!({ "type": "sphere", "center": arr(center), "radius": num(radius) })
+                }
+            };
+            v["samples"] = a.samples.into();
+            v["two_sided"] = a.two_sided.into();
+            v
+        }
+    };
+    v["color"] = arr(l.color);
+    v["intensity"] = num(l.intensity);
+    v
+}
+
+/// ", inverse-square" for a light that dims with distance.
+fn falloff_text(f: Falloff) -> &'static str {
+    match f {
+        Falloff::None => "",
+        Falloff::InverseSquare => ", inverse-square",
+    }
 }

@@ -185,3 +185,23 @@ fn eight_bit_colours_warn_and_samples_aliases_work() {
         assert!(text(&out.stdout).contains("32×18, 2 spp"), "{flag}: {}", text(&out.stdout));
     }
 }
+
+#[test]
+fn camera_chooses_a_named_camera_and_lists_the_names_when_unknown() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = format!(
+        "{GOOD}\n[[cameras]]\nname = \"above\"\nposition = [0, 9, 0.01]\nlook_at = [0, 0, 0]\nprojection = \"orthographic\"\n"
+    );
+    fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let first = prism(dir.path(), &["render", "s.toml", "-o", "a.png", "--quiet"]);
+    assert!(first.status.success(), "{}", text(&first.stderr));
+    let above = prism(dir.path(), &["render", "s.toml", "-o", "b.png", "--quiet", "--camera", "above"]);
+    assert!(above.status.success(), "{}", text(&above.stderr));
+    let (a, b) = (fs::read(dir.path().join("a.png")).unwrap(), fs::read(dir.path().join("b.png")).unwrap());
+    assert_ne!(a, b, "another camera, another picture");
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "c.png", "--camera", "side"]);
+    common::assert_clean_failure("unknown camera", &out);
+    let err = text(&out.stderr);
+    assert!(err.contains("--camera") && err.contains("`side`") && err.contains("above"), "{err}");
+    assert!(!dir.path().join("c.png").exists());
+}

@@ -15,7 +15,7 @@ use crate::{LoadOptions, LoadedScene, MeshInfo, Overrides, SceneInfo};
 use prism_bvh::{Accel, Object};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Instance, Transform, TriangleMesh};
-use prism_shade::{Camera, Fog, FogMode, ImageTexture, PointLight, RenderSettings, Scene};
+use prism_shade::{Camera, Fog, FogMode, ImageTexture, Light, PointLight, RenderSettings, Scene};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -35,15 +35,8 @@ pub(crate) fn build_scene(
     let settings =
         settings::resolve(&ctx, file.render.as_ref().map(Spanned::get_ref), Defaults::FILE, options)?;
     let mut b = Build::new(ctx, res, options);
-    let mut lights = Vec::with_capacity(file.lights.len());
-    for l in &file.lights {
-        let d = l.get_ref();
-        lights.push(PointLight {
-            position: ctx.vec3(&d.position, "light position")?,
-            color: ctx.opt_color(d.color.as_ref(), "light color", Vec3::ONE)?,
-            intensity: ctx.opt_num(d.intensity.as_ref(), 1.0, |n| ctx.non_negative(n, "light intensity"))?,
-        });
-    }
+    let lights = file.lights.iter().map(|l| crate::light::light(&ctx, l)).collect::<Result<Vec<_>>>()?;
+    let camera_def = view::choose_camera(&ctx, file, options.overrides.camera.as_ref())?;
     if lights.is_empty() {
         b.warn("the scene has no lights; only ambient light will show");
     }
@@ -55,7 +48,15 @@ pub(crate) fn build_scene(
     for o in &file.objects {
         b.object(o)?;
     }
-    b.finish(settings, &CameraSource::File(&file.camera), lights, fog)
+    let environment = match file.render.as_ref().and_then(|r| r.get_ref().background.as_ref()) {
+        Some(bg) => view::environment(&ctx, bg.get_ref(), &mut |p| {
+            b.image(res.texture(p.get_ref(), prism_shade::Wrap::Repeat), p)
+        })?,
+        None => None,
+    };
+    let mut loaded = b.finish(settings, &CameraSource::File(camera_def), lights, fog)?;
+    loaded.scene.environment = environment;
+    Ok(loaded)
 }
 
 /// Builds a scene of the OBJ file `name` alone (read into `res`; its
@@ -118,7 +119,7 @@ pub(crate) fn build_obj_scene(
         )));
     }
     let settings = settings::resolve(&ctx, None, d, options)?;
-    let lights = vec![PointLight { position: light, color: Vec3::ONE, intensity: 1.0 }];
+    let lights = vec![PointLight { position: light, color: Vec3::ONE, intensity: 1.0 }.into()];
     if options.obj.floor && !bounds.is_empty() {
         b.floor(bounds.min.y).map_err(|e| ctx.invalid_file(format!("cannot place the floor: {e}")))?;
     }
@@ -377,7 +378,7 @@ impl<'a> Build<'a> {
         mut self,
         settings: Settings,
         camera: &CameraSource,
-        lights: Vec<PointLight>,
+        lights: Vec<Light>,
         fog: Option<(Fog, bool)>,
     ) -> Result<LoadedScene> {
         if self.objects.is_empty() {
@@ -427,6 +428,7 @@ impl<'a> Build<'a> {
             lights,
             ambient,
             background,
+            environment: None,
             fog,
         };
         let settings = RenderSettings {

@@ -111,12 +111,18 @@ impl<'a> Ctx<'a> {
     }
 
     pub fn color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
-        match vec3_of(&c.get_ref().0) {
+        self.color_at(&c.span(), c.get_ref(), what)
+    }
+
+    /// The colour `c` written at `span`, checked; components that look
+    /// like 8-bit values get a warning.
+    pub fn color_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
+        match vec3_of(&c.0) {
             Some(v) if v.min_element() >= 0.0 => {
-                if looks_8bit(&c.get_ref().0) {
-                    let [r, g, b] = c.get_ref().0.map(|x| x as u8);
+                if looks_8bit(&c.0) {
+                    let [r, g, b] = c.0.map(|x| x as u8);
                     self.note(
-                        &c.span(),
+                        span,
                         &format!(
                             "{what} {v} looks like 8-bit values: colour components are 0–1 (or \"#{r:02x}{g:02x}{b:02x}\")"
                         ),
@@ -124,10 +130,7 @@ impl<'a> Ctx<'a> {
                 }
                 Ok(v)
             }
-            _ => Err(self.invalid(
-                &c.span(),
-                format!("{what} must be three finite numbers >= 0, got {:?}", c.get_ref().0),
-            )),
+            _ => Err(self.invalid(span, format!("{what} must be three finite numbers >= 0, got {:?}", c.0))),
         }
     }
 
@@ -172,4 +175,22 @@ pub(crate) fn first_foreign<'k>(
     allowed: &[&str],
 ) -> Option<(&'k str, Range<usize>)> {
     keys.iter().find_map(|(key, span)| span.clone().filter(|_| !allowed.contains(key)).map(|s| (*key, s)))
+}
+
+/// Refuses the first of `keys` (name, span if given) that is given but not
+/// in `allowed`: "`key` is not a key of a {what} (it takes: ..., plus {common})".
+pub(crate) fn refuse_foreign(
+    ctx: &Ctx,
+    keys: &[(&str, Option<Range<usize>>)],
+    allowed: &[&str],
+    what: &str,
+    common: &str,
+) -> Result<()> {
+    match first_foreign(keys, allowed) {
+        Some((key, span)) => Err(ctx.invalid(
+            &span,
+            format!("`{key}` is not a key of a {what} (it takes: {}, plus {common})", allowed.join(", ")),
+        )),
+        None => Ok(()),
+    }
 }

@@ -22,7 +22,13 @@ pub type V3 = Spanned<[f64; 3]>;
 pub struct SceneFile {
     #[serde(default)]
     pub render: Option<Spanned<RenderDef>>,
-    pub camera: Spanned<CameraDef>,
+    /// The camera; optional where `[[cameras]]` names some.
+    #[serde(default)]
+    pub camera: Option<Spanned<CameraDef>>,
+    /// Named cameras (`--camera NAME`); the first is the default where
+    /// there is no `[camera]`.
+    #[serde(default)]
+    pub cameras: Vec<Spanned<CameraDef>>,
     #[serde(default)]
     pub lights: Vec<Spanned<LightDef>>,
     #[serde(default)]
@@ -69,7 +75,7 @@ pub struct RenderDef {
     pub spp: Option<Spanned<u64>>,
     pub max_depth: Option<Spanned<u64>>,
     pub min_contribution: Option<Num>,
-    pub background: Option<Spanned<Color>>,
+    pub background: Option<Spanned<BackgroundDef>>,
     pub ambient: Option<Spanned<Color>>,
     /// AOV pass names (`"depth"`, ..., `"all"`), checked with spans.
     pub aov: Option<Spanned<Vec<Spanned<String>>>>,
@@ -87,14 +93,113 @@ pub struct CameraDef {
     pub look_at: V3,
     pub up: Option<V3>,
     pub fov: Option<Num>,
+    /// The name `--camera` chooses it by.
+    pub name: Option<Spanned<String>>,
+    /// Lens radius (0: pinhole).
+    pub aperture: Option<Num>,
+    /// Distance of the plane in focus (default: to `look_at`).
+    pub focus_distance: Option<Num>,
+    pub projection: Option<Spanned<ProjectionDef>>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum ProjectionDef {
+    Perspective,
+    Orthographic,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LightKindDef {
+    #[default]
+    Point,
+    Spot,
+    Directional,
+    Quad,
+    Disk,
+    Sphere,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub enum FalloffDef {
+    None,
+    InverseSquare,
+}
+
+/// One light; which keys a `type` takes is checked in `light.rs`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDef {
+    #[serde(rename = "type")]
+    pub kind: Option<Spanned<LightKindDef>>,
+    pub position: Option<V3>,
+    pub color: Option<Spanned<Color>>,
+    pub radiance: Option<Spanned<Color>>,
+    pub intensity: Option<Num>,
+    pub falloff: Option<Spanned<FalloffDef>>,
+    pub direction: Option<V3>,
+    pub inner_angle: Option<Num>,
+    pub outer_angle: Option<Num>,
+    pub corner: Option<V3>,
+    pub edge_u: Option<V3>,
+    pub edge_v: Option<V3>,
+    pub center: Option<V3>,
+    pub normal: Option<V3>,
+    pub radius: Option<Num>,
+    pub samples: Option<Spanned<u64>>,
+    pub two_sided: Option<Spanned<bool>>,
+    pub adaptive: Option<Spanned<bool>>,
+}
+
+/// `[render] background`: a colour, or an environment image
+/// `{ image = "sky.hdr", rotation = 90 }`.
+pub enum BackgroundDef {
+    Color(Color),
+    Image(EnvironmentDef),
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct LightDef {
-    pub position: V3,
-    pub color: Option<Spanned<Color>>,
-    pub intensity: Option<Num>,
+pub struct EnvironmentDef {
+    pub image: Spanned<String>,
+    pub rotation: Option<Num>,
+}
+
+impl BackgroundDef {
+    /// The environment image's path, if the background is one.
+    pub fn image(&self) -> Option<&Spanned<String>> {
+        match self {
+            Self::Image(e) => Some(&e.image),
+            Self::Color(_) => None,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for BackgroundDef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = BackgroundDef;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "a colour ([r, g, b] or \"#rrggbb\") or an environment image { image = \"file\", rotation = degrees }",
+                )
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<BackgroundDef, A::Error> {
+                Color::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(BackgroundDef::Color)
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<BackgroundDef, E> {
+                Color::deserialize(de::value::StrDeserializer::new(s)).map(BackgroundDef::Color)
+            }
+            fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<BackgroundDef, A::Error> {
+                EnvironmentDef::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(BackgroundDef::Image)
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]

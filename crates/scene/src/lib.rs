@@ -54,6 +54,7 @@ mod build;
 mod check;
 mod error;
 mod format;
+mod light;
 mod material;
 mod obj;
 mod obj_view;
@@ -68,12 +69,12 @@ mod wild;
 
 pub use error::{Location, SceneError, line_col};
 pub use obj_view::{ObjOptions, ObjView};
-pub use overrides::{Overrides, parse_vec3};
+pub use overrides::{CameraName, Overrides, parse_vec3};
 pub use read::inputs_digest;
 pub use settings::fit_size;
 
 use prism_geometry::Aabb;
-use prism_shade::{Aov, Camera, Fog, PointLight, RenderSettings, Scene};
+use prism_shade::{Aov, Camera, Fog, Light, RenderSettings, Scene};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -165,7 +166,7 @@ pub struct SceneInfo {
     /// Material names, in index order (MTL materials as `file.obj/name`).
     pub materials: Vec<String>,
     /// The lights.
-    pub lights: Vec<PointLight>,
+    pub lights: Vec<Light>,
     /// Bounds of every bounded object (planes excluded).
     pub bounds: Aabb,
     /// The fog, if any.

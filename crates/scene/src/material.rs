@@ -234,6 +234,10 @@ pub(crate) fn from_mtl(
             }
         }
     }
+    // `Ke`: emission, seen and reflected but lighting nothing.
+    if let Some(ke) = raw.emissive {
+        m.emission = v3(ke, "Ke")?;
+    }
     let sum = m.reflectivity + m.transparency + m.transmission;
     if sum > 1.0 {
         m.reflectivity /= sum;

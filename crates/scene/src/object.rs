@@ -2,7 +2,7 @@
 //! instanced from their files by the build), the keys each kind takes, and
 //! the `transform` steps. No I/O.
 
-use crate::check::{Ctx, Result, first_foreign, span_of, vec3_of};
+use crate::check::{Ctx, Result, refuse_foreign, span_of, vec3_of};
 use crate::format::{Num, ObjectDef, ObjectKind, Step};
 use prism_geometry::glam::{Mat4, Vec3};
 use prism_geometry::{Cone, Cuboid, Cylinder, Disk, Plane, Shape, Shear, Sphere, Transform, Triangle};
@@ -99,17 +99,8 @@ pub(crate) fn check_keys(ctx: &Ctx, d: &ObjectDef, kind: ObjectKind) -> Result<(
         ("crease_angle", span_of(&d.crease_angle)),
     ];
     let allowed = shape_keys(kind);
-    match first_foreign(&present, allowed) {
-        Some((key, span)) => Err(ctx.invalid(
-            &span,
-            format!(
-                "`{key}` is not a key of a {} (it takes: {}, plus material, transform, name)",
-                kind.name(),
-                allowed.join(", ")
-            ),
-        )),
-        None => check_crease(ctx, d),
-    }
+    refuse_foreign(ctx, &present, allowed, kind.name(), "material, transform, name")?;
+    check_crease(ctx, d)
 }
 
 /// The keys of its own that an object of `kind` takes (besides `type`,

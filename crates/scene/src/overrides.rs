@@ -16,7 +16,7 @@ use prism_shade::PixelFilter;
 /// (`#[command(flatten)]`): `--width W`, `--height H`, `--spp N` (also `-s N`, `--samples N`),
 /// `--max-depth N`, `--threads N`, `--fog` / `--no-fog`,
 /// `--camera-pos X,Y,Z`, `--look-at X,Y,Z`, `--up X,Y,Z`, `--fov DEGREES`,
-/// `--filter NAME`, `--adaptive THRESHOLD`.
+/// `--filter NAME`, `--adaptive THRESHOLD`, `--camera NAME`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Overrides {
     /// Image width. If only one of width and height is given, the other
@@ -50,6 +50,54 @@ pub struct Overrides {
     /// Adaptive supersampling threshold (`--adaptive THRESHOLD`), finite
     /// and at least 0.
     pub adaptive: Option<f32>,
+    /// The scene camera to use (`--camera NAME`), by its `name`; the
+    /// default is the file's first camera.
+    pub camera: Option<CameraName>,
+}
+
+/// A camera's name as `--camera` gives it: up to [`CameraName::MAX_LEN`]
+/// bytes of UTF-8, held inline so that [`Overrides`] stays `Copy`.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct CameraName {
+    len: u8,
+    bytes: [u8; CameraName::MAX_LEN],
+}
+
+impl CameraName {
+    /// The longest name, in bytes.
+    pub const MAX_LEN: usize = 64;
+
+    /// The name `s`.
+    ///
+    /// # Errors
+    /// A message if `s` is empty or longer than [`CameraName::MAX_LEN`] bytes.
+    pub fn new(s: &str) -> Result<Self, String> {
+        let len = s.len();
+        if len == 0 || len > Self::MAX_LEN {
+            return Err(format!("a camera name has 1 to {} bytes, got {len}", Self::MAX_LEN));
+        }
+        let mut bytes = [0; Self::MAX_LEN];
+        bytes[..len].copy_from_slice(s.as_bytes());
+        Ok(Self { len: len as u8, bytes })
+    }
+
+    /// The name.
+    #[must_use]
+    pub fn as_str(&self) -> &str {
+        self.bytes.get(..usize::from(self.len)).and_then(|b| std::str::from_utf8(b).ok()).unwrap_or("")
+    }
+}
+
+impl std::fmt::Debug for CameraName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:?}", self.as_str())
+    }
+}
+
+impl std::fmt::Display for CameraName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
 }
 
 /// `X,Y,Z`: three comma-separated numbers (checked to be finite by the
@@ -68,7 +116,7 @@ pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
 
 #[cfg(feature = "clap")]
 mod cli {
-    use super::{Overrides, parse_vec3};
+    use super::{CameraName, Overrides, parse_vec3};
     use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches, value_parser};
 
     /// `--fog` and `--no-fog` are two flags of the one field
@@ -156,6 +204,13 @@ mod cli {
                     .allow_hyphen_values(true)
                     .help("Adaptive supersampling: 4 samples per pixel, the rest of --spp only where two differ by more than THRESHOLD"),
             )
+            .arg(
+                Arg::new("camera")
+                    .long("camera")
+                    .value_name("NAME")
+                    .value_parser(|s: &str| CameraName::new(s))
+                    .help("The scene's camera of this name [default: its first camera]"),
+            )
         }
 
         fn augment_args_for_update(cmd: Command) -> Command {
@@ -182,6 +237,7 @@ mod cli {
                 fov: m.get_one("fov").copied(),
                 filter: m.get_one("filter").copied(),
                 adaptive: m.get_one("adaptive").copied(),
+                camera: m.get_one("camera").copied(),
             })
         }
 
@@ -238,6 +294,12 @@ mod cli {
             assert!(parse(&["--threads", "0"]).is_err());
             assert!(parse(&["--up", "1,2"]).is_err());
             assert!(parse(&["--width", "-3"]).is_err());
+            assert_eq!(
+                parse(&["--camera", "top"]).unwrap().camera.map(|c| c.to_string()),
+                Some("top".into())
+            );
+            assert!(parse(&["--camera", ""]).is_err());
+            assert!(parse(&["--camera", &"x".repeat(65)]).is_err());
         }
 
         #[test]

@@ -104,8 +104,11 @@ pub(crate) fn read_resources(file: &SceneFile, base: &Path) -> Resources {
             && *t.get_ref().kind.get_ref() == TextureKind::Image
             && let Some(p) = &t.get_ref().path
         {
-            reader.texture(p.get_ref(), t.get_ref().wrap());
+            reader.texture(p.get_ref(), t.get_ref().wrap(), "texture");
         }
+    }
+    if let Some(p) = file.render.as_ref().and_then(|r| r.get_ref().background.as_ref()?.get_ref().image()) {
+        reader.texture(p.get_ref(), Wrap::Repeat, "background image");
     }
     for o in &file.objects {
         let d = o.get_ref();
@@ -140,10 +143,11 @@ impl<'a> Reader<'a> {
         Self { base, res: Resources::default(), objs: HashMap::new(), images: HashMap::new() }
     }
 
-    fn texture(&mut self, raw: &str, wrap: Wrap) {
+    /// The image written `raw` (a `what`: "texture", "background image").
+    fn texture(&mut self, raw: &str, wrap: Wrap, what: &'static str) {
         let key = (raw.to_owned(), wrap == Wrap::Repeat);
         if !self.res.textures.contains_key(&key) {
-            let t = regular_file(self.base, raw, "texture").and_then(|p| self.image(p, wrap));
+            let t = regular_file(self.base, raw, what).and_then(|p| self.image(p, wrap));
             self.res.insert_texture(raw, wrap, t);
         }
     }

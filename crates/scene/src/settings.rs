@@ -4,7 +4,7 @@
 
 use crate::check::{Ctx, Result};
 use crate::error::SceneError;
-use crate::format::RenderDef;
+use crate::format::{BackgroundDef, RenderDef};
 use crate::{LoadOptions, Overrides};
 use prism_geometry::glam::Vec3;
 use prism_shade::{Antialias, Aov, PixelFilter};
@@ -114,8 +114,14 @@ pub(crate) fn resolve(
         }
         None => DEFAULT_MIN_CONTRIBUTION,
     };
-    let background =
-        ctx.opt_color(render.and_then(|r| r.background.as_ref()), "background", defaults.background)?;
+    // An environment image (built with the scene) leaves the colour black.
+    let background = match render.and_then(|r| r.background.as_ref()) {
+        Some(b) => match b.get_ref() {
+            BackgroundDef::Color(c) => ctx.color_at(&b.span(), c, "background")?,
+            BackgroundDef::Image(_) => Vec3::ZERO,
+        },
+        None => defaults.background,
+    };
     let ambient = ctx.opt_color(render.and_then(|r| r.ambient.as_ref()), "ambient", Vec3::ONE)?;
 
     let mut aovs = Vec::new();

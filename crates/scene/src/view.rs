@@ -2,14 +2,15 @@
 //! framing camera, with the camera overrides applied) and the `[fog]`
 //! table, checked.
 
-use crate::Overrides;
 use crate::check::{Ctx, Result};
 use crate::error::SceneError;
-use crate::format::{CameraDef, FogDef, FogMeasureDef, FogModeDef};
+use crate::format::{BackgroundDef, CameraDef, FogDef, FogMeasureDef, FogModeDef, ProjectionDef, SceneFile};
+use crate::{CameraName, Overrides};
 use prism_geometry::Aabb;
 use prism_geometry::glam::Vec3;
-use prism_shade::{Camera, Fog, FogMode};
+use prism_shade::{Camera, Environment, Fog, FogMode, ImageTexture, Projection};
 use std::ops::Range;
+use std::sync::Arc;
 use toml::Spanned;
 
 /// The camera a scene describes, before the overrides.
@@ -142,13 +143,95 @@ pub(crate) fn camera(
             (None, None) => SceneError::Invalid { location: ctx.place(table.as_ref()), message },
         });
     }
-    Camera::new(position, look_at, up, fov, width, height).map_err(|e| {
+    let camera = Camera::new(position, look_at, up, fov, width, height).map_err(|e| {
         if ov.camera_pos.is_some() || ov.look_at.is_some() || ov.up.is_some() || ov.fov.is_some() {
             SceneError::Option { flag: "--camera-pos/--look-at/--up/--fov", message: e.to_string() }
         } else {
             SceneError::Invalid { location: ctx.place(table.as_ref()), message: e.to_string() }
         }
-    })
+    })?;
+    match file {
+        Some(d) => lens(ctx, d, camera),
+        None => Ok(camera),
+    }
+}
+
+/// `camera` with the file's projection, aperture and focus distance.
+fn lens(ctx: &Ctx, d: &CameraDef, camera: Camera) -> Result<Camera> {
+    let camera = match d.projection.as_ref().map(|p| *p.get_ref()) {
+        Some(ProjectionDef::Orthographic) => camera.with_projection(Projection::Orthographic),
+        None | Some(ProjectionDef::Perspective) => camera,
+    };
+    let (aperture, focus) = lens_values(ctx, d)?;
+    let focus = focus.unwrap_or(camera.focus_distance());
+    let place = d.focus_distance.as_ref().or(d.aperture.as_ref()).map(Spanned::span);
+    camera
+        .with_lens(aperture, focus)
+        .map_err(|e| SceneError::Invalid { location: ctx.place(place.as_ref()), message: e.to_string() })
+}
+
+/// A camera's `aperture` (default 0) and `focus_distance`, checked.
+fn lens_values(ctx: &Ctx, d: &CameraDef) -> Result<(f32, Option<f32>)> {
+    let aperture = ctx.opt_num(d.aperture.as_ref(), 0.0, |n| ctx.non_negative(n, "camera aperture"))?;
+    let focus = d.focus_distance.as_ref().map(|n| ctx.positive(n, "camera focus_distance")).transpose()?;
+    Ok((aperture, focus))
+}
+
+/// The camera a render uses: the one `--camera NAME` names, else the
+/// first of `[camera]` and `[[cameras]]`. Every `[[cameras]]` entry has a
+/// name, and no two cameras share one.
+pub(crate) fn choose_camera<'f>(
+    ctx: &Ctx,
+    file: &'f SceneFile,
+    name: Option<&CameraName>,
+) -> Result<&'f Spanned<CameraDef>> {
+    let all: Vec<&Spanned<CameraDef>> = file.camera.iter().chain(file.cameras.iter()).collect();
+    let mut names: Vec<&str> = Vec::with_capacity(all.len());
+    for c in &file.cameras {
+        if c.get_ref().name.is_none() {
+            return Err(ctx.invalid(&c.span(), "a camera in [[cameras]] needs a `name` (for --camera NAME)"));
+        }
+    }
+    for c in &all {
+        // Every camera's lens is checked, chosen or not.
+        lens_values(ctx, c.get_ref())?;
+        if let Some(n) = &c.get_ref().name {
+            if names.contains(&n.get_ref().as_str()) {
+                return Err(
+                    ctx.invalid(&n.span(), format!("there is already a camera named `{}`", n.get_ref()))
+                );
+            }
+            names.push(n.get_ref());
+        }
+    }
+    let Some(wanted) = name else {
+        return all.first().copied().ok_or_else(|| {
+            ctx.invalid_file("missing [camera] table (position and look_at are required), or [[cameras]]")
+        });
+    };
+    all.iter()
+        .find(|c| c.get_ref().name.as_ref().is_some_and(|n| n.get_ref() == wanted.as_str()))
+        .copied()
+        .ok_or_else(|| SceneError::Option {
+            flag: "--camera",
+            message: if names.is_empty() {
+                format!("the scene has no camera named `{wanted}`: none of its cameras has a name")
+            } else {
+                format!("the scene has no camera named `{wanted}`; its cameras are: {}", names.join(", "))
+            },
+        })
+}
+
+/// The environment image of `[render] background`, if it names one
+/// (`image` gives the image read for its path).
+pub(crate) fn environment(
+    ctx: &Ctx,
+    bg: &BackgroundDef,
+    image: &mut dyn FnMut(&Spanned<String>) -> Result<Arc<ImageTexture>>,
+) -> Result<Option<Environment>> {
+    let BackgroundDef::Image(e) = bg else { return Ok(None) };
+    let rotation_deg = ctx.opt_num(e.rotation.as_ref(), 0.0, |n| ctx.finite(n, "background rotation"))?;
+    Ok(Some(Environment { image: image(&e.image)?, rotation_deg }))
 }
 
 /// The fog of a `[fog]` table, checked.

@@ -118,9 +118,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         accel: Accel::build(Vec::new(), objs)?,
         object_materials: (0..materials.len() as u32).collect(),
         materials,
-        lights: vec![PointLight { position: Vec3::new(6.0, 10.0, 8.0), color: Vec3::ONE, intensity: 1.0 }],
+        lights: vec![
+            PointLight { position: Vec3::new(6.0, 10.0, 8.0), color: Vec3::ONE, intensity: 1.0 }.into(),
+        ],
         ambient: Vec3::splat(0.25),
         background: Vec3::new(0.05, 0.05, 0.1),
+        environment: None,
         fog: Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 6.0, end: 40.0 } }),
     };
     scene.validate()?;

@@ -1,10 +1,24 @@
-//! The pinhole camera.
+//! The camera: a pinhole or thin lens, perspective or orthographic.
 
 use crate::ShadeError;
 use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
 
-/// A pinhole camera. Pixel `(i, j)` covers `[i, i+1) × [j, j+1)` in image
+/// How the camera projects the scene onto the image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Projection {
+    /// Rays from the eye through the image (the default).
+    #[default]
+    Perspective,
+    /// Parallel rays along the view direction from a plane through the
+    /// eye; the image is as tall as the perspective view is at the look-at
+    /// point (`2 · tan(fov / 2) · |look_at − position|`).
+    Orthographic,
+}
+
+/// A camera: a pinhole by default, a thin lens with depth of field when it
+/// has an aperture ([`Camera::with_lens`]), perspective or orthographic
+/// ([`Camera::with_projection`]). Pixel `(i, j)` covers `[i, i+1) × [j, j+1)` in image
 /// coordinates, column `i` left to right, row `j` top to bottom (row 0 is
 /// the top of the image).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,6 +33,11 @@ pub struct Camera {
     right: Vec3,
     true_up: Vec3,
     tan_half: f32,
+    projection: Projection,
+    /// Lens radius (0: pinhole).
+    aperture: f32,
+    /// Distance of the plane in focus along the view direction.
+    focus_distance: f32,
 }
 
 impl Camera {
@@ -65,7 +84,55 @@ impl Camera {
             right,
             true_up,
             tan_half: (vfov_deg.to_radians() * 0.5).tan(),
+            projection: Projection::Perspective,
+            aperture: 0.0,
+            focus_distance: (look_at - position).length(),
         })
+    }
+
+    /// The same camera as a thin lens of radius `aperture` focused at
+    /// `focus_distance` along the view direction (`aperture = 0` is the
+    /// pinhole). Each camera ray starts at a point of the lens chosen by a
+    /// hash of its image position, so renders stay deterministic; more
+    /// samples per pixel give smoother blur.
+    ///
+    /// # Errors
+    /// [`ShadeError::Camera`] for an aperture that is negative or not
+    /// finite, or a focus distance that is not a finite number > 0.
+    pub fn with_lens(&self, aperture: f32, focus_distance: f32) -> Result<Self, ShadeError> {
+        if !(aperture.is_finite() && aperture >= 0.0) {
+            return Err(ShadeError::Camera(format!("aperture must be a finite number >= 0, got {aperture}")));
+        }
+        if !(focus_distance.is_finite() && focus_distance > 0.0) {
+            return Err(ShadeError::Camera(format!(
+                "focus distance must be a finite number > 0, got {focus_distance}"
+            )));
+        }
+        Ok(Self { aperture, focus_distance, ..*self })
+    }
+
+    /// The same camera with projection `projection`.
+    #[must_use]
+    pub fn with_projection(&self, projection: Projection) -> Self {
+        Self { projection, ..*self }
+    }
+
+    /// The projection.
+    #[must_use]
+    pub fn projection(&self) -> Projection {
+        self.projection
+    }
+
+    /// Lens radius (0 for a pinhole).
+    #[must_use]
+    pub fn aperture(&self) -> f32 {
+        self.aperture
+    }
+
+    /// Distance of the plane in focus.
+    #[must_use]
+    pub fn focus_distance(&self) -> f32 {
+        self.focus_distance
     }
 
     /// The same camera with another image size.
@@ -73,7 +140,13 @@ impl Camera {
     /// # Errors
     /// As [`Camera::new`].
     pub fn with_size(&self, width: u32, height: u32) -> Result<Self, ShadeError> {
-        Self::new(self.position, self.look_at, self.up, self.vfov_deg, width, height)
+        let c = Self::new(self.position, self.look_at, self.up, self.vfov_deg, width, height)?;
+        Ok(Self {
+            projection: self.projection,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
+            ..c
+        })
     }
 
     /// Eye position.
@@ -114,14 +187,76 @@ impl Camera {
 
     /// The primary ray through image point `(x, y)` (continuous pixel
     /// coordinates: `(i + 0.5, j + 0.5)` is the centre of pixel `(i, j)`).
-    /// The direction is unit length, so `t` is distance.
+    /// The direction is unit length, so `t` is distance. With a lens, the
+    /// ray starts at a point of the lens picked by a hash of `(x, y)` and
+    /// passes through the point in focus that the pinhole ray meets.
     #[inline]
     #[must_use]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let (w, h) = (self.size.0 as f32, self.size.1 as f32);
         let sx = (2.0 * x / w - 1.0) * self.tan_half * w / h;
         let sy = (1.0 - 2.0 * y / h) * self.tan_half;
-        let dir = (self.forward + sx * self.right + sy * self.true_up).normalize();
-        Ray::new(self.position, dir)
+        let offset = sx * self.right + sy * self.true_up;
+        let (origin, dir) = match self.projection {
+            Projection::Perspective => (self.position, (self.forward + offset).normalize()),
+            Projection::Orthographic => {
+                (self.position + offset * (self.look_at - self.position).length(), self.forward)
+            }
+        };
+        if self.aperture > 0.0 {
+            // The plane in focus is perpendicular to the view direction.
+            let focus = origin + dir * (self.focus_distance / dir.dot(self.forward));
+            let z = crate::render::splitmix64(u64::from(x.to_bits()) | (u64::from(y.to_bits()) << 32));
+            let (u, v) = crate::light::unit_pair(z);
+            let (lx, ly) = crate::light::concentric_disk(u, v);
+            let lens = origin + self.aperture * (lx * self.right + ly * self.true_up);
+            return Ray::new(lens, (focus - lens).normalize());
+        }
+        Ray::new(origin, dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam() -> Camera {
+        Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 60.0, 64, 32).unwrap()
+    }
+
+    #[test]
+    fn thin_lens_rays_meet_at_the_focus_plane() {
+        let c = cam().with_lens(0.5, 3.0).unwrap();
+        let pin = cam();
+        for (x, y) in [(10.3, 4.7), (32.0, 16.0), (60.9, 30.1)] {
+            let r = c.ray(x, y);
+            let p = pin.ray(x, y);
+            // Where the pinhole ray crosses the plane z = 5 − 3, so does the lens ray.
+            let at = |r: &Ray| r.origin + r.dir * ((r.origin.z - 2.0) / -r.dir.z);
+            assert!((at(&r) - at(&p)).length() < 1e-4, "{x},{y}");
+            assert!((r.origin - pin.position()).length() <= 0.5 + 1e-6);
+            assert!((r.dir.length() - 1.0).abs() < 1e-5);
+            assert_eq!(r, c.ray(x, y), "deterministic");
+        }
+        // Different image points use different lens points.
+        assert_ne!(c.ray(1.5, 1.5).origin, c.ray(2.5, 1.5).origin);
+        assert!(cam().with_lens(-0.1, 1.0).is_err());
+        assert!(cam().with_lens(0.1, 0.0).is_err());
+        assert!(cam().with_lens(0.1, f32::NAN).is_err());
+        // The lens survives a resize.
+        assert_eq!(c.with_size(8, 8).unwrap().aperture(), 0.5);
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_and_span_the_view_at_the_look_at_point() {
+        let c = cam().with_projection(Projection::Orthographic);
+        let top = c.ray(32.0, 0.0);
+        let bottom = c.ray(32.0, 32.0);
+        assert_eq!(top.dir, c.forward());
+        assert_eq!(bottom.dir, c.forward());
+        // Height 2 · tan 30° · 5.
+        let height = top.origin.y - bottom.origin.y;
+        assert!((height - 10.0 * (30f32).to_radians().tan()).abs() < 1e-4, "{height}");
+        assert_eq!(c.with_size(10, 10).unwrap().projection(), Projection::Orthographic);
     }
 }

@@ -7,6 +7,7 @@
 //! while a row is traced.
 
 use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
+use crate::light::{Target, sample_seed};
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
@@ -148,8 +149,15 @@ impl<'a> Tracer<'a> {
     ) -> Vec3 {
         self.rays += 1;
         let scene = self.scene;
-        let Some(h) = scene.accel.closest_hit(ray) else {
-            return self.fog_blend(scene.background, self.fog_t(path, f32::INFINITY));
+        let hit = scene.accel.closest_hit(ray);
+        // An area light nearer than the surface (or than nothing) is seen.
+        if let Some((t, l)) = self.light_hit(ray, hit.as_ref().map_or(ray.t_max, |h| h.hit.t)) {
+            let end = path + t * ray.dir.length();
+            return self.fog_blend(l, self.fog_t(path, end));
+        }
+        let Some(h) = hit else {
+            let sky = scene.environment.as_ref().map_or(scene.background, |e| e.radiance(ray.dir));
+            return self.fog_blend(sky, self.fog_t(path, f32::INFINITY));
         };
         let seg = h.hit.t * ray.dir.length();
         let end = path + self.fog_length(ray, seg);
@@ -190,7 +198,7 @@ impl<'a> Tracer<'a> {
         let hit = &h.hit;
         let d = ray.dir.normalize_or(Vec3::NEG_Z);
         let n = hit.facing_normal();
-        let mut out = Vec3::ZERO;
+        let mut out = mat.emission;
         let w_local = mat.local_weight();
         if w_local > 0.0 {
             let albedo = self.albedo_over(ray, h, mat, cone.width);
@@ -251,39 +259,62 @@ impl<'a> Tracer<'a> {
         )
     }
 
-    /// Ambient + Lambert + Phong over every light, each through its shadow
-    /// transmittance. `n` is the shading normal facing the viewer, `v` the
-    /// unit direction toward the viewer.
+    /// The nearest area light `ray` meets before `t_max`: its distance
+    /// (in the ray's parameter) and the radiance seen there.
+    fn light_hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec3)> {
+        let mut best: Option<(f32, Vec3)> = None;
+        for light in &self.scene.lights {
+            if let Some((t, l)) = light.intersect(ray, best.map_or(t_max, |b| b.0)) {
+                best = Some((t, l));
+            }
+        }
+        best
+    }
+
+    /// Ambient + Lambert + Phong over every light sample, each through its
+    /// shadow transmittance. `n` is the shading normal facing the viewer,
+    /// `v` the unit direction toward the viewer. An adaptive area light is
+    /// probed at four rim points first; when all four see the same
+    /// transmittance (fully lit or fully hidden) its samples take that
+    /// instead of tracing their own shadow rays.
     fn local(&mut self, mat: &Material, albedo: Vec3, hit: &Hit, n: Vec3, v: Vec3) -> Vec3 {
         let scene = self.scene;
         let mut c = mat.ambient * albedo * scene.ambient;
-        for light in &scene.lights {
-            let radiance = light.color * light.intensity;
-            if !(radiance.max_element() > 0.0) {
+        for (index, light) in scene.lights.iter().enumerate() {
+            if !(light.radiance().max_element() > 0.0) {
                 continue;
             }
-            let to = light.position - hit.point;
-            let dist = to.length();
-            if !(dist > 0.0) {
+            let p = hit.point;
+            let shared = light.probes(p).and_then(|probes| {
+                let first = self.shadow(hit, Target::Point(probes[0]));
+                probes[1..].iter().all(|q| self.shadow(hit, Target::Point(*q)) == first).then_some(first)
+            });
+            if shared == Some(Vec3::ZERO) {
                 continue;
             }
-            let l = to / dist;
-            let n_dot_l = n.dot(l);
-            if !(n_dot_l > 0.0) {
-                continue;
-            }
-            let shadow = self.shadow(hit, light.position);
-            if !(shadow.max_element() > 0.0) {
-                continue;
-            }
-            let mut s = mat.diffuse * n_dot_l * albedo;
-            if mat.specular > 0.0 {
-                let r_dot_v = (2.0 * n_dot_l * n - l).dot(v);
-                if r_dot_v > 0.0 {
-                    s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+            let seed = sample_seed(p, index, light.sample_count());
+            for k in 0..light.sample_count() {
+                let Some(ls) = light.sample(p, k, seed) else { continue };
+                let n_dot_l = n.dot(ls.dir);
+                if !(n_dot_l > 0.0) {
+                    continue;
                 }
+                let shadow = match shared {
+                    Some(s) => s,
+                    None => self.shadow(hit, ls.target),
+                };
+                if !(shadow.max_element() > 0.0) {
+                    continue;
+                }
+                let mut s = mat.diffuse * n_dot_l * albedo;
+                if mat.specular > 0.0 {
+                    let r_dot_v = (2.0 * n_dot_l * n - ls.dir).dot(v);
+                    if r_dot_v > 0.0 {
+                        s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+                    }
+                }
+                c += shadow * ls.e * s;
             }
-            c += shadow * radiance * s;
         }
         c
     }
@@ -303,8 +334,11 @@ impl<'a> Tracer<'a> {
     /// green shadow. `L` is the sum of exit minus entry distances (crossings
     /// come unordered); a segment that starts inside a solid counts from its
     /// start, one that ends inside (a light in the glass) up to its end.
-    fn shadow(&mut self, hit: &Hit, target: Vec3) -> Vec3 {
-        let ray = Ray::spawn_to(hit.point, hit.geo_normal, target);
+    fn shadow(&mut self, hit: &Hit, target: Target) -> Vec3 {
+        let ray = match target {
+            Target::Point(q) => Ray::spawn_to(hit.point, hit.geo_normal, q),
+            Target::Away(dir) => Ray::spawn(hit.point, hit.geo_normal, dir),
+        };
         self.rays += 1;
         self.shadow_rays += 1;
         let scene = self.scene;
@@ -337,8 +371,11 @@ impl<'a> Tracer<'a> {
             t *= (through * albedo(scene, m, sh)).clamp(Vec3::ZERO, Vec3::ONE);
             if t.max_element() > 0.0 { ControlFlow::Continue(()) } else { ControlFlow::Break(()) }
         });
-        // The shadow ray's direction is unit: `t` is distance.
-        let tau = tau + open.max(Vec3::ZERO) * ray.t_max;
+        // The shadow ray's direction is unit: `t` is distance. A ray toward
+        // a directional light (t_max infinite) that starts inside glass
+        // crosses an unbounded length of it in each absorbing channel.
+        let inside = open.max(Vec3::ZERO).to_array().map(|a| if a > 0.0 { a * ray.t_max } else { 0.0 });
+        let tau = tau + Vec3::from_array(inside);
         t * (-tau.max(Vec3::ZERO)).exp()
     }
 }

@@ -29,9 +29,10 @@
 //!     accel: Accel::build(Vec::new(), vec![Object::Shape(sphere)])?,
 //!     object_materials: vec![0],
 //!     materials: vec![Material { ambient: 0.1, diffuse: 0.9, ..Material::diffuse(Vec3::X) }],
-//!     lights: vec![PointLight { position: Vec3::new(0.0, 0.0, 10.0), color: Vec3::ONE, intensity: 1.0 }],
+//!     lights: vec![PointLight { position: Vec3::new(0.0, 0.0, 10.0), color: Vec3::ONE, intensity: 1.0 }.into()],
 //!     ambient: Vec3::ONE,
 //!     background: Vec3::ZERO,
+//!     environment: None,
 //!     fog: None,
 //! };
 //! scene.validate()?;
@@ -57,11 +58,13 @@
 mod aov;
 mod bounds;
 mod camera;
+mod environment;
 mod exr;
 mod filter;
 mod footprint;
 mod integrator;
 mod layers;
+mod light;
 mod material;
 mod mipmap;
 pub mod optics;
@@ -75,7 +78,8 @@ pub use aov::{
     AlphaImage, Aov, AovImage, AovImages, AovParseError, render_aovs, render_with_alpha, render_with_aovs,
 };
 pub use bounds::{BoundsError, PixelBounds};
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
+pub use environment::Environment;
 pub use exr::{
     ExrAttribute, ExrChannel, ExrLayer, ExrSamples, LayeredExr, read_layered_exr, write_layered_exr,
 };
@@ -85,6 +89,7 @@ pub use integrator::MAX_DEPTH_LIMIT;
 pub use layers::{
     NO_ID, RenderExr, aov_exr_channels, read_render_exr, render_from_exr, render_layers, write_render_exr,
 };
+pub use light::{AreaLight, AreaShape, Falloff, Light, LightKind, spot_weight};
 pub use material::Material;
 pub use output::{
     OutputError, OutputFormat, aov_path, aov_preview_rgb8, read_exr_rgb, write_aov_exr, write_aov_files,

@@ -64,6 +64,10 @@ pub struct Material {
     /// Beer–Lambert absorption coefficient per scene unit inside the
     /// object, per channel (zero: clear).
     pub absorption: Vec3,
+    /// Light the surface gives off itself (OBJ `Ke`), linear RGB, added to
+    /// its outgoing radiance: seen by camera rays and in reflections, but it
+    /// lights no other surface.
+    pub emission: Vec3,
 }
 
 impl Material {
@@ -82,6 +86,7 @@ impl Material {
             transmission: 0.0,
             ior: 1.5,
             absorption: Vec3::ZERO,
+            emission: Vec3::ZERO,
         }
     }
 
@@ -133,6 +138,9 @@ impl Material {
         }
         if !(self.absorption.is_finite() && self.absorption.min_element() >= 0.0) {
             return Err(ShadeError::Material("absorption must be finite and >= 0".into()));
+        }
+        if !(self.emission.is_finite() && self.emission.min_element() >= 0.0) {
+            return Err(ShadeError::Material("emission must be finite and >= 0".into()));
         }
         if !(self.specular_color.is_finite() && self.specular_color.min_element() >= 0.0) {
             return Err(ShadeError::Material("specular_color must be finite and >= 0".into()));

@@ -384,11 +384,7 @@ impl SamplePattern {
             m += 1;
         }
         let strata = m.saturating_mul(m);
-        let mut stride = ((f64::from(strata) * 0.618_033_988_75).round() as u32).max(1);
-        while gcd(stride, strata) != 1 {
-            stride += 1;
-        }
-        Self { m, strata, stride }
+        Self { m, strata, stride: golden_stride(strata) }
     }
 
     /// Offset of sample `s` of pixel number `pixel` inside its pixel, in `[0, 1)²`.
@@ -415,6 +411,16 @@ impl SamplePattern {
         let y = (sy as f32 + (px as f32 + jy) / m) / m;
         (x.min(below_one), y.min(below_one))
     }
+}
+
+/// A step through `n` items that visits each once and spreads the first
+/// ones out: about 0.618 · n, made coprime with `n`.
+pub(crate) fn golden_stride(n: u32) -> u32 {
+    let mut stride = ((f64::from(n) * 0.618_033_988_75).round() as u32).max(1);
+    while gcd(stride, n) != 1 {
+        stride += 1;
+    }
+    stride
 }
 
 fn gcd(mut a: u32, mut b: u32) -> u32 {
@@ -463,7 +469,7 @@ fn permute(mut i: u32, len: u32, key: u32) -> u32 {
 
 /// Steele, Lea and Flood's SplitMix64 finaliser: a well-mixed 64-bit hash.
 #[inline]
-fn splitmix64(mut z: u64) -> u64 {
+pub(crate) fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);

@@ -2,7 +2,7 @@
 //! Per-render choices (camera, fog on/off, sampling) are not here but in
 //! [`crate::RenderSettings`].
 
-use crate::{Material, ShadeError};
+use crate::{Environment, Light, Material, ShadeError};
 use prism_bvh::{Accel, Object, SceneHit};
 use prism_geometry::Intersect;
 use prism_geometry::glam::{Affine3A, Vec3};
@@ -187,12 +187,15 @@ pub struct Scene {
     pub object_materials: Vec<u32>,
     /// The materials.
     pub materials: Vec<Material>,
-    /// Point lights.
-    pub lights: Vec<PointLight>,
+    /// The lights (a [`PointLight`] converts with `.into()`).
+    pub lights: Vec<Light>,
     /// Ambient light colour (times each material's ambient coefficient).
     pub ambient: Vec3,
-    /// Colour of rays that hit nothing.
+    /// Colour of rays that hit nothing (where there is no `environment`).
     pub background: Vec3,
+    /// An environment image seen by camera, mirror and glass rays that hit
+    /// nothing, in place of `background`; it lights no surface.
+    pub environment: Option<Environment>,
     /// The fog's medium, if the scene has one (applied when
     /// [`crate::RenderSettings::fog`] is set).
     pub fog: Option<Fog>,
@@ -213,6 +216,7 @@ pub(crate) static MISSING_MATERIAL: Material = Material {
     transmission: 0.0,
     ior: 1.0,
     absorption: Vec3::ZERO,
+    emission: Vec3::ZERO,
 };
 
 impl Scene {
@@ -249,16 +253,10 @@ impl Scene {
             })?;
         }
         for (i, l) in self.lights.iter().enumerate() {
-            if !(l.position.is_finite()
-                && l.color.is_finite()
-                && l.color.min_element() >= 0.0
-                && l.intensity.is_finite()
-                && l.intensity >= 0.0)
-            {
-                return Err(ShadeError::Scene(format!(
-                    "light {i} needs a finite position and finite, non-negative colour and intensity"
-                )));
-            }
+            l.validate().map_err(|e| match e {
+                ShadeError::Scene(m) => ShadeError::Scene(format!("light {i}: {m}")),
+                other => other,
+            })?;
         }
         for (name, c) in [("ambient", self.ambient), ("background", self.background)] {
             if !(c.is_finite() && c.min_element() >= 0.0) {

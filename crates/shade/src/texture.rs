@@ -227,10 +227,10 @@ impl ImageTexture {
         Ok(Self { base, mips, wrap })
     }
 
-    /// Loads a PNG, JPEG, BMP or EXR file (the format is guessed from the
+    /// Loads a PNG, JPEG, BMP, EXR or Radiance HDR file (the format is guessed from the
     /// content, not the extension) and converts it to linear RGB: 8- and
     /// 16-bit images are taken to be sRGB-encoded and decoded with the sRGB
-    /// EOTF ([`srgb_to_linear`]); floating-point images (EXR) are taken as
+    /// EOTF ([`srgb_to_linear`]); floating-point images (EXR, HDR) are taken as
     /// already linear. Alpha is ignored; grey images become grey RGB.
     ///
     /// Images wider or taller than [`MAX_TEXTURE_EDGE`] or with more than
@@ -252,7 +252,9 @@ impl ImageTexture {
         limits.max_alloc = Some(1024 * 1024 * 1024);
         reader.limits(limits);
         if reader.format().is_none() {
-            return Err(err("not a recognised image format (PNG, JPEG, BMP or EXR expected)".into()));
+            return Err(err(
+                "not a recognised image format (PNG, JPEG, BMP, EXR or Radiance HDR expected)".into()
+            ));
         }
         let decoded = reader.decode().map_err(|e| err(e.to_string()))?;
         let (width, height) = (decoded.width(), decoded.height());

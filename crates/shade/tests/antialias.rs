@@ -234,6 +234,7 @@ fn mesh_uv_footprint_selects_the_mip_level() {
             lights: vec![],
             ambient: Vec3::ONE,
             background: Vec3::ZERO,
+            environment: None,
             fog: None,
         };
         let cam = camera(Vec3::new(0.13, 0.07, 5.0), Vec3::new(0.13, 0.07, 0.0), Vec3::Y, 20.0, 16, 16);

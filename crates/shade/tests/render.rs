@@ -171,9 +171,10 @@ fn degenerate_inputs_never_make_nan() {
     let mut s = busy_scene(24, 16);
     // A light exactly on a surface, a light inside a sphere, a dark light,
     // shininess 0, ior 1 and huge, enormous absorption, zero fog density.
-    s.lights.push(light(Vec3::new(0.0, -1.0, 0.0)));
-    s.lights.push(light(Vec3::new(1.0, 0.0, 0.0)));
-    s.lights.push(PointLight { position: Vec3::new(0.0, 5.0, 0.0), color: Vec3::ZERO, intensity: 0.0 });
+    s.lights.push(light(Vec3::new(0.0, -1.0, 0.0)).into());
+    s.lights.push(light(Vec3::new(1.0, 0.0, 0.0)).into());
+    s.lights
+        .push(PointLight { position: Vec3::new(0.0, 5.0, 0.0), color: Vec3::ZERO, intensity: 0.0 }.into());
     s.materials[1].shininess = 0.0;
     s.materials[1].specular = 1.0;
     s.materials[2].ior = 1.0;

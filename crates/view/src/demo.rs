@@ -46,9 +46,12 @@ pub fn demo_scene(width: u32, height: u32) -> Result<SceneSetup, ViewError> {
         accel,
         object_materials: vec![0, 1, 2, 3],
         materials,
-        lights: vec![PointLight { position: Vec3::new(8.0, 12.0, 4.0), color: Vec3::ONE, intensity: 1.0 }],
+        lights: vec![
+            PointLight { position: Vec3::new(8.0, 12.0, 4.0), color: Vec3::ONE, intensity: 1.0 }.into(),
+        ],
         ambient: Vec3::splat(0.3),
         background: Vec3::new(0.05, 0.05, 0.1),
+        environment: None,
         fog: Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 2.0, end: 40.0 } }),
     };
     Ok(SceneSetup {

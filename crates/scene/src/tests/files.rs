@@ -84,6 +84,8 @@ fn mtl_materials_are_mapped() {
     assert!((mirror.reflectivity - 0.8).abs() < 1e-6);
     let painted = &m[3];
     assert!((painted.transparency - 0.5).abs() < 1e-6 && painted.transmission == 0.0);
+    assert_eq!(painted.emission, Vec3::new(0.25, 0.5, 0.0), "Ke");
+    assert_eq!(glass.emission, Vec3::ZERO);
     let Texture::Image { mapping, tint, image, .. } = &painted.texture else {
         panic!("map_Kd gives an image")
     };

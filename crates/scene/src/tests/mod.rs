@@ -8,6 +8,7 @@ use std::fs;
 
 mod build;
 mod files;
+mod lights;
 mod messages;
 mod obj_mode;
 mod overrides;
@@ -111,6 +112,7 @@ illum 3
 
 newmtl painted
 Kd 0.5 0.25 1.0
+Ke 0.25 0.5 0
 Ns 10
 d 0.5
 illum 2

@@ -4,6 +4,18 @@
 use super::*;
 use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
+use prism_shade::LightKind;
+
+/// The position of the scene's one light, a point light in OBJ mode.
+fn point_light(l: &LoadedScene) -> Vec3 {
+    match l.info.lights.as_slice() {
+        [light] => match light.kind {
+            LightKind::Point { position, .. } => position,
+            other => panic!("OBJ mode's light is a point light, got {other:?}"),
+        },
+        other => panic!("OBJ mode has one light, got {}", other.len()),
+    }
+}
 
 /// A box 2 wide (X), 1 high, 6 deep (Z), bottom at y = 0.
 fn deep_box(dir: &Path) -> PathBuf {
@@ -48,7 +60,7 @@ fn views_put_the_eye_on_their_side_and_auto_faces_the_larger_side() {
         assert!((toward - side).length() < 1e-5, "{view:?}: eye toward {toward}");
         // The mesh is in the middle of the image; the light is on the eye's side.
         assert!(l.scene.accel.closest_hit(&cam.ray(320.0, 240.0)).is_some(), "{view:?}");
-        assert!((l.info.lights[0].position - c).dot(side) > 0.0, "{view:?}");
+        assert!((point_light(&l) - c).dot(side) > 0.0, "{view:?}");
     }
 }
 
@@ -57,7 +69,7 @@ fn light_and_floor_are_placed_as_asked() {
     let dir = tempfile::tempdir().unwrap();
     let path = deep_box(dir.path());
     let l = load(&path, ObjOptions { light: Some(Vec3::new(0.0, 9.0, 0.0)), ..ObjOptions::default() });
-    assert_eq!(l.info.lights[0].position, Vec3::new(0.0, 9.0, 0.0));
+    assert_eq!(point_light(&l), Vec3::new(0.0, 9.0, 0.0));
     assert!(!l.info.objects_by_kind.contains_key("plane"));
     let down = Ray::new(Vec3::new(5.0, 3.0, 0.0), Vec3::NEG_Y);
     assert!(l.scene.accel.closest_hit(&down).is_none());

@@ -84,7 +84,8 @@ fn an_obj_file_is_a_framed_scene() {
     assert_eq!(c.look_at(), Vec3::ZERO);
     assert!((c.position() - Vec3::new(0.0, 0.0, r / 20f32.to_radians().sin())).length() < 1e-4);
     assert!((c.vfov_deg() - 40.0).abs() < 1e-5);
-    assert!((info.lights[0].position - r * Vec3::new(1.0, 2.0, 1.5)).length() < 1e-4);
+    let prism_shade::LightKind::Point { position, .. } = info.lights[0].kind else { panic!("a point light") };
+    assert!((position - r * Vec3::new(1.0, 2.0, 1.5)).length() < 1e-4);
     // The mesh is in frame: the centre ray hits it, the corners miss.
     let cam = &loaded.settings.camera;
     assert!(loaded.scene.accel.closest_hit(&cam.ray(320.0, 240.0)).is_some());

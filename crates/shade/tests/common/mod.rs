@@ -4,7 +4,9 @@
 use prism_bvh::{Accel, Object};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Instance, Shape, Transform};
-use prism_shade::{Camera, Fog, Image, Material, PointLight, RenderHooks, RenderSettings, Scene, Texture};
+use prism_shade::{
+    Camera, Fog, Image, Light, Material, PointLight, RenderHooks, RenderSettings, Scene, Texture,
+};
 
 /// A scene and the per-render choices the tests vary: the camera and
 /// whether the fog is on (it derefs to the scene).
@@ -48,6 +50,11 @@ impl Shot {
 /// A scene of `objects` (each with its own material), lit by `lights`,
 /// seen by `camera`, fog (if any) on.
 pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>, camera: Camera) -> Shot {
+    scene_lit(objects, lights.into_iter().map(Light::from).collect(), camera)
+}
+
+/// [`scene`] with lights of any kind.
+pub fn scene_lit(objects: Vec<(Shape, Transform, Material)>, lights: Vec<Light>, camera: Camera) -> Shot {
     let mut objs = Vec::new();
     let mut materials = Vec::new();
     let mut object_materials = Vec::new();
@@ -63,6 +70,7 @@ pub fn scene(objects: Vec<(Shape, Transform, Material)>, lights: Vec<PointLight>
         lights,
         ambient: Vec3::ONE,
         background: Vec3::ZERO,
+        environment: None,
         fog: None,
     };
     Shot { scene, camera, fog_on: true }

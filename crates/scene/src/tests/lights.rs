@@ -1,0 +1,240 @@
+//! `[[lights]]` of every type, `[[cameras]]` with `--camera`, the lens and
+//! projection keys, the environment background, and their refusals at the
+//! place of the key.
+
+use super::*;
+use crate::format::SceneFile;
+use crate::read::{Resources, TextureFile};
+use prism_geometry::glam::Vec3;
+use prism_shade::{AreaShape, Falloff, ImageTexture, LightKind, Projection, Wrap};
+use std::sync::Arc;
+
+const LIGHTS: &str = r#"
+[[lights]]
+type = "point"
+position = [0, 5, 0]
+falloff = "inverse_square"
+intensity = 20
+
+[[lights]]
+type = "spot"
+position = [0, 5, 0]
+direction = [0, -2, 0]
+inner_angle = 20
+outer_angle = 30
+
+[[lights]]
+type = "directional"
+direction = [1, -1, 0]
+color = [1, 0.9, 0.8]
+
+[[lights]]
+type = "quad"
+corner = [-1, 4, -1]
+edge_u = [2, 0, 0]
+edge_v = [0, 0, 2]
+radiance = [2, 2, 2]
+samples = 9
+two_sided = true
+
+[[lights]]
+type = "disk"
+center = [0, 4, 0]
+normal = [0, -1, 0]
+radius = 0.5
+adaptive = false
+
+[[lights]]
+type = "sphere"
+center = [3, 3, 0]
+radius = 0.25
+"#;
+
+#[test]
+fn every_light_type_parses() {
+    let loaded = parse(&format!("{BASE}{LIGHTS}")).unwrap();
+    let l = &loaded.scene.lights;
+    assert_eq!(l.len(), 7, "the base scene's light and six more");
+    assert_eq!(l[0].kind, LightKind::Point { position: Vec3::new(5.0, 8.0, 5.0), falloff: Falloff::None });
+    assert_eq!(
+        l[1].kind,
+        LightKind::Point { position: Vec3::new(0.0, 5.0, 0.0), falloff: Falloff::InverseSquare }
+    );
+    assert_eq!(l[1].intensity, 20.0);
+    let LightKind::Spot { direction, cos_inner, cos_outer, .. } = l[2].kind else { panic!("a spot") };
+    assert_eq!(direction, Vec3::NEG_Y);
+    assert!((cos_inner - 20f32.to_radians().cos()).abs() < 1e-6);
+    assert!((cos_outer - 30f32.to_radians().cos()).abs() < 1e-6);
+    let LightKind::Directional { direction } = l[3].kind else { panic!("directional") };
+    assert!((direction - Vec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-6);
+    let LightKind::Area(q) = l[4].kind else { panic!("quad") };
+    assert_eq!(q.samples, 9);
+    assert!(q.two_sided && q.adaptive);
+    assert_eq!(l[4].radiance(), Vec3::splat(2.0));
+    assert!(matches!(q.shape, AreaShape::Quad { .. }));
+    let LightKind::Area(d) = l[5].kind else { panic!("disk") };
+    assert!(!d.adaptive && d.samples == 16, "the default sample count is 16");
+    assert!(
+        matches!(l[6].kind, LightKind::Area(a) if matches!(a.shape, AreaShape::Sphere { radius, .. } if radius == 0.25))
+    );
+    assert!(loaded.scene.validate().is_ok());
+}
+
+#[test]
+fn bad_lights_are_refused_at_their_key() {
+    refused(&[
+        (
+            "[[lights]]\ntype = \"quad\"\ncorner = [0, 1, 0]\nedge_u = [1, 0, 0]\nedge_v = [2, 0, 0]\n",
+            "quad light has zero area",
+            Some("edge_v"),
+        ),
+        (
+            "[[lights]]\ntype = \"disk\"\nnormal = [0, 1, 0]\nradius = 0\n",
+            "disk light radius",
+            Some("radius = 0"),
+        ),
+        ("[[lights]]\ntype = \"sphere\"\nradius = -1\n", "sphere light radius", Some("radius = -1")),
+        (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\ninner_angle = 30\nouter_angle = 20\n",
+            "outer_angle (20) must not be smaller than inner_angle (30)",
+            Some("outer_angle"),
+        ),
+        (
+            "[[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\n",
+            "direction must not be zero",
+            Some("direction = "),
+        ),
+        (
+            "[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nposition = [1, 2, 3]\n",
+            "`position` is not a key of a directional light",
+            Some("position = [1"),
+        ),
+        ("[[lights]]\ntype = \"quad\"\ncorner = [0, 1, 0]\nedge_u = [1, 0, 0]\n", "needs `edge_v`", None),
+        ("[[lights]]\ntype = \"sphere\"\nradius = 1\nsamples = 0\n", "light samples", Some("samples")),
+        (
+            "[[lights]]\ntype = \"sphere\"\nradius = 1\ntwo_sided = true\n",
+            "`two_sided` is not a key",
+            Some("two_sided"),
+        ),
+    ]);
+}
+
+const CAMERAS: &str = r#"
+[[cameras]]
+name = "top"
+position = [0, 10, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+projection = "orthographic"
+
+[[cameras]]
+name = "close"
+position = [0, 1, 3]
+look_at = [0, 1, 0]
+aperture = 0.1
+focus_distance = 2.5
+"#;
+
+fn with_camera(text: &str, name: Option<&str>) -> Result<LoadedScene, SceneError> {
+    let overrides = Overrides { camera: name.map(|n| CameraName::new(n).unwrap()), ..Overrides::default() };
+    let opts = LoadOptions { overrides, ..LoadOptions::default() };
+    parse_scene_str_with(text, Path::new("."), Path::new("test.toml"), &opts)
+}
+
+#[test]
+fn named_cameras_are_chosen_with_the_flag() {
+    let text = format!("{BASE}{CAMERAS}");
+    // The default is the first: [camera].
+    let cam = with_camera(&text, None).unwrap().settings.camera;
+    assert_eq!(cam.position(), Vec3::new(0.0, 2.0, 10.0));
+    assert_eq!(cam.projection(), Projection::Perspective);
+    assert_eq!(cam.aperture(), 0.0);
+    let top = with_camera(&text, Some("top")).unwrap().settings.camera;
+    assert_eq!(top.position(), Vec3::new(0.0, 10.0, 0.0));
+    assert_eq!(top.projection(), Projection::Orthographic);
+    let close = with_camera(&text, Some("close")).unwrap().settings.camera;
+    assert_eq!((close.aperture(), close.focus_distance()), (0.1, 2.5));
+    let err = with_camera(&text, Some("side")).unwrap_err().to_string();
+    assert!(err.contains("--camera") && err.contains("no camera named `side`"), "{err}");
+    assert!(err.contains("top, close"), "lists the names: {err}");
+    // Without [camera], the first of [[cameras]] is the default.
+    let no_main = text.replace("[camera]\nposition = [0, 2, 10]\nlook_at = [0, 1, 0]\n", "");
+    assert_eq!(with_camera(&no_main, None).unwrap().settings.camera.position(), Vec3::new(0.0, 10.0, 0.0));
+}
+
+#[test]
+fn bad_cameras_are_refused_at_their_key() {
+    refused(&[
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\naperture = -0.5\n",
+            "camera aperture must be 0 or more",
+            Some("aperture"),
+        ),
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfocus_distance = 0\n",
+            "camera focus_distance must be greater than 0",
+            Some("focus_distance"),
+        ),
+        ("[[cameras]]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\n", "needs a `name`", Some("[[cameras]]")),
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\n[[cameras]]\nname = \"a\"\nposition = [0, 0, 2]\nlook_at = [0, 0, 0]\n",
+            "already a camera named `a`",
+            None,
+        ),
+    ]);
+    // The file's first camera is checked like the others.
+    let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\naperture = -1");
+    assert!(parse(&text).unwrap_err().to_string().contains("aperture"));
+}
+
+#[test]
+fn background_images_are_built_with_their_rotation_and_refused_when_unreadable() {
+    let text = BASE.replace("spp = 2", "spp = 2\nbackground = { image = \"mem/sky.exr\", rotation = 90 }");
+    let file_name = Path::new("mem.toml");
+    let file = SceneFile::parse(&text, file_name).unwrap();
+    let mut res = Resources::default();
+    let image = Arc::new(ImageTexture::from_linear(2, 1, vec![Vec3::X, Vec3::Y], Wrap::Repeat).unwrap());
+    res.insert_texture(
+        "mem/sky.exr",
+        Wrap::Repeat,
+        Ok(TextureFile { path: "/in-memory/sky.exr".into(), image }),
+    );
+    let loaded = crate::build::build_scene(
+        crate::check::Ctx::new(file_name, &text),
+        &file,
+        &res,
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let env = loaded.scene.environment.expect("an environment");
+    assert_eq!(env.rotation_deg, 90.0);
+    assert_eq!(loaded.scene.background, Vec3::ZERO);
+    // A file that is not there: refused where the scene names it.
+    let missing = BASE.replace("spp = 2", "spp = 2\nbackground = { image = \"no-such-sky.hdr\" }");
+    let err = parse(&missing).unwrap_err().to_string();
+    assert!(err.contains("background image") && err.contains("no-such-sky.hdr"), "{err}");
+    let line = missing.lines().position(|l| l.contains("no-such-sky")).unwrap() + 1;
+    assert!(err.starts_with(&format!("test.toml:{line}:")), "{err}");
+    // Colours still work, and a bad key in the table is named.
+    assert!(parse(&BASE.replace("spp = 2", "spp = 2\nbackground = \"#102030\"")).is_ok());
+    let err = parse(&BASE.replace("spp = 2", "spp = 2\nbackground = { picture = \"a.png\" }"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("picture"), "{err}");
+}
+
+#[test]
+fn a_radiance_hdr_background_is_read_linear() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 4 × 2 Radiance HDR sky, every texel (2, 0.5, 0.25): brighter than 1, linear.
+    let texels = vec![image::Rgb([2.0f32, 0.5, 0.25]); 8];
+    let file = std::fs::File::create(dir.path().join("sky.hdr")).unwrap();
+    image::codecs::hdr::HdrEncoder::new(file).encode(&texels, 4, 2).unwrap();
+    let text = BASE.replace("spp = 2", "spp = 2\nbackground = { image = \"sky.hdr\", rotation = -45 }");
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("t.toml")).unwrap();
+    let env = loaded.scene.environment.expect("an environment image");
+    assert_eq!((env.image.width(), env.image.height(), env.rotation_deg), (4, 2, -45.0));
+    let c = env.radiance(Vec3::new(0.3, 0.2, -1.0));
+    assert!((c - Vec3::new(2.0, 0.5, 0.25)).abs().max_element() < 0.02, "{c}");
+    assert!(loaded.inputs.iter().any(|p| p.ends_with("sky.hdr")), "the image is an input");
+}

@@ -1,0 +1,70 @@
+//! The environment image: an equirectangular (latitude–longitude) picture
+//! of everything far away, seen by camera, mirror and glass rays that hit
+//! nothing. It does not light surfaces (that would be image-based
+//! lighting, which prism does not do): shadow rays and the Lambert term
+//! never look at it.
+
+use crate::ImageTexture;
+use prism_geometry::glam::{Vec2, Vec3};
+use std::f32::consts::{PI, TAU};
+use std::sync::Arc;
+
+/// An equirectangular environment image turned about +Y.
+///
+/// Direction `d` (unit) reads the image at
+/// `u = ½ + atan2(d.x, −d.z) / 2π − rotation / 360°` (wrapped), `v =
+/// acos(d.y) / π`: the image's centre column is the −Z direction (where the
+/// default camera looks), its top row straight up, and a positive rotation
+/// turns the picture counter-clockwise seen from above.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Environment {
+    /// The image, linear RGB.
+    pub image: Arc<ImageTexture>,
+    /// Rotation about +Y in degrees.
+    pub rotation_deg: f32,
+}
+
+impl Environment {
+    /// The radiance arriving from direction `dir` (any length; zero reads
+    /// straight up).
+    #[inline]
+    #[must_use]
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        let d = dir.normalize_or(Vec3::Y);
+        let u = 0.5 + d.x.atan2(-d.z) / TAU - self.rotation_deg / 360.0;
+        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        self.image.sample(Vec2::new(u - u.floor(), v))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Wrap;
+
+    /// A 4×2 image whose columns are distinct colours.
+    fn env(rotation_deg: f32) -> Environment {
+        let cols = [Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE];
+        let texels = (0..8).map(|i| cols[i % 4]).collect();
+        let image = Arc::new(ImageTexture::from_linear(4, 2, texels, Wrap::Repeat).unwrap());
+        Environment { image, rotation_deg }
+    }
+
+    #[test]
+    fn directions_map_to_their_columns() {
+        // Column centres at u = 1/8, 3/8, 5/8, 7/8; −Z is u = ½, between
+        // columns 1 and 2; turn by 45° to land on a column centre.
+        let e = env(0.0);
+        let at = |deg: f32| {
+            let a = deg.to_radians();
+            Vec3::new(a.sin(), 0.0, -a.cos())
+        };
+        assert!((e.radiance(at(45.0)) - Vec3::Z).length() < 1e-5);
+        assert!((e.radiance(at(-45.0)) - Vec3::Y).length() < 1e-5);
+        assert!((e.radiance(at(135.0)) - Vec3::ONE).length() < 1e-5);
+        // Rotating the picture by +90° moves what was at −45° to +45°.
+        let r = env(90.0);
+        assert!((r.radiance(at(45.0)) - e.radiance(at(-45.0))).length() < 1e-5);
+        assert!(e.radiance(Vec3::ZERO).is_finite());
+    }
+}
