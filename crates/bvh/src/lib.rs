@@ -82,6 +82,7 @@ mod blas;
 mod bvh2;
 mod cwbvh;
 mod traverse;
+mod wide;
 
 use blas::Blas;
 use obvhs::BvhBuildParams;
@@ -92,6 +93,7 @@ use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
 use traverse::{BoxRay, Visit, visitor, walk_any};
+pub use wide::Kernel;
 
 /// One object of the scene: an analytic shape or an instance of a mesh.
 #[derive(Clone, Debug)]
@@ -255,6 +257,10 @@ pub enum BlasKind {
     /// obvhs's binary BVH: two children, 48-byte nodes with full-precision
     /// boxes, leaves of up to the preset's `max_prims_per_leaf` triangles.
     Bvh2,
+    /// A CPU-native wide BVH converted from obvhs's binary one: eight
+    /// children per 256-byte node with full-precision SoA boxes, leaves of
+    /// up to four triangles, node tests by the run-time [`Kernel`].
+    Wide,
 }
 
 impl BlasKind {
@@ -264,6 +270,7 @@ impl BlasKind {
         match self {
             Self::Cwbvh => "cwbvh",
             Self::Bvh2 => "bvh2",
+            Self::Wide => "wide",
         }
     }
 
@@ -275,6 +282,7 @@ impl BlasKind {
         match std::env::var("PRISM_BVH_BLAS").ok()?.as_str() {
             "cwbvh" => Some(Self::Cwbvh),
             "bvh2" => Some(Self::Bvh2),
+            "wide" => Some(Self::Wide),
             _ => None,
         }
     }
@@ -294,7 +302,7 @@ impl Default for BuildOptions {
 const DEFAULT_MESH_QUALITY: BuildQuality = BuildQuality::Medium;
 
 /// Chosen by measurement (docs/benchmarks.md).
-const DEFAULT_MESH_LAYOUT: BlasKind = BlasKind::Cwbvh;
+const DEFAULT_MESH_LAYOUT: BlasKind = BlasKind::Wide;
 
 /// Objects whose bounds reach beyond this are tested outside the hierarchy
 /// (the compressed node boxes cannot represent them well).
@@ -328,6 +336,8 @@ struct AnyObject<'a> {
 }
 
 impl Visit for &mut AnyObject<'_> {
+    const ANY: bool = true;
+
     #[inline(always)]
     fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
         self.hit = self.accel.object_occludes(self.accel.tlas_objects[slot as usize], self.ray);
@@ -445,18 +455,18 @@ impl Accel {
             object_bounds.push(b);
         }
         // One hierarchy per mesh that some object uses, in parallel.
-        let blas: Vec<Blas> =
-            meshes
-                .par_iter()
-                .zip(used.par_iter())
-                .map(|(m, &u)| {
-                    if u {
-                        Blas::build(m, options.mesh_quality, options.mesh_layout)
-                    } else {
-                        Blas::default()
-                    }
-                })
-                .collect();
+        let kernel = Kernel::detect();
+        let blas: Vec<Blas> = meshes
+            .par_iter()
+            .zip(used.par_iter())
+            .map(|(m, &u)| {
+                if u {
+                    Blas::build(m, options.mesh_quality, options.mesh_layout, kernel)
+                } else {
+                    Blas::default()
+                }
+            })
+            .collect();
         let mut unbounded = Vec::new();
         let mut top = Vec::new();
         let mut tlas_boxes = Vec::new();
@@ -518,6 +528,17 @@ impl Accel {
     #[must_use]
     pub fn meshes(&self) -> &[Arc<TriangleMesh>] {
         &self.meshes
+    }
+
+    /// Selects the node-test [`Kernel`] of the wide hierarchies (the
+    /// default is [`Kernel::detect`]'s); refused (`false`, nothing changed)
+    /// when this CPU cannot run it. All kernels give the same answers; this
+    /// is for comparing them.
+    pub fn set_kernel(&mut self, kernel: Kernel) -> bool {
+        if !kernel.supported() {
+            return false;
+        }
+        self.blas.iter_mut().all(|b| b.set_kernel(kernel))
     }
 
     /// Bounds of every bounded object (infinite planes excluded).
@@ -830,6 +851,61 @@ mod tests {
             }
         }
         (positions, indices)
+    }
+
+    /// Whether this CPU has what kernel `k` needs, asked independently of
+    /// [`Kernel::supported`].
+    fn host_has(k: Kernel) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+            match k {
+                Kernel::Portable => true,
+                Kernel::Avx2 => avx2,
+                Kernel::Avx512 => {
+                    avx2 && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            k == Kernel::Portable
+        }
+    }
+
+    /// Every kernel this CPU has is selectable and actually walks (so the
+    /// kernel comparisons in `tests/blas_kinds.rs` ran it): this FAILS,
+    /// rather than skipping, where the host has AVX2 or AVX-512 and that
+    /// path did not run; and detection picks the widest one.
+    #[test]
+    fn every_kernel_the_host_has_is_exercised() {
+        let (positions, indices) = wavy_grid(20, [9.0, 7.0, 0.3]);
+        let mesh = Arc::new(TriangleMesh::new(positions, None, None, indices).unwrap());
+        let objects = vec![Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
+        let options = BuildOptions { mesh_layout: BlasKind::Wide, ..BuildOptions::default() };
+        let mut accel = Accel::build_with(vec![mesh], objects, options).unwrap();
+        let ray = Ray::new(Vec3::new(0.5, 1.0, 0.5), Vec3::new(0.01, -1.0, 0.02));
+        let mut reference = None;
+        for k in Kernel::ALL {
+            assert_eq!(k.supported(), host_has(k), "{}", k.name());
+            if !host_has(k) {
+                assert!(!accel.set_kernel(k), "{} accepted without the CPU features", k.name());
+                continue;
+            }
+            assert!(accel.set_kernel(k), "{}", k.name());
+            let before = wide::WALKS[k as usize].load(std::sync::atomic::Ordering::Relaxed);
+            let hit = accel.closest_hit(&ray).map(|h| (h.triangle, h.hit.t.to_bits()));
+            assert!(hit.is_some());
+            assert!(accel.occluded(&ray));
+            let after = wide::WALKS[k as usize].load(std::sync::atomic::Ordering::Relaxed);
+            assert!(after >= before + 2, "the {} kernel did not run", k.name());
+            assert_eq!(*reference.get_or_insert(hit), hit, "{}", k.name());
+        }
+        if std::env::var_os("PRISM_BVH_NO_SIMD").is_none() {
+            let best =
+                [Kernel::Avx512, Kernel::Avx2].into_iter().find(|&k| host_has(k)).unwrap_or(Kernel::Portable);
+            assert_eq!(Kernel::detect(), best);
+        }
     }
 
     /// The AVX2-compiled queries give bit-for-bit the answers of the

@@ -55,5 +55,5 @@ pub use hit::Hit;
 pub use mesh::TriangleMesh;
 pub use ray::{Ray, offset_ray_origin};
 pub use shape::{Instance, Intersect, Shape};
-pub use shapes::{Cone, Cuboid, Cylinder, Disk, Plane, Sphere, Triangle, TriangleRay, sphere_uv};
+pub use shapes::{Cone, Cuboid, Cylinder, Disk, Plane, Sphere, Triangle, TriangleRay, Triangles4, sphere_uv};
 pub use transform::{Shear, Transform};
