@@ -102,53 +102,26 @@ impl Blas {
             }
             BlasKind::Wide => {
                 let aabbs = tris.iter().map(obvhs::triangle::Triangle::aabb).collect();
-                let mut p = quality.params();
-                p.max_prims_per_leaf = WIDE_LEAF;
-                let b = bvh2::build(aabbs, Some(&tris), p);
-                match WideBvh::from_bvh2(&b, kernel) {
-                    Some(w) => {
-                        let need = w.stack_need();
-                        // Padding slots repeat the slot before (never visited).
-                        let mut last = 0;
-                        let order: Vec<u32> = w
-                            .slots
-                            .iter()
-                            .map(|&s| {
-                                if s != wide::PAD {
-                                    last = b.primitive_indices[s as usize];
-                                }
-                                last
-                            })
-                            .collect();
-                        let faces: Vec<u32> = w
-                            .slots
-                            .iter()
-                            .zip(&order)
-                            .map(
-                                |(&s, &i): (&u32, &u32)| {
-                                    if s == wide::PAD { u32::MAX } else { kept[i as usize] }
-                                },
-                            )
-                            .collect();
-                        let blocks = faces
-                            .chunks(wide::MAX_LEAF as usize)
-                            .map(|c| {
-                                let tris: Vec<_> = c
-                                    .iter()
-                                    .filter(|&&f| f != u32::MAX)
-                                    .map(|&f| mesh.triangle(f as usize))
-                                    .collect();
-                                Triangles4::new(&tris)
-                            })
-                            .collect();
-                        let mut blas =
-                            Self::finish(mesh, Nodes::Wide(w), need, b.uses_spatial_splits, &kept, &order);
-                        blas.blocks = blocks;
-                        return blas;
-                    }
+                let Some((w, split)) = WideBvh::build(aabbs, Some(&tris), quality, kernel) else {
                     // Too many triangles for the wide layout's references.
-                    None => return Self::build(mesh, quality, BlasKind::Cwbvh, kernel),
-                }
+                    return Self::build(mesh, quality, BlasKind::Cwbvh, kernel);
+                };
+                let blocks = w
+                    .slots
+                    .chunks(wide::MAX_LEAF as usize)
+                    .map(|c| {
+                        let tris: Vec<_> = c
+                            .iter()
+                            .filter(|&&s| s != wide::PAD)
+                            .map(|&s| mesh.triangle(kept[s as usize] as usize))
+                            .collect();
+                        Triangles4::new(&tris)
+                    })
+                    .collect();
+                let (need, order) = (w.stack_need(), w.order());
+                let mut blas = Self::finish(mesh, Nodes::Wide(w), need, split, &kept, &order);
+                blas.blocks = blocks;
+                return blas;
             }
         };
         Self::finish(mesh, nodes, depth, split, &kept, &order)
@@ -269,10 +242,6 @@ impl Blas {
         flow
     }
 }
-
-/// Most triangles in a leaf of the wide layout (chosen by measurement,
-/// docs/benchmarks.md).
-const WIDE_LEAF: u32 = 4;
 
 /// The closest-hit walk over one mesh's triangles.
 struct ClosestTriangle<'a> {

@@ -86,14 +86,14 @@ mod wide;
 
 use blas::Blas;
 use obvhs::BvhBuildParams;
-use obvhs::cwbvh::CwBvh;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
-use traverse::{BoxRay, Visit, visitor, walk_any};
+use traverse::{BoxRay, Tree, Visit, visitor, walk_any};
 pub use wide::Kernel;
+use wide::WideBvh;
 
 /// One object of the scene: an analytic shape or an instance of a mesh.
 #[derive(Clone, Debug)]
@@ -172,6 +172,12 @@ pub enum BuildError {
         /// The mesh index it named.
         mesh: u32,
     },
+    /// More bounded objects than the top level's references can hold
+    /// (2²⁷ slots).
+    TooManyObjects {
+        /// How many there were.
+        objects: usize,
+    },
 }
 
 impl std::fmt::Display for BuildError {
@@ -179,6 +185,9 @@ impl std::fmt::Display for BuildError {
         match self {
             Self::NoSuchMesh { object, mesh } => {
                 write!(f, "object {object} names mesh {mesh}, which does not exist")
+            }
+            Self::TooManyObjects { objects } => {
+                write!(f, "{objects} objects are more than the top-level hierarchy can hold")
             }
         }
     }
@@ -362,9 +371,10 @@ pub struct Accel {
     bounds: Aabb,
     stats: BuildStats,
     blas: Vec<Blas>,
-    tlas: CwBvh,
+    /// The top level: a wide BVH over the bounded objects' world boxes.
+    tlas: WideBvh,
     tlas_depth: usize,
-    /// Object index of each top-level primitive slot.
+    /// Object index of each top-level slot.
     tlas_objects: Vec<u32>,
     /// Objects tested outside the hierarchy.
     unbounded: Vec<u32>,
@@ -487,16 +497,17 @@ impl Accel {
                 unbounded.push(i as u32);
             }
         }
-        let tlas = cwbvh::build(tlas_boxes, None, options.top_quality);
-        let tlas_objects = tlas.primitive_indices.iter().map(|&k| top[k as usize]).collect();
+        let (tlas, _) = WideBvh::build(tlas_boxes, None, options.top_quality, kernel)
+            .ok_or(BuildError::TooManyObjects { objects: top.len() })?;
+        let tlas_objects = tlas.order().iter().map(|&k| top[k as usize]).collect();
         let stats = BuildStats {
             build_seconds: start.elapsed().as_secs_f64(),
-            bvh_bytes: cwbvh::bytes(&tlas)
+            bvh_bytes: tlas.bytes()
                 + std::mem::size_of::<u32>() * (top.len() + unbounded.len())
                 + blas.iter().map(Blas::bytes).sum::<usize>(),
             stored_triangles: meshes.iter().map(|m| m.len()).sum(),
             instanced_triangles: instanced,
-            bvh_nodes: tlas.nodes.len() + blas.iter().map(Blas::node_count).sum::<usize>(),
+            bvh_nodes: tlas.node_count() + blas.iter().map(Blas::node_count).sum::<usize>(),
             unbounded_objects: unbounded.len(),
         };
         let objects_identity = objects
@@ -509,7 +520,7 @@ impl Accel {
             bounds,
             stats,
             blas,
-            tlas_depth: traverse::depth(&tlas),
+            tlas_depth: tlas.stack_need(),
             tlas,
             tlas_objects,
             unbounded,
@@ -538,7 +549,7 @@ impl Accel {
         if !kernel.supported() {
             return false;
         }
-        self.blas.iter_mut().all(|b| b.set_kernel(kernel))
+        self.tlas.set_kernel(kernel) && self.blas.iter_mut().all(|b| b.set_kernel(kernel))
     }
 
     /// Bounds of every bounded object (infinite planes excluded).

@@ -147,9 +147,9 @@ pub(crate) static WALKS: [std::sync::atomic::AtomicUsize; 3] =
 #[derive(Clone, Debug)]
 pub(crate) struct WideBvh {
     nodes: Vec<Node>,
-    /// Per slot: the binary tree's slot (an index into its
-    /// `primitive_indices`), or [`PAD`]. Every leaf starts at a multiple
-    /// of four, so that leaf `first / 4` is one block of four.
+    /// Per slot: the primitive's index (as given to the build), or
+    /// [`PAD`]. Every leaf starts at a multiple of four, so that leaf
+    /// `first / 4` is one block of four.
     pub slots: Vec<u32>,
     kernel: Kernel,
 }
@@ -176,6 +176,37 @@ impl WideBvh {
         let mut w = Self { nodes, slots, kernel: Kernel::Portable };
         w.set_kernel(kernel);
         Some(w)
+    }
+
+    /// The primitive of each slot, padding slots repeating the one before
+    /// (they are never visited).
+    pub fn order(&self) -> Vec<u32> {
+        let mut last = 0;
+        self.slots
+            .iter()
+            .map(|&s| {
+                if s != PAD {
+                    last = s;
+                }
+                last
+            })
+            .collect()
+    }
+
+    /// Builds obvhs's binary tree over `aabbs` (pre-splitting `tris` if the
+    /// quality asks for it) with leaves of at most [`MAX_LEAF`], and
+    /// converts it; `None` as [`WideBvh::from_bvh2`]. Also says whether the
+    /// build pre-split (a primitive may then sit in several leaves).
+    pub fn build(
+        aabbs: Vec<obvhs::aabb::Aabb>,
+        tris: Option<&[obvhs::triangle::Triangle]>,
+        quality: crate::BuildQuality,
+        kernel: Kernel,
+    ) -> Option<(Self, bool)> {
+        let mut p = quality.params();
+        p.max_prims_per_leaf = MAX_LEAF;
+        let b = crate::bvh2::build(aabbs, tris, p);
+        Some((Self::from_bvh2(&b, kernel)?, b.uses_spatial_splits))
     }
 
     /// Selects the kernel its walks use; refused (`false`) when the CPU
@@ -239,7 +270,9 @@ fn convert(bvh: &Bvh2, src: usize, nodes: &mut Vec<Node>, slots: &mut Vec<u32>) 
             if count > MAX_LEAF || u64::from(first) + u64::from(MAX_LEAF) > 1 << FIRST_BITS {
                 return None;
             }
-            slots.extend(n.first_index..n.first_index + count);
+            let prims =
+                bvh.primitive_indices.get(n.first_index as usize..(n.first_index + count) as usize)?;
+            slots.extend_from_slice(prims);
             slots.resize(slots.len() + (MAX_LEAF - count) as usize, PAD);
             LEAF | (count - 1) << FIRST_BITS | first
         } else {
