@@ -9,6 +9,7 @@ mod bench;
 mod bless;
 mod ci;
 mod fuzz;
+mod peers;
 mod render;
 #[cfg(test)]
 mod tidy;
