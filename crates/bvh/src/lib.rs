@@ -1,7 +1,8 @@
 //! Scene acceleration for prism: closest-hit, occlusion and every-crossing
 //! queries over a mix of analytic shapes and instanced triangle meshes,
-//! built on [obvhs](https://docs.rs/obvhs)'s compressed wide BVHs (CWBVH,
-//! eight children per node, 80 bytes a node).
+//! built by [obvhs](https://docs.rs/obvhs) (PLOC with reinsertion) and
+//! converted into a CPU-native wide BVH (eight children per 256-byte node,
+//! uncompressed SoA `f32` boxes, leaves of four triangles tested at once).
 //!
 //! # Structure
 //!
@@ -17,15 +18,14 @@
 //! Hierarchies are built in parallel (rayon) with the [`BuildQuality`]
 //! chosen in [`BuildOptions`].
 //!
-//! A mesh's hierarchy is a CWBVH by default; [`BuildOptions::mesh_layout`]
-//! (or the environment variable `PRISM_BVH_BLAS=bvh2` for the default
-//! options) selects obvhs's binary BVH instead ([`BlasKind`]), walked by
-//! this crate's own BVH2 walk under the same rules (`t_min`, no `1e-4`
-//! clamp, `NaN`-safe slabs, nearer child first, early exit for occlusion).
-//! Measured on the bunny, kitchen and 6×6×6 grid (docs/benchmarks.md) the
-//! BVH2 walk runs 9–13 % more instructions on primary rays (about even in
-//! CPU time) and 26–50 % more on incoherent and shadow rays (15–30 %
-//! slower), so the CWBVH stays the default for every query.
+//! A mesh's hierarchy is the wide layout ([`BlasKind::Wide`]) by default;
+//! [`BuildOptions::mesh_layout`] (or the environment variable
+//! `PRISM_BVH_BLAS=cwbvh|bvh2|wide` for the default options) selects
+//! obvhs's CWBVH or binary BVH instead, each walked by this crate's own
+//! walk under the same rules (`t_min`, no `1e-4` clamp, `NaN`-safe slabs,
+//! front to back, early exit for occlusion). The wide layout measured
+//! 1.3–1.7× the CWBVH's rays per second (docs/benchmarks.md). The top
+//! level is always the wide layout.
 //!
 //! # Infinite planes
 //!
@@ -61,16 +61,20 @@
 //!
 //! # SIMD
 //!
-//! The node test handles a node's eight children as plain per-child code
-//! that the compiler vectorises: two SSE halves in a default x86-64
-//! build. [`Accel::closest_hit`] and [`Accel::occluded`] also exist
-//! compiled for AVX2 (one 8-wide register per test, plus FMA, BMI, LZCNT
-//! and POPCNT), chosen at run time when the CPU has these features, so
-//! the binary stays portable and the rest of the workspace is unaffected.
-//! Both give bit-for-bit the same answers (no operation is fused or
-//! reordered; a test compares them). Setting the environment variable
-//! `PRISM_BVH_NO_SIMD` when the structure is built selects the plain
-//! variant, for comparison.
+//! The wide layout's node test exists three times ([`Kernel`]): portable
+//! Rust over eight-lane arrays (no `unsafe`; the compiler vectorises it),
+//! AVX2 intrinsics, and AVX-512 (mask-register compare and compress-store
+//! of the children hit, on 256-bit vectors); the walk and its leaf tests
+//! are compiled once per kernel, and [`Kernel::detect`] picks the widest
+//! the CPU has when the structure is built ([`Accel::set_kernel`] selects
+//! another). All give bit-for-bit the same answers (same operations in the
+//! same order, nothing fused; tests compare them). A leaf's four triangles
+//! are tested together by [`prism_geometry::TriangleRay::intersect4`],
+//! bit-identical to the scalar test. [`Accel::closest_hit`] and
+//! [`Accel::occluded`] are also compiled for AVX2 as a whole (the CWBVH and
+//! BVH2 walks, and the analytic shapes, then use 256-bit registers).
+//! Setting the environment variable `PRISM_BVH_NO_SIMD` when the structure
+//! is built selects the plain variants of both, for comparison.
 //!
 //! [`Accel::closest_hit_brute_force`] and [`Accel::for_each_hit_brute_force`]
 //! answer the same questions by testing everything; the tests compare the
@@ -155,7 +159,7 @@ pub struct BuildStats {
     pub stored_triangles: usize,
     /// Triangles as seen by rays (each instance counted).
     pub instanced_triangles: usize,
-    /// CWBVH nodes over all levels (top level plus one tree per mesh).
+    /// Nodes over all levels (top level plus one tree per mesh).
     pub bvh_nodes: usize,
     /// Objects kept out of the hierarchy and tested by every ray
     /// (infinite planes, and anything without finite bounds).
@@ -256,8 +260,8 @@ pub struct BuildOptions {
     pub mesh_layout: BlasKind,
 }
 
-/// Node layout of a mesh's own hierarchy. Both are walked by this crate's
-/// own traversal (see the crate docs); the top level is always a CWBVH.
+/// Node layout of a mesh's own hierarchy. All are walked by this crate's
+/// own traversal (see the crate docs); the top level is always wide.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BlasKind {
     /// obvhs's compressed wide BVH: eight children per 80-byte node,
@@ -359,8 +363,24 @@ impl Visit for &mut AnyObject<'_> {
 #[derive(Clone, Copy)]
 enum Best {
     None,
-    Shape { object: u32, hit: Hit },
-    Mesh { object: u32, face: u32, t: f32, b1: f32, b2: f32, dir: Vec3 },
+    Shape {
+        object: u32,
+        hit: Hit,
+    },
+    /// An unbounded shape (a plane) hit at `t`: its hit record is made by
+    /// [`Accel::finish`] only if nothing nearer is found.
+    Unbounded {
+        object: u32,
+        t: f32,
+    },
+    Mesh {
+        object: u32,
+        face: u32,
+        t: f32,
+        b1: f32,
+        b2: f32,
+        dir: Vec3,
+    },
 }
 
 /// The acceleration structure over a whole scene.
@@ -613,9 +633,19 @@ impl Accel {
         }
     }
 
-    fn finish(&self, best: Best) -> Option<SceneHit> {
+    fn finish(&self, best: Best, ray: &Ray) -> Option<SceneHit> {
         match best {
             Best::None => None,
+            Best::Unbounded { object, t } => {
+                let Object::Shape(s) = &self.objects[object as usize] else {
+                    return None;
+                };
+                // The same ray as the `t`-only test that found it, so the
+                // same `t` (`intersect` computes it by `intersect_t`).
+                let hit = self.shape_hit(object, s, ray)?;
+                debug_assert_eq!(hit.t.to_bits(), t.to_bits());
+                Some(SceneHit { object, triangle: SceneHit::NO_TRIANGLE, hit })
+            }
             Best::Shape { object, hit } => Some(SceneHit { object, triangle: SceneHit::NO_TRIANGLE, hit }),
             Best::Mesh { object, face, t, b1, b2, dir } => {
                 let Object::Mesh { mesh, transform } = &self.objects[object as usize] else {
@@ -654,12 +684,24 @@ impl Accel {
             return None;
         }
         let mut v = ClosestObject { accel: self, ray: *ray, best: Best::None };
+        // Unbounded shapes (planes) by `t` only: every query meets them,
+        // and most find something nearer in the hierarchy.
         for &i in &self.unbounded {
-            self.closest_object(i, &mut v.ray, &mut v.best);
+            match &self.objects[i as usize] {
+                Object::Shape(s) => {
+                    if let Some(t) = self.shape_t(i, s, &v.ray) {
+                        v.ray.t_max = t;
+                        v.best = Best::Unbounded { object: i, t };
+                    }
+                }
+                Object::Mesh { .. } => self.closest_object(i, &mut v.ray, &mut v.best),
+            }
         }
         let mut br = BoxRay::new(&v.ray);
         walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
-        self.finish(v.best)
+        // The winner's hit from the query's own ray: its `t` does not depend
+        // on `t_max` (which was at least `t` when it was found).
+        self.finish(v.best, ray)
     }
 
     #[inline(always)]
