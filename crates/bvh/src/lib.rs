@@ -363,24 +363,8 @@ impl Visit for &mut AnyObject<'_> {
 #[derive(Clone, Copy)]
 enum Best {
     None,
-    Shape {
-        object: u32,
-        hit: Hit,
-    },
-    /// An unbounded shape (a plane) hit at `t`: its hit record is made by
-    /// [`Accel::finish`] only if nothing nearer is found.
-    Unbounded {
-        object: u32,
-        t: f32,
-    },
-    Mesh {
-        object: u32,
-        face: u32,
-        t: f32,
-        b1: f32,
-        b2: f32,
-        dir: Vec3,
-    },
+    Shape { object: u32, hit: Hit },
+    Mesh { object: u32, face: u32, t: f32, b1: f32, b2: f32, dir: Vec3 },
 }
 
 /// The acceleration structure over a whole scene.
@@ -633,19 +617,9 @@ impl Accel {
         }
     }
 
-    fn finish(&self, best: Best, ray: &Ray) -> Option<SceneHit> {
+    fn finish(&self, best: Best) -> Option<SceneHit> {
         match best {
             Best::None => None,
-            Best::Unbounded { object, t } => {
-                let Object::Shape(s) = &self.objects[object as usize] else {
-                    return None;
-                };
-                // The same ray as the `t`-only test that found it, so the
-                // same `t` (`intersect` computes it by `intersect_t`).
-                let hit = self.shape_hit(object, s, ray)?;
-                debug_assert_eq!(hit.t.to_bits(), t.to_bits());
-                Some(SceneHit { object, triangle: SceneHit::NO_TRIANGLE, hit })
-            }
             Best::Shape { object, hit } => Some(SceneHit { object, triangle: SceneHit::NO_TRIANGLE, hit }),
             Best::Mesh { object, face, t, b1, b2, dir } => {
                 let Object::Mesh { mesh, transform } = &self.objects[object as usize] else {
@@ -684,24 +658,12 @@ impl Accel {
             return None;
         }
         let mut v = ClosestObject { accel: self, ray: *ray, best: Best::None };
-        // Unbounded shapes (planes) by `t` only: every query meets them,
-        // and most find something nearer in the hierarchy.
         for &i in &self.unbounded {
-            match &self.objects[i as usize] {
-                Object::Shape(s) => {
-                    if let Some(t) = self.shape_t(i, s, &v.ray) {
-                        v.ray.t_max = t;
-                        v.best = Best::Unbounded { object: i, t };
-                    }
-                }
-                Object::Mesh { .. } => self.closest_object(i, &mut v.ray, &mut v.best),
-            }
+            self.closest_object(i, &mut v.ray, &mut v.best);
         }
         let mut br = BoxRay::new(&v.ray);
         walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
-        // The winner's hit from the query's own ray: its `t` does not depend
-        // on `t_max` (which was at least `t` when it was found).
-        self.finish(v.best, ray)
+        self.finish(v.best)
     }
 
     #[inline(always)]
