@@ -321,18 +321,18 @@ fn min_ps(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
-/// A node test: writes the children the ray's `[t_min, reach]` meets,
-/// in lane order, as entry distances `near` and references `child`;
-/// returns how many.
+/// What a node test writes: the children the ray meets, in lane order.
+struct Hits {
+    /// Entry distances.
+    near: [f32; WIDTH],
+    /// References.
+    child: [u32; WIDTH],
+}
+
+/// A node test: writes the children the ray's `[t_min, reach]` meets to
+/// the front of `out`; returns how many.
 trait NodeTest: Copy {
-    fn hits(
-        self,
-        node: &Node,
-        r: &WideRay,
-        reach: f32,
-        near: &mut [f32; WIDTH],
-        child: &mut [u32; WIDTH],
-    ) -> usize;
+    fn hits(self, node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize;
 }
 
 /// The portable node test.
@@ -341,14 +341,7 @@ struct Portable;
 
 impl NodeTest for Portable {
     #[inline(always)]
-    fn hits(
-        self,
-        node: &Node,
-        r: &WideRay,
-        reach: f32,
-        near: &mut [f32; WIDTH],
-        child: &mut [u32; WIDTH],
-    ) -> usize {
+    fn hits(self, node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
         let p = &node.planes;
         let (nx, ny, nz) = (&p[r.near_row[0]], &p[r.near_row[1]], &p[r.near_row[2]]);
         let (fx, fy, fz) = (&p[r.far_row[0]], &p[r.far_row[1]], &p[r.far_row[2]]);
@@ -362,25 +355,19 @@ impl NodeTest for Portable {
             t_near[k] = n;
             mask |= u32::from(n <= f) << k;
         }
-        compact(mask, &t_near, &node.child, near, child)
+        compact(mask, &t_near, &node.child, out)
     }
 }
 
 /// Writes the lanes set in `mask` to the front of `near`/`child`.
 #[inline(always)]
-fn compact(
-    mut mask: u32,
-    t_near: &[f32; WIDTH],
-    lanes: &[u32; WIDTH],
-    near: &mut [f32; WIDTH],
-    child: &mut [u32; WIDTH],
-) -> usize {
+fn compact(mut mask: u32, t_near: &[f32; WIDTH], lanes: &[u32; WIDTH], out: &mut Hits) -> usize {
     let mut n = 0;
     while mask != 0 {
         let k = mask.trailing_zeros() as usize & (WIDTH - 1);
         mask &= mask - 1;
-        near[n & (WIDTH - 1)] = t_near[k];
-        child[n & (WIDTH - 1)] = lanes[k];
+        out.near[n & (WIDTH - 1)] = t_near[k];
+        out.child[n & (WIDTH - 1)] = lanes[k];
         n += 1;
     }
     n
@@ -389,7 +376,7 @@ fn compact(
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     //! The AVX2 and AVX-512 node tests.
-    use super::{Node, NodeTest, WIDTH, WideRay, compact};
+    use super::{Hits, Node, NodeTest, WIDTH, WideRay, compact};
     use core::arch::x86_64::*;
 
     /// The AVX2 node test. Made only inside code compiled for AVX2 that
@@ -447,73 +434,49 @@ mod x86 {
 
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn hits_avx2(
-        node: &Node,
-        r: &WideRay,
-        reach: f32,
-        near: &mut [f32; WIDTH],
-        child: &mut [u32; WIDTH],
-    ) -> usize {
+    fn hits_avx2(node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
         let (n, f) = distances(node, r, reach);
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(n, f)) as u32;
         let mut t_near = [0.0f32; WIDTH];
         // SAFETY: `t_near` holds eight `f32`s (unaligned store).
         unsafe { _mm256_storeu_ps(t_near.as_mut_ptr(), n) };
-        compact(mask, &t_near, &node.child, near, child)
+        compact(mask, &t_near, &node.child, out)
     }
 
     #[inline]
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn hits_avx512(
-        node: &Node,
-        r: &WideRay,
-        reach: f32,
-        near: &mut [f32; WIDTH],
-        child: &mut [u32; WIDTH],
-    ) -> usize {
+    fn hits_avx512(node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
         let (n, f) = distances(node, r, reach);
         let mask = _mm256_cmp_ps_mask::<_CMP_LE_OQ>(n, f);
         // SAFETY: `near` and `child` hold eight lanes each; a compress-store
         // writes at most the lanes set in `mask`, contiguously from the
         // start. `node.child` is eight `u32`s (unaligned load).
         unsafe {
-            _mm256_mask_compressstoreu_ps(near.as_mut_ptr().cast(), mask, n);
+            _mm256_mask_compressstoreu_ps(out.near.as_mut_ptr().cast(), mask, n);
             let c = _mm256_loadu_si256(node.child.as_ptr().cast());
-            _mm256_mask_compressstoreu_epi32(child.as_mut_ptr().cast(), mask, c);
+            _mm256_mask_compressstoreu_epi32(out.child.as_mut_ptr().cast(), mask, c);
         }
         mask.count_ones() as usize
     }
 
-    impl NodeTest for Avx2 {
-        #[inline(always)]
-        fn hits(
-            self,
-            node: &Node,
-            r: &WideRay,
-            reach: f32,
-            near: &mut [f32; WIDTH],
-            child: &mut [u32; WIDTH],
-        ) -> usize {
-            // SAFETY: an `Avx2` exists only where the CPU has AVX2 (`new`).
-            unsafe { hits_avx2(node, r, reach, near, child) }
-        }
+    /// `impl NodeTest for $token`, calling the `#[target_feature]`
+    /// function `$hits`.
+    macro_rules! node_test {
+        ($token:ty, $hits:ident) => {
+            impl NodeTest for $token {
+                #[inline(always)]
+                fn hits(self, node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
+                    // SAFETY: a value of this token type exists only where
+                    // the CPU has the features `$hits` is compiled for
+                    // (its `new` is unsafe with that contract).
+                    unsafe { $hits(node, r, reach, out) }
+                }
+            }
+        };
     }
 
-    impl NodeTest for Avx512 {
-        #[inline(always)]
-        fn hits(
-            self,
-            node: &Node,
-            r: &WideRay,
-            reach: f32,
-            near: &mut [f32; WIDTH],
-            child: &mut [u32; WIDTH],
-        ) -> usize {
-            // SAFETY: an `Avx512` exists only where the CPU has AVX-512 F
-            // and VL and AVX2 (`new`).
-            unsafe { hits_avx512(node, r, reach, near, child) }
-        }
-    }
+    node_test!(Avx2, hits_avx2);
+    node_test!(Avx512, hits_avx512);
 }
 
 impl WideBvh {
@@ -534,9 +497,9 @@ impl WideBvh {
         loop {
             if cur & LEAF == 0 {
                 let Some(node) = self.nodes.get(cur as usize) else { return };
-                let mut near = [0.0f32; WIDTH];
-                let mut child = [0u32; WIDTH];
-                let n = test.hits(node, &r, ray.reach(), &mut near, &mut child).min(WIDTH);
+                let mut out = Hits { near: [0.0; WIDTH], child: [0; WIDTH] };
+                let n = test.hits(node, &r, ray.reach(), &mut out).min(WIDTH);
+                let Hits { near, child } = &mut out;
                 if n > 0 {
                     if n > 1 && !V::ANY {
                         sort(&mut near[..n], &mut child[..n]);
@@ -673,8 +636,8 @@ mod tests {
             );
             let br = BoxRay::new(&ray);
             let r = WideRay::new(&br);
-            let (mut near, mut child) = ([0.0; WIDTH], [0; WIDTH]);
-            assert_eq!(Portable.hits(&node, &r, br.reach(), &mut near, &mut child), 0, "{d:?}");
+            let mut out = Hits { near: [0.0; WIDTH], child: [0; WIDTH] };
+            assert_eq!(Portable.hits(&node, &r, br.reach(), &mut out), 0, "{d:?}");
         }
     }
 }
