@@ -3,6 +3,8 @@
 //! ```text
 //! cargo xtask bench                     both: BVH benchmark, then the seed render
 //! cargo xtask bench [BVH ARGS…]         acceleration-structure benchmark (prism-bench)
+//! cargo xtask bench --vs-peers [--rounds 2] [--threads 1,2] [--reps 3] [--scenes bunny,kitchen,grid]
+//!                                       prism beside Embree and POV-Ray (`peers.rs`)
 //! cargo xtask bench --scene SCENE [--threads 1,2] [--reps 5] [--width 1280] [--height 720] [--spp 4]
 //!                                       render benchmark (release `prism render`)
 //! ```
@@ -27,6 +29,9 @@ use std::path::Path;
 use std::time::Instant;
 
 pub fn run(args: &[String]) -> Result<()> {
+    if args.iter().any(|a| a == "--vs-peers") {
+        return crate::peers::run(args);
+    }
     if args.is_empty() {
         bvh(args)?;
         return render(&[]);

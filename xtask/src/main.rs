@@ -10,6 +10,7 @@ mod bless;
 mod ci;
 mod fuzz;
 mod man;
+mod peers;
 mod render;
 mod rmse;
 #[cfg(test)]

@@ -6,11 +6,12 @@
 //! watertight ray/triangle test.
 
 use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
+use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Ray, TriangleMesh, TriangleRay};
+use prism_geometry::{Ray, TriangleMesh, TriangleRay, Triangles4};
 use std::ops::ControlFlow;
 
 /// A mesh's nodes, in one of the two layouts.
@@ -19,6 +20,8 @@ enum Nodes {
     Cwbvh(CwBvh),
     /// obvhs's binary BVH.
     Bvh2(Bvh2),
+    /// The wide SoA layout converted from obvhs's binary BVH.
+    Wide(WideBvh),
 }
 
 impl std::fmt::Debug for Nodes {
@@ -27,6 +30,7 @@ impl std::fmt::Debug for Nodes {
         let (name, nodes) = match self {
             Self::Cwbvh(b) => ("Cwbvh", b.nodes.len()),
             Self::Bvh2(b) => ("Bvh2", b.nodes.len()),
+            Self::Wide(b) => ("Wide", b.node_count()),
         };
         f.debug_struct(name).field("nodes", &nodes).finish_non_exhaustive()
     }
@@ -36,7 +40,8 @@ impl std::fmt::Debug for Nodes {
 #[derive(Debug)]
 pub(crate) struct Blas {
     nodes: Nodes,
-    /// Depth of the tree, for sizing the walk's stack.
+    /// Stack entries its walk can need (the tree's depth for the CWBVH
+    /// and BVH2 walks).
     depth: usize,
     /// Corners of the triangle in each primitive slot.
     tris: Vec<[Vec3; 3]>,
@@ -44,6 +49,9 @@ pub(crate) struct Blas {
     faces: Vec<u32>,
     /// A face may occupy several slots (pre-split build).
     split: bool,
+    /// The wide layout's leaves as SIMD blocks (slots `4i..4i + 4` in
+    /// block `i`); empty for the other layouts.
+    blocks: Vec<Triangles4>,
 }
 
 impl Default for Blas {
@@ -55,6 +63,7 @@ impl Default for Blas {
             tris: Vec::new(),
             faces: Vec::new(),
             split: false,
+            blocks: Vec::new(),
         }
     }
 }
@@ -62,7 +71,7 @@ impl Default for Blas {
 impl Blas {
     /// The hierarchy over `mesh`'s faces of non-zero area (the others can
     /// never be hit).
-    pub fn build(mesh: &TriangleMesh, quality: BuildQuality, layout: BlasKind) -> Self {
+    pub fn build(mesh: &TriangleMesh, quality: BuildQuality, layout: BlasKind, kernel: Kernel) -> Self {
         let kept: Vec<u32> = (0..mesh.len())
             .filter(|&f| {
                 let [a, b, c] = mesh.triangle(f);
@@ -91,10 +100,46 @@ impl Blas {
                     (traverse::depth(&b), b.uses_spatial_splits, b.primitive_indices.clone());
                 (Nodes::Bvh2(b), depth, split, order)
             }
+            BlasKind::Wide => {
+                let aabbs = tris.iter().map(obvhs::triangle::Triangle::aabb).collect();
+                let Some((w, split)) = WideBvh::build(aabbs, Some(&tris), quality, kernel) else {
+                    // Too many triangles for the wide layout's references.
+                    return Self::build(mesh, quality, BlasKind::Cwbvh, kernel);
+                };
+                let blocks = w
+                    .slots
+                    .chunks(wide::MAX_LEAF as usize)
+                    .map(|c| {
+                        let tris: Vec<_> = c
+                            .iter()
+                            .filter(|&&s| s != wide::PAD)
+                            .map(|&s| mesh.triangle(kept[s as usize] as usize))
+                            .collect();
+                        Triangles4::new(&tris)
+                    })
+                    .collect();
+                let (need, order) = (w.stack_need(), w.order());
+                let mut blas = Self::finish(mesh, Nodes::Wide(w), need, split, &kept, &order);
+                blas.blocks = blocks;
+                return blas;
+            }
         };
+        Self::finish(mesh, nodes, depth, split, &kept, &order)
+    }
+
+    /// The hierarchy with its triangles copied in slot order (`order`:
+    /// the index into `kept` of each slot).
+    fn finish(
+        mesh: &TriangleMesh,
+        nodes: Nodes,
+        depth: usize,
+        split: bool,
+        kept: &[u32],
+        order: &[u32],
+    ) -> Self {
         let faces: Vec<u32> = order.iter().map(|&i| kept[i as usize]).collect();
         let tris = faces.iter().map(|&f| mesh.triangle(f as usize)).collect();
-        Self { nodes, depth, tris, faces, split }
+        Self { nodes, depth, tris, faces, split, blocks: Vec::new() }
     }
 
     /// Whether the mesh has no hierarchy (nothing to hit).
@@ -107,6 +152,16 @@ impl Blas {
         match &self.nodes {
             Nodes::Cwbvh(b) => b.node_count(),
             Nodes::Bvh2(b) => b.node_count(),
+            Nodes::Wide(b) => b.node_count(),
+        }
+    }
+
+    /// Selects the node-test kernel of a wide hierarchy (`false` if the CPU
+    /// cannot run it; other layouts ignore it).
+    pub fn set_kernel(&mut self, kernel: Kernel) -> bool {
+        match &mut self.nodes {
+            Nodes::Wide(b) => b.set_kernel(kernel),
+            _ => kernel.supported(),
         }
     }
 
@@ -116,6 +171,7 @@ impl Blas {
         match &self.nodes {
             Nodes::Cwbvh(b) => walk_any(b, self.depth, br, v),
             Nodes::Bvh2(b) => walk_any(b, self.depth, br, v),
+            Nodes::Wide(b) => walk_any(b, self.depth, br, v),
         }
     }
 
@@ -124,8 +180,10 @@ impl Blas {
         let nodes = match &self.nodes {
             Nodes::Cwbvh(b) => cwbvh::bytes(b),
             Nodes::Bvh2(b) => bvh2::bytes(b),
+            Nodes::Wide(b) => b.bytes(),
         };
         nodes
+            + self.blocks.len() * std::mem::size_of::<Triangles4>()
             + self.tris.len() * std::mem::size_of::<[Vec3; 3]>()
             + self.faces.len() * std::mem::size_of::<u32>()
     }
@@ -134,7 +192,12 @@ impl Blas {
     #[inline(always)]
     pub fn closest(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
         let mut br = BoxRay::new(ray);
-        let mut v = ClosestTriangle { tris: &self.tris, tr: TriangleRay::new(ray), found: None };
+        let mut v = ClosestTriangle {
+            tris: &self.tris,
+            blocks: &self.blocks,
+            tr: TriangleRay::new(ray),
+            found: None,
+        };
         self.walk(&mut br, &mut v);
         v.found.map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2))
     }
@@ -143,7 +206,8 @@ impl Blas {
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
         let mut br = BoxRay::new(ray);
-        let mut v = AnyTriangle { tris: &self.tris, tr: TriangleRay::new(ray), hit: false };
+        let mut v =
+            AnyTriangle { tris: &self.tris, blocks: &self.blocks, tr: TriangleRay::new(ray), hit: false };
         self.walk(&mut br, &mut v);
         v.hit
     }
@@ -182,6 +246,7 @@ impl Blas {
 /// The closest-hit walk over one mesh's triangles.
 struct ClosestTriangle<'a> {
     tris: &'a [[Vec3; 3]],
+    blocks: &'a [Triangles4],
     tr: TriangleRay,
     /// `(slot, t, b1, b2)` of the nearest hit so far.
     found: Option<(u32, f32, f32, f32)>,
@@ -197,19 +262,46 @@ impl Visit for &mut ClosestTriangle<'_> {
         }
         true
     }
+
+    /// A wide leaf's block at once: the same hit as visiting its slots in
+    /// order ([`TriangleRay::intersect4`]).
+    #[inline(always)]
+    fn visit_leaf(&mut self, first: u32, count: u32, br: &mut BoxRay) -> bool {
+        let Some(block) = self.blocks.get(first as usize / 4) else {
+            return (first..first + count).all(|slot| self.visit(slot, br));
+        };
+        if let Some((lane, t, b1, b2)) = self.tr.intersect4(block) {
+            self.tr.set_t_max(t);
+            br.set_t_max(t);
+            self.found = Some((first + lane as u32, t, b1, b2));
+        }
+        true
+    }
 }
 
 /// The occlusion walk over one mesh's triangles (stops at the first hit).
 struct AnyTriangle<'a> {
     tris: &'a [[Vec3; 3]],
+    blocks: &'a [Triangles4],
     tr: TriangleRay,
     hit: bool,
 }
 
 impl Visit for &mut AnyTriangle<'_> {
+    const ANY: bool = true;
+
     #[inline(always)]
     fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
         self.hit = self.tr.intersect(&self.tris[slot as usize]).is_some();
+        !self.hit
+    }
+
+    #[inline(always)]
+    fn visit_leaf(&mut self, first: u32, count: u32, br: &mut BoxRay) -> bool {
+        let Some(block) = self.blocks.get(first as usize / 4) else {
+            return (first..first + count).all(|slot| self.visit(slot, br));
+        };
+        self.hit = self.tr.intersect4(block).is_some();
         !self.hit
     }
 }
@@ -234,8 +326,8 @@ mod tests {
             })
             .collect();
         for q in BuildQuality::ALL {
-            for layout in [BlasKind::Cwbvh, BlasKind::Bvh2] {
-                let blas = Blas::build(&mesh, q, layout);
+            for layout in [BlasKind::Cwbvh, BlasKind::Bvh2, BlasKind::Wide] {
+                let blas = Blas::build(&mesh, q, layout, Kernel::Portable);
                 match &blas.nodes {
                     Nodes::Cwbvh(b) => {
                         assert_eq!(layout, BlasKind::Cwbvh);
@@ -245,6 +337,8 @@ mod tests {
                         assert_eq!(layout, BlasKind::Bvh2);
                         b.validate(&tris, false, blas.split);
                     }
+                    // Its boxes and slots are checked by the queries' tests.
+                    Nodes::Wide(_) => assert_eq!(layout, BlasKind::Wide),
                 }
                 assert!(blas.depth >= 1 && blas.depth <= traverse::INLINE_STACK);
                 assert_eq!(blas.tris.len(), blas.faces.len());

@@ -1,7 +1,8 @@
 //! Scene acceleration for prism: closest-hit, occlusion and every-crossing
 //! queries over a mix of analytic shapes and instanced triangle meshes,
-//! built on [obvhs](https://docs.rs/obvhs)'s compressed wide BVHs (CWBVH,
-//! eight children per node, 80 bytes a node).
+//! built by [obvhs](https://docs.rs/obvhs) (PLOC with reinsertion) and
+//! converted into a CPU-native wide BVH (eight children per 256-byte node,
+//! uncompressed SoA `f32` boxes, leaves of four triangles tested at once).
 //!
 //! # Structure
 //!
@@ -17,15 +18,14 @@
 //! Hierarchies are built in parallel (rayon) with the [`BuildQuality`]
 //! chosen in [`BuildOptions`].
 //!
-//! A mesh's hierarchy is a CWBVH by default; [`BuildOptions::mesh_layout`]
-//! (or the environment variable `PRISM_BVH_BLAS=bvh2` for the default
-//! options) selects obvhs's binary BVH instead ([`BlasKind`]), walked by
-//! this crate's own BVH2 walk under the same rules (`t_min`, no `1e-4`
-//! clamp, `NaN`-safe slabs, nearer child first, early exit for occlusion).
-//! Measured on the bunny, kitchen and 6×6×6 grid (docs/benchmarks.md) the
-//! BVH2 walk runs 9–13 % more instructions on primary rays (about even in
-//! CPU time) and 26–50 % more on incoherent and shadow rays (15–30 %
-//! slower), so the CWBVH stays the default for every query.
+//! A mesh's hierarchy is the wide layout ([`BlasKind::Wide`]) by default;
+//! [`BuildOptions::mesh_layout`] (or the environment variable
+//! `PRISM_BVH_BLAS=cwbvh|bvh2|wide` for the default options) selects
+//! obvhs's CWBVH or binary BVH instead, each walked by this crate's own
+//! walk under the same rules (`t_min`, no `1e-4` clamp, `NaN`-safe slabs,
+//! front to back, early exit for occlusion). The wide layout measured
+//! 1.3–1.7× the CWBVH's rays per second (docs/benchmarks.md). The top
+//! level is always the wide layout.
 //!
 //! # Infinite planes
 //!
@@ -61,16 +61,20 @@
 //!
 //! # SIMD
 //!
-//! The node test handles a node's eight children as plain per-child code
-//! that the compiler vectorises: two SSE halves in a default x86-64
-//! build. [`Accel::closest_hit`] and [`Accel::occluded`] also exist
-//! compiled for AVX2 (one 8-wide register per test, plus FMA, BMI, LZCNT
-//! and POPCNT), chosen at run time when the CPU has these features, so
-//! the binary stays portable and the rest of the workspace is unaffected.
-//! Both give bit-for-bit the same answers (no operation is fused or
-//! reordered; a test compares them). Setting the environment variable
-//! `PRISM_BVH_NO_SIMD` when the structure is built selects the plain
-//! variant, for comparison.
+//! The wide layout's node test exists three times ([`Kernel`]): portable
+//! Rust over eight-lane arrays (no `unsafe`; the compiler vectorises it),
+//! AVX2 intrinsics, and AVX-512 (mask-register compare and compress-store
+//! of the children hit, on 256-bit vectors); the walk and its leaf tests
+//! are compiled once per kernel, and [`Kernel::detect`] picks the widest
+//! the CPU has when the structure is built ([`Accel::set_kernel`] selects
+//! another). All give bit-for-bit the same answers (same operations in the
+//! same order, nothing fused; tests compare them). A leaf's four triangles
+//! are tested together by [`prism_geometry::TriangleRay::intersect4`],
+//! bit-identical to the scalar test. [`Accel::closest_hit`] and
+//! [`Accel::occluded`] are also compiled for AVX2 as a whole (the CWBVH and
+//! BVH2 walks, and the analytic shapes, then use 256-bit registers).
+//! Setting the environment variable `PRISM_BVH_NO_SIMD` when the structure
+//! is built selects the plain variants of both, for comparison.
 //!
 //! [`Accel::closest_hit_brute_force`] and [`Accel::for_each_hit_brute_force`]
 //! answer the same questions by testing everything; the tests compare the
@@ -82,16 +86,18 @@ mod blas;
 mod bvh2;
 mod cwbvh;
 mod traverse;
+mod wide;
 
 use blas::Blas;
 use obvhs::BvhBuildParams;
-use obvhs::cwbvh::CwBvh;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
-use traverse::{BoxRay, Visit, visitor, walk_any};
+use traverse::{BoxRay, Tree, Visit, visitor, walk_any};
+pub use wide::Kernel;
+use wide::WideBvh;
 
 /// One object of the scene: an analytic shape or an instance of a mesh.
 #[derive(Clone, Debug)]
@@ -153,7 +159,7 @@ pub struct BuildStats {
     pub stored_triangles: usize,
     /// Triangles as seen by rays (each instance counted).
     pub instanced_triangles: usize,
-    /// CWBVH nodes over all levels (top level plus one tree per mesh).
+    /// Nodes over all levels (top level plus one tree per mesh).
     pub bvh_nodes: usize,
     /// Objects kept out of the hierarchy and tested by every ray
     /// (infinite planes, and anything without finite bounds).
@@ -170,6 +176,12 @@ pub enum BuildError {
         /// The mesh index it named.
         mesh: u32,
     },
+    /// More bounded objects than the top level's references can hold
+    /// (2²⁷ slots).
+    TooManyObjects {
+        /// How many there were.
+        objects: usize,
+    },
 }
 
 impl std::fmt::Display for BuildError {
@@ -177,6 +189,9 @@ impl std::fmt::Display for BuildError {
         match self {
             Self::NoSuchMesh { object, mesh } => {
                 write!(f, "object {object} names mesh {mesh}, which does not exist")
+            }
+            Self::TooManyObjects { objects } => {
+                write!(f, "{objects} objects are more than the top-level hierarchy can hold")
             }
         }
     }
@@ -245,8 +260,8 @@ pub struct BuildOptions {
     pub mesh_layout: BlasKind,
 }
 
-/// Node layout of a mesh's own hierarchy. Both are walked by this crate's
-/// own traversal (see the crate docs); the top level is always a CWBVH.
+/// Node layout of a mesh's own hierarchy. All are walked by this crate's
+/// own traversal (see the crate docs); the top level is always wide.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BlasKind {
     /// obvhs's compressed wide BVH: eight children per 80-byte node,
@@ -255,6 +270,10 @@ pub enum BlasKind {
     /// obvhs's binary BVH: two children, 48-byte nodes with full-precision
     /// boxes, leaves of up to the preset's `max_prims_per_leaf` triangles.
     Bvh2,
+    /// A CPU-native wide BVH converted from obvhs's binary one: eight
+    /// children per 256-byte node with full-precision SoA boxes, leaves of
+    /// up to four triangles, node tests by the run-time [`Kernel`].
+    Wide,
 }
 
 impl BlasKind {
@@ -264,6 +283,7 @@ impl BlasKind {
         match self {
             Self::Cwbvh => "cwbvh",
             Self::Bvh2 => "bvh2",
+            Self::Wide => "wide",
         }
     }
 
@@ -275,6 +295,7 @@ impl BlasKind {
         match std::env::var("PRISM_BVH_BLAS").ok()?.as_str() {
             "cwbvh" => Some(Self::Cwbvh),
             "bvh2" => Some(Self::Bvh2),
+            "wide" => Some(Self::Wide),
             _ => None,
         }
     }
@@ -294,7 +315,7 @@ impl Default for BuildOptions {
 const DEFAULT_MESH_QUALITY: BuildQuality = BuildQuality::Medium;
 
 /// Chosen by measurement (docs/benchmarks.md).
-const DEFAULT_MESH_LAYOUT: BlasKind = BlasKind::Cwbvh;
+const DEFAULT_MESH_LAYOUT: BlasKind = BlasKind::Wide;
 
 /// Objects whose bounds reach beyond this are tested outside the hierarchy
 /// (the compressed node boxes cannot represent them well).
@@ -328,6 +349,8 @@ struct AnyObject<'a> {
 }
 
 impl Visit for &mut AnyObject<'_> {
+    const ANY: bool = true;
+
     #[inline(always)]
     fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
         self.hit = self.accel.object_occludes(self.accel.tlas_objects[slot as usize], self.ray);
@@ -352,9 +375,10 @@ pub struct Accel {
     bounds: Aabb,
     stats: BuildStats,
     blas: Vec<Blas>,
-    tlas: CwBvh,
+    /// The top level: a wide BVH over the bounded objects' world boxes.
+    tlas: WideBvh,
     tlas_depth: usize,
-    /// Object index of each top-level primitive slot.
+    /// Object index of each top-level slot.
     tlas_objects: Vec<u32>,
     /// Objects tested outside the hierarchy.
     unbounded: Vec<u32>,
@@ -445,18 +469,18 @@ impl Accel {
             object_bounds.push(b);
         }
         // One hierarchy per mesh that some object uses, in parallel.
-        let blas: Vec<Blas> =
-            meshes
-                .par_iter()
-                .zip(used.par_iter())
-                .map(|(m, &u)| {
-                    if u {
-                        Blas::build(m, options.mesh_quality, options.mesh_layout)
-                    } else {
-                        Blas::default()
-                    }
-                })
-                .collect();
+        let kernel = Kernel::detect();
+        let blas: Vec<Blas> = meshes
+            .par_iter()
+            .zip(used.par_iter())
+            .map(|(m, &u)| {
+                if u {
+                    Blas::build(m, options.mesh_quality, options.mesh_layout, kernel)
+                } else {
+                    Blas::default()
+                }
+            })
+            .collect();
         let mut unbounded = Vec::new();
         let mut top = Vec::new();
         let mut tlas_boxes = Vec::new();
@@ -477,16 +501,17 @@ impl Accel {
                 unbounded.push(i as u32);
             }
         }
-        let tlas = cwbvh::build(tlas_boxes, None, options.top_quality);
-        let tlas_objects = tlas.primitive_indices.iter().map(|&k| top[k as usize]).collect();
+        let (tlas, _) = WideBvh::build(tlas_boxes, None, options.top_quality, kernel)
+            .ok_or(BuildError::TooManyObjects { objects: top.len() })?;
+        let tlas_objects = tlas.order().iter().map(|&k| top[k as usize]).collect();
         let stats = BuildStats {
             build_seconds: start.elapsed().as_secs_f64(),
-            bvh_bytes: cwbvh::bytes(&tlas)
+            bvh_bytes: tlas.bytes()
                 + std::mem::size_of::<u32>() * (top.len() + unbounded.len())
                 + blas.iter().map(Blas::bytes).sum::<usize>(),
             stored_triangles: meshes.iter().map(|m| m.len()).sum(),
             instanced_triangles: instanced,
-            bvh_nodes: tlas.nodes.len() + blas.iter().map(Blas::node_count).sum::<usize>(),
+            bvh_nodes: tlas.node_count() + blas.iter().map(Blas::node_count).sum::<usize>(),
             unbounded_objects: unbounded.len(),
         };
         let objects_identity = objects
@@ -499,7 +524,7 @@ impl Accel {
             bounds,
             stats,
             blas,
-            tlas_depth: traverse::depth(&tlas),
+            tlas_depth: tlas.stack_need(),
             tlas,
             tlas_objects,
             unbounded,
@@ -518,6 +543,17 @@ impl Accel {
     #[must_use]
     pub fn meshes(&self) -> &[Arc<TriangleMesh>] {
         &self.meshes
+    }
+
+    /// Selects the node-test [`Kernel`] of the wide hierarchies (the
+    /// default is [`Kernel::detect`]'s); refused (`false`, nothing changed)
+    /// when this CPU cannot run it. All kernels give the same answers; this
+    /// is for comparing them.
+    pub fn set_kernel(&mut self, kernel: Kernel) -> bool {
+        if !kernel.supported() {
+            return false;
+        }
+        self.tlas.set_kernel(kernel) && self.blas.iter_mut().all(|b| b.set_kernel(kernel))
     }
 
     /// Bounds of every bounded object (infinite planes excluded).
@@ -830,6 +866,61 @@ mod tests {
             }
         }
         (positions, indices)
+    }
+
+    /// Whether this CPU has what kernel `k` needs, asked independently of
+    /// [`Kernel::supported`].
+    fn host_has(k: Kernel) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+            match k {
+                Kernel::Portable => true,
+                Kernel::Avx2 => avx2,
+                Kernel::Avx512 => {
+                    avx2 && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            k == Kernel::Portable
+        }
+    }
+
+    /// Every kernel this CPU has is selectable and actually walks (so the
+    /// kernel comparisons in `tests/blas_kinds.rs` ran it): this FAILS,
+    /// rather than skipping, where the host has AVX2 or AVX-512 and that
+    /// path did not run; and detection picks the widest one.
+    #[test]
+    fn every_kernel_the_host_has_is_exercised() {
+        let (positions, indices) = wavy_grid(20, [9.0, 7.0, 0.3]);
+        let mesh = Arc::new(TriangleMesh::new(positions, None, None, indices).unwrap());
+        let objects = vec![Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
+        let options = BuildOptions { mesh_layout: BlasKind::Wide, ..BuildOptions::default() };
+        let mut accel = Accel::build_with(vec![mesh], objects, options).unwrap();
+        let ray = Ray::new(Vec3::new(0.5, 1.0, 0.5), Vec3::new(0.01, -1.0, 0.02));
+        let mut reference = None;
+        for k in Kernel::ALL {
+            assert_eq!(k.supported(), host_has(k), "{}", k.name());
+            if !host_has(k) {
+                assert!(!accel.set_kernel(k), "{} accepted without the CPU features", k.name());
+                continue;
+            }
+            assert!(accel.set_kernel(k), "{}", k.name());
+            let before = wide::WALKS[k as usize].load(std::sync::atomic::Ordering::Relaxed);
+            let hit = accel.closest_hit(&ray).map(|h| (h.triangle, h.hit.t.to_bits()));
+            assert!(hit.is_some());
+            assert!(accel.occluded(&ray));
+            let after = wide::WALKS[k as usize].load(std::sync::atomic::Ordering::Relaxed);
+            assert!(after >= before + 2, "the {} kernel did not run", k.name());
+            assert_eq!(*reference.get_or_insert(hit), hit, "{}", k.name());
+        }
+        if std::env::var_os("PRISM_BVH_NO_SIMD").is_none() {
+            let best =
+                [Kernel::Avx512, Kernel::Avx2].into_iter().find(|&k| host_has(k)).unwrap_or(Kernel::Portable);
+            assert_eq!(Kernel::detect(), best);
+        }
     }
 
     /// The AVX2-compiled queries give bit-for-bit the answers of the

@@ -78,7 +78,20 @@ impl BoxRay {
 /// closure big enough is left out of line, and then misses the features a
 /// `#[target_feature]` caller is compiled with).
 pub(crate) trait Visit {
+    /// Whether any hit will do (an occlusion query): walks that order
+    /// children front to back may then skip the ordering.
+    const ANY: bool = false;
+
     fn visit(&mut self, slot: u32, ray: &mut BoxRay) -> bool;
+
+    /// Visits the `count` slots from `first` (a wide BVH's leaf, whose
+    /// slots start at a multiple of four): as many calls of
+    /// [`Visit::visit`], in order, unless the visitor tests the block at
+    /// once with the same result.
+    #[inline(always)]
+    fn visit_leaf(&mut self, first: u32, count: u32, ray: &mut BoxRay) -> bool {
+        (first..first + count).all(|slot| self.visit(slot, ray))
+    }
 }
 
 impl<F: FnMut(u32, &mut BoxRay) -> bool> Visit for F {
@@ -100,10 +113,10 @@ pub(crate) trait Stack<T> {
     fn pop(&mut self) -> Option<T>;
 }
 
-/// Stack entries kept inline (on the call stack); a tree deeper than this
-/// (never seen in practice: a walk pushes at most one entry per level)
-/// walks with a heap stack.
-pub(crate) const INLINE_STACK: usize = 64;
+/// Stack entries kept inline (on the call stack); a tree needing more
+/// (never seen in practice: a binary or CWBVH walk pushes at most one entry
+/// per level, a wide walk seven) walks with a heap stack.
+pub(crate) const INLINE_STACK: usize = 256;
 
 /// Fixed-capacity stack, left uninitialised: zeroing it cost a `memset`
 /// per walk (about 2 % of a query's instructions), and with nothing to

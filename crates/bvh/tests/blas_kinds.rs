@@ -1,12 +1,15 @@
-//! The BVH2 and CWBVH mesh hierarchies (`BlasKind`) give the same answers:
-//! bit for bit between the two walks, and as brute force, on random rays
-//! including axis-parallel ones (`+0.0`/`-0.0` components), restricted
-//! intervals and rays spawned a few ULPs off a surface.
+//! The BVH2, CWBVH and wide mesh hierarchies (`BlasKind`) give the same
+//! answers: bit for bit between the walks, and as brute force, on random
+//! rays including axis-parallel ones (`+0.0`/`-0.0` components), restricted
+//! intervals and rays spawned a few ULPs off a surface. The wide layout's
+//! node-test kernels (`Kernel`: portable, AVX2, AVX-512, each where this
+//! CPU has it) agree exactly: same hit record, same crossings in the same
+//! order.
 
 mod common;
 
 use common::{Rng, compare_all, compare_closest, random_mesh, random_ray, random_scene};
-use prism_bvh::{Accel, BlasKind, BuildOptions, BuildQuality, Object, SceneHit};
+use prism_bvh::{Accel, BlasKind, BuildOptions, BuildQuality, Kernel, Object, SceneHit};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Ray, Transform, TriangleMesh};
 use std::ops::ControlFlow;
@@ -15,6 +18,41 @@ use std::sync::Arc;
 fn build(meshes: &[Arc<TriangleMesh>], objects: &[Object], q: BuildQuality, kind: BlasKind) -> Accel {
     let options = BuildOptions { mesh_quality: q, mesh_layout: kind, ..BuildOptions::default() };
     Accel::build_with(meshes.to_vec(), objects.to_vec(), options).unwrap()
+}
+
+/// The wide layout, once per kernel this CPU runs (portable first).
+fn wides(meshes: &[Arc<TriangleMesh>], objects: &[Object], q: BuildQuality) -> Vec<Accel> {
+    Kernel::ALL
+        .into_iter()
+        .filter(|k| k.supported())
+        .map(|k| {
+            let mut a = build(meshes, objects, q, BlasKind::Wide);
+            assert!(a.set_kernel(k), "{}", k.name());
+            a
+        })
+        .collect()
+}
+
+/// Every kernel of `wides` answers `ray` exactly as the first: the same
+/// hit record, occlusion answer and crossings in the same order.
+fn kernels_agree(wides: &[Accel], ray: &Ray) {
+    let all = |a: &Accel| {
+        let mut v = Vec::new();
+        a.for_each_hit(ray, |h| {
+            v.push(*h);
+            ControlFlow::Continue(())
+        });
+        v
+    };
+    let first = &wides[0];
+    let (hit, occluded, crossings) = (first.closest_hit(ray), first.occluded(ray), all(first));
+    for w in &wides[1..] {
+        let h = w.closest_hit(ray);
+        assert_eq!(h.map(|h| h.hit.t.to_bits()), hit.map(|h| h.hit.t.to_bits()), "{ray:?}");
+        assert_eq!(h, hit, "{ray:?}");
+        assert_eq!(w.occluded(ray), occluded, "{ray:?}");
+        assert_eq!(all(w), crossings, "{ray:?}");
+    }
 }
 
 /// Every crossing as sorted `(object, triangle, t bits)`.
@@ -72,19 +110,27 @@ fn random_scenes_agree_across_layouts_and_with_brute_force() {
         let (meshes, objects) = random_scene(&mut rng, 40);
         let cw = build(&meshes, &objects, q, BlasKind::Cwbvh);
         let b2 = build(&meshes, &objects, q, BlasKind::Bvh2);
+        let wide = wides(&meshes, &objects, q);
         let c = b2.bounds().center();
         let size = b2.bounds().extent().max_element().max(1.0);
         let mut hits = 0;
         for _ in 0..4000 {
             let ray = random_ray(&mut rng, c, size);
             let hit = agree(&cw, &b2, &ray);
+            agree(&cw, &wide[0], &ray);
+            kernels_agree(&wide, &ray);
             compare_closest(&b2, &ray).unwrap();
             compare_all(&b2, &ray).unwrap();
+            compare_closest(&wide[0], &ray).unwrap();
+            compare_all(&wide[0], &ray).unwrap();
             if let Some(h) = hit {
                 hits += 1;
                 for r in spawned(&mut rng, &h, c + Vec3::new(1.0, 2.0, 1.5) * size) {
                     agree(&cw, &b2, &r);
+                    agree(&cw, &wide[0], &r);
+                    kernels_agree(&wide, &r);
                     compare_closest(&b2, &r).unwrap();
+                    compare_closest(&wide[0], &r).unwrap();
                 }
             }
         }
@@ -107,18 +153,24 @@ fn dense_mesh_agrees_across_layouts() {
     for q in [BuildQuality::Medium, BuildQuality::Slow] {
         let cw = build(&meshes, &objects, q, BlasKind::Cwbvh);
         let b2 = build(&meshes, &objects, q, BlasKind::Bvh2);
+        let wide = wides(&meshes, &objects, q);
         let c = b2.bounds().center();
         let size = b2.bounds().extent().max_element();
         let mut hits = 0;
         for k in 0..50_000 {
             let ray = random_ray(&mut rng, c, size);
+            agree(&cw, &wide[0], &ray);
+            kernels_agree(&wide, &ray);
             if let Some(h) = agree(&cw, &b2, &ray) {
                 hits += 1;
                 for r in spawned(&mut rng, &h, c + Vec3::Y * size * 2.0) {
                     agree(&cw, &b2, &r);
+                    agree(&cw, &wide[0], &r);
+                    kernels_agree(&wide, &r);
                 }
                 if k % 50 == 0 {
                     compare_closest(&b2, &ray).unwrap();
+                    compare_closest(&wide[0], &ray).unwrap();
                 }
             }
         }
@@ -166,19 +218,25 @@ fn shared_meshes_agree_across_layouts() {
         let objects = vec![Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
         let cw = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Cwbvh);
         let b2 = build(&meshes, &objects, BuildQuality::Medium, BlasKind::Bvh2);
+        let wide = wides(&meshes, &objects, BuildQuality::Medium);
         let mut rng = Rng::new(7 + name.len() as u64);
         let c = b2.bounds().center();
         let size = b2.bounds().extent().max_element();
         let mut hits = 0;
         for k in 0..MESH_RAYS {
             let ray = random_ray(&mut rng, c, size);
+            agree_close(&cw, &wide[0], &ray);
+            kernels_agree(&wide, &ray);
             if let Some(h) = agree_close(&cw, &b2, &ray) {
                 hits += 1;
                 for r in spawned(&mut rng, &h, c + Vec3::new(1.0, 2.0, 1.5) * size) {
                     agree_close(&cw, &b2, &r);
+                    agree_close(&cw, &wide[0], &r);
+                    kernels_agree(&wide, &r);
                 }
                 if k % 200 == 0 {
                     compare_closest(&b2, &ray).unwrap();
+                    compare_closest(&wide[0], &ray).unwrap();
                 }
             }
         }

@@ -8,15 +8,21 @@ use std::sync::OnceLock;
 pub const COMMIT: &str = env!("PRISM_GIT_COMMIT");
 
 /// The SIMD paths of prism and whether this CPU (and environment) enables
-/// each: `(path, enabled)`. Today one: the BVH's AVX2
-/// traversal (`prism_bvh::Accel`, chosen when the structure is built); a
-/// new run-time path adds a line here.
+/// each: `(path, enabled)`. Two today, both chosen when the structure is
+/// built and both off with `PRISM_BVH_NO_SIMD`: the AVX2 compilation of
+/// the BVH walks (`bvh-avx2`), and the node-test kernel of the wide
+/// (8-child) hierarchies (`bvh8-avx512` or `bvh8-avx2`, the widest the CPU
+/// runs, [`prism_bvh::Kernel::detect`]; the portable kernel is the
+/// fallback). A new run-time path adds a line here.
 #[must_use]
 pub fn simd_paths() -> Vec<(&'static str, bool)> {
     let forced_off = std::env::var_os("PRISM_BVH_NO_SIMD").is_some();
+    let kernel = prism_bvh::Kernel::detect();
     vec![
         // avx2 fma bmi1 bmi2 lzcnt popcnt; off with PRISM_BVH_NO_SIMD.
         ("bvh-avx2", !forced_off && has_avx2_set()),
+        ("bvh8-avx512", kernel == prism_bvh::Kernel::Avx512),
+        ("bvh8-avx2", kernel == prism_bvh::Kernel::Avx2),
     ]
 }
 

@@ -62,5 +62,7 @@ pub use mesh::{TriangleMesh, weld_by_position};
 pub use normals::{DEFAULT_CREASE_DEG, with_computed_normals};
 pub use ray::{Ray, offset_ray_origin};
 pub use shape::{Instance, Intersect, Shape};
-pub use shapes::{Cone, Cuboid, Cylinder, Disk, Plane, Sphere, Triangle, TriangleRay, azimuth_u, sphere_uv};
+pub use shapes::{
+    Cone, Cuboid, Cylinder, Disk, Plane, Sphere, Triangle, TriangleRay, Triangles4, azimuth_u, sphere_uv,
+};
 pub use transform::{Shear, Transform};

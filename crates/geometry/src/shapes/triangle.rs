@@ -179,6 +179,102 @@ impl TriangleRay {
     }
 }
 
+/// Up to four triangles in SoA form (`v[corner][axis][lane]`), for
+/// [`TriangleRay::intersect4`]: one leaf of a wide BVH, tested at once.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(16))]
+pub struct Triangles4 {
+    v: [[[f32; 4]; 3]; 3],
+    /// Lanes in use (the others are zero and never reported).
+    len: u32,
+}
+
+impl Triangles4 {
+    /// The first four of `tris` (fewer leave lanes unused).
+    #[must_use]
+    pub fn new(tris: &[[Vec3; 3]]) -> Self {
+        let mut out = Self::default();
+        for (lane, t) in tris.iter().take(4).enumerate() {
+            for (corner, p) in t.iter().enumerate() {
+                for axis in 0..3 {
+                    out.v[corner][axis][lane] = p[axis];
+                }
+            }
+            out.len = lane as u32 + 1;
+        }
+        out
+    }
+
+    /// Corners of triangle `lane`.
+    #[inline(always)]
+    fn corners(&self, lane: usize) -> [Vec3; 3] {
+        let v = &self.v;
+        let p = |c: usize| Vec3::new(v[c][0][lane & 3], v[c][1][lane & 3], v[c][2][lane & 3]);
+        [p(0), p(1), p(2)]
+    }
+}
+
+impl TriangleRay {
+    /// [`TriangleRay::intersect`] on the (up to) four triangles of `tris`
+    /// at once, lane by lane in plain code the compiler vectorises. Returns
+    /// the hit a loop over the lanes in order would keep, narrowing `t_max`
+    /// after each hit: `(lane, t, b1, b2)` of the nearest, the last lane
+    /// among equal `t`. Every value is computed by the same operations in
+    /// the same order as [`TriangleRay::intersect`] (the dot products as
+    /// `(x + y) + z`, as glam's), so it is bit-identical; a lane with an
+    /// exactly zero edge function takes the scalar test, whose `f64`
+    /// fallback decides it.
+    #[inline(always)]
+    #[must_use]
+    pub fn intersect4(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
+        let [ox, oy, oz] = self.origin.to_array();
+        let dot = |m: Vec3A, x: f32, y: f32, z: f32| m.x * x + m.y * y + m.z * z;
+        let (mut t, mut b1, mut b2) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+        let (mut ok, mut exact) = ([false; 4], [false; 4]);
+        let v = &tris.v;
+        for k in 0..4 {
+            let a = [v[0][0][k] - ox, v[0][1][k] - oy, v[0][2][k] - oz];
+            let b = [v[1][0][k] - ox, v[1][1][k] - oy, v[1][2][k] - oz];
+            let c = [v[2][0][k] - ox, v[2][1][k] - oy, v[2][2][k] - oz];
+            let (ax, ay) = (dot(self.mx, a[0], a[1], a[2]), dot(self.my, a[0], a[1], a[2]));
+            let (bx, by) = (dot(self.mx, b[0], b[1], b[2]), dot(self.my, b[0], b[1], b[2]));
+            let (cx, cy) = (dot(self.mx, c[0], c[1], c[2]), dot(self.my, c[0], c[1], c[2]));
+            let u = cx * by - cy * bx;
+            let vv = ax * cy - ay * cx;
+            let w = bx * ay - by * ax;
+            exact[k] = u == 0.0 || vv == 0.0 || w == 0.0;
+            let outside = (u < 0.0 || vv < 0.0 || w < 0.0) && (u > 0.0 || vv > 0.0 || w > 0.0);
+            let det = u + vv + w;
+            let t_scaled = u * dot(self.mz, a[0], a[1], a[2])
+                + vv * dot(self.mz, b[0], b[1], b[2])
+                + w * dot(self.mz, c[0], c[1], c[2]);
+            let rcp = 1.0 / det;
+            t[k] = t_scaled * rcp;
+            b1[k] = vv * rcp;
+            b2[k] = w * rcp;
+            ok[k] = !outside && det != 0.0 && det.is_finite();
+        }
+        let mut best: Option<(usize, f32, f32, f32)> = None;
+        let mut t_max = self.t_max;
+        for k in 0..(tris.len as usize).min(4) {
+            let hit = if exact[k] {
+                let mut r = *self;
+                r.t_max = t_max;
+                r.intersect(&tris.corners(k))
+            } else if ok[k] && t[k] >= self.t_min && t[k] <= t_max {
+                Some((t[k], b1[k], b2[k]))
+            } else {
+                None
+            };
+            if let Some((t, b1, b2)) = hit {
+                t_max = t;
+                best = Some((k, t, b1, b2));
+            }
+        }
+        best
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -241,5 +337,73 @@ mod tests {
         assert!(Triangle::new([Vec3::ZERO, Vec3::X, Vec3::NAN]).is_err());
         assert_eq!(tri().bounds(), Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
         assert_eq!(tri().normal(), Vec3::Z);
+    }
+
+    /// `intersect4` keeps exactly what a loop of `intersect` over the lanes
+    /// (narrowing `t_max` after each hit) keeps: the same lane, `t`, `b1`,
+    /// `b2` bit for bit, on random and degenerate triangles, rays through
+    /// shared edges and vertices, axis-parallel rays with `±0.0`
+    /// components, and every interval kind.
+    #[test]
+    fn intersect4_is_the_scalar_loop_bit_for_bit() {
+        let mut seed = 0x2545_f491_u64;
+        let mut f = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        };
+        let mut hits = 0;
+        let mut exact_lanes = 0;
+        for case in 0..40_000 {
+            let n = 1 + case % 4;
+            let mut tris = Vec::new();
+            for k in 0..n {
+                let mut t = [Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f())];
+                match (case / 4 + k) % 7 {
+                    // Degenerate: a repeated corner, or collinear corners.
+                    0 => t[2] = t[1],
+                    1 => t[2] = t[0] + (t[1] - t[0]) * 0.5,
+                    // Small integers: rays hit shared edges and vertices exactly.
+                    2 | 3 => t = t.map(|p| (p * 2.0).round()),
+                    // A copy of the previous triangle (an exact tie).
+                    4 if k > 0 => t = tris[k - 1],
+                    _ => {}
+                }
+                tris.push(t);
+            }
+            let mut o = Vec3::new(f(), f(), f()) * 2.0;
+            let mut d = Vec3::new(f(), f(), f());
+            if case % 3 == 0 {
+                o = o.round();
+                d = d.round();
+            }
+            if case % 5 == 0 {
+                d[case % 3] = if case % 2 == 0 { 0.0 } else { -0.0 };
+            }
+            if d == Vec3::ZERO {
+                d = Vec3::Z;
+            }
+            let (t_min, t_max) = match case % 4 {
+                0 => (0.0, f32::INFINITY),
+                1 => (0.5, 1.5),
+                2 => (f32::MIN, f32::MAX),
+                _ => (-1.0, 0.25),
+            };
+            let tr = TriangleRay::new(&Ray::with_interval(o, d, t_min, t_max));
+            let mut scalar = tr;
+            let mut want = None;
+            for (k, t) in tris.iter().enumerate() {
+                if let Some((t, b1, b2)) = scalar.intersect(t) {
+                    scalar.set_t_max(t);
+                    want = Some((k, t.to_bits(), b1.to_bits(), b2.to_bits()));
+                }
+            }
+            let got = tr
+                .intersect4(&Triangles4::new(&tris))
+                .map(|(k, t, b1, b2)| (k, t.to_bits(), b1.to_bits(), b2.to_bits()));
+            assert_eq!(got, want, "case {case}: {tris:?} {o} {d}");
+            hits += usize::from(want.is_some());
+            exact_lanes += usize::from(case % 3 == 0 && want.is_some());
+        }
+        assert!(hits > 1500 && exact_lanes > 500, "{hits} {exact_lanes}");
     }
 }

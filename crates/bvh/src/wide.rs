@@ -1,0 +1,643 @@
+//! A CPU-native wide BVH: eight children per node with uncompressed
+//! single-precision boxes in SoA form (one 256-byte block a node),
+//! converted from obvhs's binary tree, and its walk with node tests in
+//! portable Rust, AVX2 or AVX-512, chosen at run time ([`Kernel`]).
+//!
+//! obvhs's CWBVH is a GPU layout: each node visit decodes eight quantised
+//! boxes. Here a node holds its children's planes as six rows of eight
+//! `f32` (min x, y, z, max x, y, z), so one node test is six loads, six
+//! subtractions, six products and a comparison, eight children at once.
+//!
+//! # The box test
+//!
+//! The rules are [`crate::cwbvh`]'s: `1/d` is `+inf` for both zeros, the
+//! slab's near plane is chosen by the sign of `d` (`-0.0` counts as
+//! positive, matching its `+inf` reciprocal), distances are `(plane -
+//! origin) * inv`, and the per-axis distances are folded into `[t_min,
+//! reach]` with `max`/`min` that drop a `NaN` (a ray in a face plane), so
+//! that slab does not limit the interval. Unused lanes hold an inverted
+//! box (`+inf` minimum, `-inf` maximum), which no ray meets: its near
+//! distance is `+inf` and its far one `-inf` whatever the direction.
+//!
+//! Every kernel performs the same operations in the same order on each
+//! lane (no fused multiply-add), so they compute bit-identical distances,
+//! visit the same children in the same order and return the same hits
+//! (tested in [`crate::tests`] and `tests/kernels.rs`).
+//!
+//! # The walk
+//!
+//! Front to back: the children a node test keeps are sorted by entry
+//! distance (stable, so ties keep lane order); the nearest is taken next
+//! and the others are pushed with their distance, and skipped when popped
+//! if the ray's `reach` has since shrunk below it. Occlusion walks
+//! ([`Visit::ANY`]) skip the sort. A leaf's primitives are visited as soon
+//! as it is taken.
+
+use crate::traverse::{BoxRay, Stack, Tree, Visit};
+use obvhs::bvh2::Bvh2;
+
+/// Children per node.
+pub(crate) const WIDTH: usize = 8;
+
+/// Marks a leaf reference in [`Node::child`].
+const LEAF: u32 = 1 << 31;
+/// Bits of a leaf's first primitive slot.
+const FIRST_BITS: u32 = 27;
+/// Most primitives in one leaf: one SIMD block of four triangles.
+pub(crate) const MAX_LEAF: u32 = 4;
+/// Marks a padding slot in [`WideBvh::slots`].
+pub(crate) const PAD: u32 = u32::MAX;
+
+/// One node: its children's boxes and references.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Node {
+    /// Rows `[min x, min y, min z, max x, max y, max z]`, one lane per child.
+    planes: [[f32; WIDTH]; 6],
+    /// Per lane: an inner node's index, or a leaf `LEAF | (count - 1) << 27
+    /// | first slot`. Unused lanes are never hit (inverted box).
+    child: [u32; WIDTH],
+}
+
+impl Node {
+    const EMPTY: Self = Self {
+        planes: [
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        child: [0; WIDTH],
+    };
+}
+
+/// Which node-test code runs: all give the same answers, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kernel {
+    /// Plain Rust over eight-lane arrays (no `unsafe`), which the compiler
+    /// vectorises as the target allows (two SSE halves by default).
+    Portable,
+    /// AVX2 intrinsics: one 256-bit register per plane row.
+    Avx2,
+    /// AVX-512 (F and VL) on 256-bit vectors: mask-register comparisons
+    /// and compress-stores of the children hit.
+    Avx512,
+}
+
+impl Kernel {
+    /// Every kernel, plainest first.
+    pub const ALL: [Self; 3] = [Self::Portable, Self::Avx2, Self::Avx512];
+
+    /// Whether the running CPU can run this kernel.
+    #[must_use]
+    pub fn supported(self) -> bool {
+        match self {
+            Self::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2 => {
+                is_x86_feature_detected!("avx2")
+                    && is_x86_feature_detected!("fma")
+                    && is_x86_feature_detected!("bmi1")
+                    && is_x86_feature_detected!("bmi2")
+                    && is_x86_feature_detected!("lzcnt")
+                    && is_x86_feature_detected!("popcnt")
+            }
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx512 => {
+                Self::Avx2.supported()
+                    && is_x86_feature_detected!("avx512f")
+                    && is_x86_feature_detected!("avx512vl")
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    /// The fastest kernel this CPU runs, or [`Kernel::Portable`] when the
+    /// environment variable `PRISM_BVH_NO_SIMD` is set.
+    #[must_use]
+    pub fn detect() -> Self {
+        if std::env::var_os("PRISM_BVH_NO_SIMD").is_some() {
+            return Self::Portable;
+        }
+        [Self::Avx512, Self::Avx2].into_iter().find(|k| k.supported()).unwrap_or(Self::Portable)
+    }
+
+    /// A short lower-case name (`"portable"`, `"avx2"`, `"avx512"`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Portable => "portable",
+            Self::Avx2 => "avx2",
+            Self::Avx512 => "avx512",
+        }
+    }
+}
+
+/// Walks run per kernel, counted in test builds so that a test can prove
+/// that a kernel the CPU has was exercised.
+#[cfg(test)]
+pub(crate) static WALKS: [std::sync::atomic::AtomicUsize; 3] =
+    [const { std::sync::atomic::AtomicUsize::new(0) }; 3];
+
+/// The wide tree: nodes (root first), its primitive slots and the kernel
+/// its walks use.
+#[derive(Clone, Debug)]
+pub(crate) struct WideBvh {
+    nodes: Vec<Node>,
+    /// Per slot: the primitive's index (as given to the build), or
+    /// [`PAD`]. Every leaf starts at a multiple of four, so that leaf
+    /// `first / 4` is one block of four.
+    pub slots: Vec<u32>,
+    kernel: Kernel,
+}
+
+impl Default for WideBvh {
+    fn default() -> Self {
+        Self { nodes: Vec::new(), slots: Vec::new(), kernel: Kernel::Portable }
+    }
+}
+
+impl WideBvh {
+    /// Converts obvhs's binary tree: each wide node takes its binary
+    /// node's two children and repeatedly opens the inner child with the
+    /// largest surface until it has eight (or only leaves). Leaves keep
+    /// their primitives, each leaf in a block of four slots ([`WideBvh::slots`]).
+    /// `None` if a leaf holds more than [`MAX_LEAF`] primitives or the slots
+    /// do not fit the reference's 27 bits.
+    pub fn from_bvh2(bvh: &Bvh2, kernel: Kernel) -> Option<Self> {
+        let mut nodes = Vec::with_capacity(bvh.nodes.len() / 4 + 1);
+        let mut slots = Vec::with_capacity(bvh.primitive_indices.len() * 2);
+        if !bvh.nodes.is_empty() {
+            convert(bvh, 0, &mut nodes, &mut slots)?;
+        }
+        let mut w = Self { nodes, slots, kernel: Kernel::Portable };
+        w.set_kernel(kernel);
+        Some(w)
+    }
+
+    /// The primitive of each slot, padding slots repeating the one before
+    /// (they are never visited).
+    pub fn order(&self) -> Vec<u32> {
+        let mut last = 0;
+        self.slots
+            .iter()
+            .map(|&s| {
+                if s != PAD {
+                    last = s;
+                }
+                last
+            })
+            .collect()
+    }
+
+    /// Builds obvhs's binary tree over `aabbs` (pre-splitting `tris` if the
+    /// quality asks for it) with leaves of at most [`MAX_LEAF`], and
+    /// converts it; `None` as [`WideBvh::from_bvh2`]. Also says whether the
+    /// build pre-split (a primitive may then sit in several leaves).
+    pub fn build(
+        aabbs: Vec<obvhs::aabb::Aabb>,
+        tris: Option<&[obvhs::triangle::Triangle]>,
+        quality: crate::BuildQuality,
+        kernel: Kernel,
+    ) -> Option<(Self, bool)> {
+        let mut p = quality.params();
+        p.max_prims_per_leaf = MAX_LEAF;
+        let b = crate::bvh2::build(aabbs, tris, p);
+        Some((Self::from_bvh2(&b, kernel)?, b.uses_spatial_splits))
+    }
+
+    /// Selects the kernel its walks use; refused (`false`) when the CPU
+    /// cannot run it.
+    pub fn set_kernel(&mut self, kernel: Kernel) -> bool {
+        let ok = kernel.supported();
+        if ok {
+            self.kernel = kernel;
+        }
+        ok
+    }
+
+    /// Bytes held by the nodes.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>() + self.slots.len() * std::mem::size_of::<u32>()
+    }
+
+    /// Stack entries a walk can need: a node pushes at most `WIDTH - 1`.
+    pub fn stack_need(&self) -> usize {
+        crate::traverse::depth(self) * (WIDTH - 1) + 1
+    }
+}
+
+/// Appends the wide node for binary node `src` (and its subtree); returns
+/// its index.
+fn convert(bvh: &Bvh2, src: usize, nodes: &mut Vec<Node>, slots: &mut Vec<u32>) -> Option<u32> {
+    let at = nodes.len();
+    nodes.push(Node::EMPTY);
+    let root = bvh.nodes.get(src)?;
+    let mut kids: Vec<usize> = if root.is_leaf() {
+        vec![src]
+    } else {
+        vec![root.first_index as usize, root.first_index as usize + 1]
+    };
+    while kids.len() < WIDTH {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|&(_, &k)| bvh.nodes.get(k).is_some_and(|n| !n.is_leaf()))
+            .max_by(|a, b| {
+                let area = |k: usize| bvh.nodes[k].aabb().half_area();
+                area(*a.1).total_cmp(&area(*b.1))
+            })
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let first = bvh.nodes[kids[i]].first_index as usize;
+        kids[i] = first;
+        kids.insert(i + 1, first + 1);
+    }
+    let mut node = Node::EMPTY;
+    for (lane, &k) in kids.iter().enumerate() {
+        let n = bvh.nodes.get(k)?;
+        let b = n.aabb();
+        for axis in 0..3 {
+            node.planes[axis][lane] = b.min[axis];
+            node.planes[axis + 3][lane] = b.max[axis];
+        }
+        node.child[lane] = if n.is_leaf() {
+            let count = n.prim_count;
+            let first = u32::try_from(slots.len()).ok()?;
+            if count > MAX_LEAF || u64::from(first) + u64::from(MAX_LEAF) > 1 << FIRST_BITS {
+                return None;
+            }
+            let prims =
+                bvh.primitive_indices.get(n.first_index as usize..(n.first_index + count) as usize)?;
+            slots.extend_from_slice(prims);
+            slots.resize(slots.len() + (MAX_LEAF - count) as usize, PAD);
+            LEAF | (count - 1) << FIRST_BITS | first
+        } else {
+            convert(bvh, k, nodes, slots)?
+        };
+    }
+    nodes[at] = node;
+    u32::try_from(at).ok()
+}
+
+/// The ray as the node tests want it (from a [`BoxRay`]).
+#[derive(Clone, Copy)]
+struct WideRay {
+    origin: [f32; 3],
+    inv: [f32; 3],
+    /// Row of the near and far plane per axis (by the sign of `inv`).
+    near_row: [usize; 3],
+    far_row: [usize; 3],
+    t_min: f32,
+}
+
+impl WideRay {
+    #[inline(always)]
+    fn new(br: &BoxRay) -> Self {
+        let inv = br.inv.to_array();
+        let neg = |a: usize| usize::from(inv[a] < 0.0) * 3;
+        Self {
+            origin: br.origin.to_array(),
+            inv,
+            near_row: [neg(0), 1 + neg(1), 2 + neg(2)],
+            far_row: [3 - neg(0), 4 - neg(1), 5 - neg(2)],
+            t_min: br.t_min,
+        }
+    }
+}
+
+/// `_mm_max_ps(a, b)` on one lane: `b` when either is `NaN`.
+#[inline(always)]
+fn max_ps(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// `_mm_min_ps(a, b)` on one lane: `b` when either is `NaN`.
+#[inline(always)]
+fn min_ps(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// What a node test writes: the children the ray meets, in lane order.
+struct Hits {
+    /// Entry distances.
+    near: [f32; WIDTH],
+    /// References.
+    child: [u32; WIDTH],
+}
+
+/// A node test: writes the children the ray's `[t_min, reach]` meets to
+/// the front of `out`; returns how many.
+trait NodeTest: Copy {
+    fn hits(self, node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize;
+}
+
+/// The portable node test.
+#[derive(Clone, Copy)]
+struct Portable;
+
+impl NodeTest for Portable {
+    #[inline(always)]
+    fn hits(self, node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
+        let p = &node.planes;
+        let (nx, ny, nz) = (&p[r.near_row[0]], &p[r.near_row[1]], &p[r.near_row[2]]);
+        let (fx, fy, fz) = (&p[r.far_row[0]], &p[r.far_row[1]], &p[r.far_row[2]]);
+        let [ox, oy, oz] = r.origin;
+        let [ix, iy, iz] = r.inv;
+        let mut t_near = [0.0f32; WIDTH];
+        let mut mask = 0u32;
+        for k in 0..WIDTH {
+            let n = max_ps((nx[k] - ox) * ix, max_ps((ny[k] - oy) * iy, max_ps((nz[k] - oz) * iz, r.t_min)));
+            let f = min_ps((fx[k] - ox) * ix, min_ps((fy[k] - oy) * iy, min_ps((fz[k] - oz) * iz, reach)));
+            t_near[k] = n;
+            mask |= u32::from(n <= f) << k;
+        }
+        compact(mask, &t_near, &node.child, out)
+    }
+}
+
+/// Writes the lanes set in `mask` to the front of `near`/`child`.
+#[inline(always)]
+fn compact(mut mask: u32, t_near: &[f32; WIDTH], lanes: &[u32; WIDTH], out: &mut Hits) -> usize {
+    let mut n = 0;
+    while mask != 0 {
+        let k = mask.trailing_zeros() as usize & (WIDTH - 1);
+        mask &= mask - 1;
+        out.near[n & (WIDTH - 1)] = t_near[k];
+        out.child[n & (WIDTH - 1)] = lanes[k];
+        n += 1;
+    }
+    n
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    //! The AVX2 and AVX-512 node tests.
+    use super::{Hits, Node, NodeTest, WIDTH, WideRay, compact};
+    use core::arch::x86_64::*;
+
+    /// The AVX2 node test. Made only inside code compiled for AVX2 that
+    /// runs only where the CPU has it ([`super::WideBvh`]'s `walk_avx2`).
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx2(());
+
+    /// The AVX-512 node test; made only inside `walk_avx512`.
+    #[derive(Clone, Copy)]
+    pub(super) struct Avx512(());
+
+    impl Avx2 {
+        /// # Safety
+        /// The CPU must have AVX2.
+        #[inline(always)]
+        pub(super) unsafe fn new() -> Self {
+            Self(())
+        }
+    }
+
+    impl Avx512 {
+        /// # Safety
+        /// The CPU must have AVX-512 F and VL (and AVX2).
+        #[inline(always)]
+        pub(super) unsafe fn new() -> Self {
+            Self(())
+        }
+    }
+
+    /// Entry and exit distances of the eight children, the lane-wise
+    /// operations of [`super::Portable`] in the same order.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn distances(node: &Node, r: &WideRay, reach: f32) -> (__m256, __m256) {
+        let p = &node.planes;
+        let row = |i: usize| -> __m256 {
+            // SAFETY: a row is eight `f32`s, 32-byte aligned (the node is
+            // 64-byte aligned and each row 32 bytes long); `i < 6` is
+            // checked by the indexing.
+            unsafe { _mm256_load_ps(p[i].as_ptr()) }
+        };
+        let o = |a: usize| _mm256_set1_ps(r.origin[a]);
+        let inv = |a: usize| _mm256_set1_ps(r.inv[a]);
+        let d = |rows: &[usize; 3], a: usize| _mm256_mul_ps(_mm256_sub_ps(row(rows[a]), o(a)), inv(a));
+        let near = _mm256_max_ps(
+            d(&r.near_row, 0),
+            _mm256_max_ps(d(&r.near_row, 1), _mm256_max_ps(d(&r.near_row, 2), _mm256_set1_ps(r.t_min))),
+        );
+        let far = _mm256_min_ps(
+            d(&r.far_row, 0),
+            _mm256_min_ps(d(&r.far_row, 1), _mm256_min_ps(d(&r.far_row, 2), _mm256_set1_ps(reach))),
+        );
+        (near, far)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn hits_avx2(node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
+        let (n, f) = distances(node, r, reach);
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(n, f)) as u32;
+        let mut t_near = [0.0f32; WIDTH];
+        // SAFETY: `t_near` holds eight `f32`s (unaligned store).
+        unsafe { _mm256_storeu_ps(t_near.as_mut_ptr(), n) };
+        compact(mask, &t_near, &node.child, out)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    fn hits_avx512(node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
+        let (n, f) = distances(node, r, reach);
+        let mask = _mm256_cmp_ps_mask::<_CMP_LE_OQ>(n, f);
+        // SAFETY: `near` and `child` hold eight lanes each; a compress-store
+        // writes at most the lanes set in `mask`, contiguously from the
+        // start. `node.child` is eight `u32`s (unaligned load).
+        unsafe {
+            _mm256_mask_compressstoreu_ps(out.near.as_mut_ptr().cast(), mask, n);
+            let c = _mm256_loadu_si256(node.child.as_ptr().cast());
+            _mm256_mask_compressstoreu_epi32(out.child.as_mut_ptr().cast(), mask, c);
+        }
+        mask.count_ones() as usize
+    }
+
+    /// `impl NodeTest for $token`, calling the `#[target_feature]`
+    /// function `$hits`.
+    macro_rules! node_test {
+        ($token:ty, $hits:ident) => {
+            impl NodeTest for $token {
+                #[inline(always)]
+                fn hits(self, node: &Node, r: &WideRay, reach: f32, out: &mut Hits) -> usize {
+                    // SAFETY: a value of this token type exists only where
+                    // the CPU has the features `$hits` is compiled for
+                    // (its `new` is unsafe with that contract).
+                    unsafe { $hits(node, r, reach, out) }
+                }
+            }
+        };
+    }
+
+    node_test!(Avx2, hits_avx2);
+    node_test!(Avx512, hits_avx512);
+}
+
+impl WideBvh {
+    /// The walk with node test `test` (see the module docs).
+    #[inline(always)]
+    fn walk_with<K: NodeTest, S: Stack<(u32, f32)>, V: Visit>(
+        &self,
+        test: K,
+        stack: &mut S,
+        ray: &mut BoxRay,
+        mut prim: V,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let r = WideRay::new(ray);
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF == 0 {
+                let Some(node) = self.nodes.get(cur as usize) else { return };
+                let mut out = Hits { near: [0.0; WIDTH], child: [0; WIDTH] };
+                let n = test.hits(node, &r, ray.reach(), &mut out).min(WIDTH);
+                let Hits { near, child } = &mut out;
+                if n > 0 {
+                    if n > 1 && !V::ANY {
+                        sort(&mut near[..n], &mut child[..n]);
+                    }
+                    for k in (1..n).rev() {
+                        stack.push((child[k], near[k]));
+                    }
+                    cur = child[0];
+                    continue;
+                }
+            } else {
+                let first = cur & ((1 << FIRST_BITS) - 1);
+                let count = ((cur & !LEAF) >> FIRST_BITS) + 1;
+                if !prim.visit_leaf(first, count, ray) {
+                    return;
+                }
+            }
+            loop {
+                let Some((c, d)) = stack.pop() else { return };
+                if d <= ray.reach() {
+                    cur = c;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// [`WideBvh::walk_with`] and its visitor compiled for AVX2.
+    ///
+    /// # Safety
+    /// The CPU must have the features enabled here.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn walk_avx2<S: Stack<(u32, f32)>, V: Visit>(&self, stack: &mut S, ray: &mut BoxRay, prim: V) {
+        // SAFETY: the caller guarantees AVX2.
+        let test = unsafe { x86::Avx2::new() };
+        self.walk_with(test, stack, ray, prim);
+    }
+
+    /// [`WideBvh::walk_with`] and its visitor compiled for AVX-512.
+    ///
+    /// # Safety
+    /// The CPU must have the features enabled here.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl")]
+    unsafe fn walk_avx512<S: Stack<(u32, f32)>, V: Visit>(&self, stack: &mut S, ray: &mut BoxRay, prim: V) {
+        // SAFETY: the caller guarantees AVX-512 F, VL and AVX2.
+        let test = unsafe { x86::Avx512::new() };
+        self.walk_with(test, stack, ray, prim);
+    }
+}
+
+/// Sorts `near` ascending, carrying `child` along; stable (insertion sort:
+/// at most eight entries, usually two or three).
+#[inline(always)]
+fn sort(near: &mut [f32], child: &mut [u32]) {
+    for i in 1..near.len().min(child.len()) {
+        let (d, c) = (near[i], child[i]);
+        let mut j = i;
+        while j > 0 && d < near[j - 1] {
+            near[j] = near[j - 1];
+            child[j] = child[j - 1];
+            j -= 1;
+        }
+        near[j] = d;
+        child[j] = c;
+    }
+}
+
+impl Tree for WideBvh {
+    /// A pushed child: its reference and entry distance.
+    type Entry = (u32, f32);
+
+    fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    fn inner_children(&self, i: usize, mut f: impl FnMut(usize)) {
+        let Some(node) = self.nodes.get(i) else { return };
+        for (lane, &c) in node.child.iter().enumerate() {
+            if c & LEAF == 0 && node.planes[0][lane] <= node.planes[3][lane] {
+                f(c as usize);
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn walk<S: Stack<(u32, f32)>>(&self, stack: &mut S, ray: &mut BoxRay, prim: impl Visit) {
+        #[cfg(test)]
+        WALKS[self.kernel as usize].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        match self.kernel {
+            // SAFETY: `kernel` is set only through `set_kernel`, which
+            // checks that the CPU has the kernel's features.
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 => unsafe { self.walk_avx512(stack, ray, prim) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => unsafe { self.walk_avx2(stack, ray, prim) },
+            _ => self.walk_with(Portable, stack, ray, prim),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_is_one_256_byte_block() {
+        assert_eq!(std::mem::size_of::<Node>(), 256);
+        assert_eq!(std::mem::align_of::<Node>(), 64);
+    }
+
+    #[test]
+    fn sort_is_stable_and_ascending() {
+        let mut near = [3.0, 1.0, 2.0, 1.0, 0.5];
+        let mut child = [0, 1, 2, 3, 4];
+        sort(&mut near, &mut child);
+        assert_eq!(near, [0.5, 1.0, 1.0, 2.0, 3.0]);
+        assert_eq!(child, [4, 1, 3, 2, 0]);
+    }
+
+    /// An unused (inverted) lane is never hit, for any direction sign,
+    /// zero components of either sign included, and any interval.
+    #[test]
+    fn empty_lanes_are_never_hit() {
+        let node = Node::EMPTY;
+        for d in [[1.0, 1.0, 1.0], [-1.0, 0.0, -0.0], [0.0, 0.0, 1.0], [-0.0, -0.0, -2.0], [3.0, -1.0, 0.0]] {
+            let ray = prism_geometry::Ray::with_interval(
+                prism_geometry::glam::Vec3::new(0.5, -2.0, 7.0),
+                prism_geometry::glam::Vec3::from_array(d),
+                f32::MIN,
+                f32::INFINITY,
+            );
+            let br = BoxRay::new(&ray);
+            let r = WideRay::new(&br);
+            let mut out = Hits { near: [0.0; WIDTH], child: [0; WIDTH] };
+            assert_eq!(Portable.hits(&node, &r, br.reach(), &mut out), 0, "{d:?}");
+        }
+    }
+}
