@@ -301,6 +301,10 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     if let Some(s) = &args.stats_json {
         overwrite::check_not_an_input(s, &loaded.inputs)?;
     }
+    let (w, h) = loaded.settings.camera.size();
+    if let Some(warning) = writable::check_space(&output, plan.uncompressed_bytes(w, h, &aovs))? {
+        eprintln!("warning: {warning}");
+    }
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;

@@ -62,6 +62,22 @@ impl Plan {
     pub fn format(&self) -> OutputFormat {
         self.format
     }
+
+    /// The size in bytes of every file of a `width × height` render with
+    /// `aovs`, uncompressed: an upper bound for the free-space check.
+    pub fn uncompressed_bytes(&self, width: u32, height: u32, aovs: &[prism_shade::Aov]) -> u64 {
+        let pixels = u64::from(width) * u64::from(height);
+        let colour = 3 + u64::from(self.alpha);
+        let image = match self.format {
+            OutputFormat::Png => colour * if self.png.bit_depth == BitDepth::Sixteen { 2 } else { 1 },
+            OutputFormat::Exr => colour * 4,
+        };
+        let passes: u64 = aovs.iter().map(|a| a.channels() as u64 * 4).sum();
+        // Beside a PNG the passes' EXR repeats the colour as floats; previews are 8-bit RGB.
+        let beside = if self.has_aovs && self.format == OutputFormat::Png { colour * 4 } else { 0 };
+        let previews = if self.previews { 3 * aovs.len() as u64 } else { 0 };
+        pixels * (image + passes + beside + previews)
+    }
 }
 
 impl ImageArgs {

@@ -2,7 +2,9 @@
 //! loaded and rendered, check that the output's directory exists or can
 //! be created (no part of its path is a file) and that a file can be
 //! created in it, so that a long render never ends in "cannot write".
-//! Nothing is created by the check itself.
+//! Nothing is created by the check itself. Once the image's size is known
+//! (after the load, before the render), [`check_space`] refuses a full
+//! disk and warns when the files may not fit.
 
 use anyhow::{Result, bail};
 use std::path::Path;
@@ -13,23 +15,7 @@ use std::path::Path;
 /// yet are not created here.
 pub fn check_writable(output: &Path) -> Result<()> {
     let shown = output.display();
-    let parent = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let mut dir = parent;
-    loop {
-        match std::fs::metadata(dir) {
-            Ok(m) if m.is_dir() => break,
-            Ok(_) => {
-                bail!("{shown}: cannot write the image there: {} is a file, not a directory", dir.display())
-            }
-            Err(_) => match dir.parent().filter(|d| !d.as_os_str().is_empty()) {
-                Some(up) => dir = up,
-                None => {
-                    dir = Path::new(".");
-                    break;
-                }
-            },
-        }
-    }
+    let dir = existing_dir(output)?;
     let probe = dir.join(format!(".prism-write-check-{}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
         Ok(_) => {
@@ -45,6 +31,120 @@ pub fn check_writable(output: &Path) -> Result<()> {
                 _ => e.to_string(),
             };
             bail!("{shown}: cannot write the image: no file can be created in {} ({why})", dir.display())
+        }
+    }
+}
+
+/// The deepest directory on `output`'s path that exists (`.` if none is
+/// named); an error if a part of the path is a file.
+fn existing_dir(output: &Path) -> Result<&Path> {
+    let mut dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    loop {
+        match std::fs::metadata(dir) {
+            Ok(m) if m.is_dir() => return Ok(dir),
+            Ok(_) => bail!(
+                "{}: cannot write the image there: {} is a file, not a directory",
+                output.display(),
+                dir.display()
+            ),
+            Err(_) => match dir.parent().filter(|d| !d.as_os_str().is_empty()) {
+                Some(up) => dir = up,
+                None => return Ok(Path::new(".")),
+            },
+        }
+    }
+}
+
+/// Below this many free bytes a file system counts as full: no image
+/// file, not even a small compressed one, can be expected to fit.
+const FULL_BELOW: u64 = 64 * 1024;
+
+/// What the free space says about files of `needed` bytes uncompressed
+/// (an upper bound: PNG and the EXR writer compress).
+#[derive(Debug, PartialEq, Eq)]
+enum Space {
+    Enough,
+    /// Less free than the uncompressed size: the files may still fit.
+    Tight,
+    /// Full: fewer than [`FULL_BELOW`] bytes (or fewer than `needed`) free.
+    Full,
+}
+
+fn judge(available: u64, needed: u64) -> Space {
+    if available < FULL_BELOW.min(needed) {
+        Space::Full
+    } else if available < needed {
+        Space::Tight
+    } else {
+        Space::Enough
+    }
+}
+
+/// Checks the free space of the file system that will hold `output`
+/// against `needed`, the files' uncompressed size in bytes: an error if it
+/// is full, a warning (returned) if the files may not fit. Where the
+/// system does not tell (not Unix, or statvfs fails), nothing is checked.
+pub fn check_space(output: &Path, needed: u64) -> Result<Option<String>> {
+    let dir = existing_dir(output)?;
+    let Some(available) = available_bytes(dir) else { return Ok(None) };
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    match judge(available, needed) {
+        Space::Enough => Ok(None),
+        Space::Tight => Ok(Some(format!(
+            "{}: {:.1} MiB free on {}'s file system, less than the {:.1} MiB the image files take uncompressed; \
+             they may not fit",
+            output.display(),
+            mib(available),
+            dir.display(),
+            mib(needed)
+        ))),
+        Space::Full => bail!(
+            "{}: cannot write the image: the disk holding {} is full ({available} bytes free)",
+            output.display(),
+            dir.display()
+        ),
+    }
+}
+
+#[cfg(unix)]
+fn available_bytes(dir: &Path) -> Option<u64> {
+    let s = rustix::fs::statvfs(dir).ok()?;
+    Some(s.f_bavail.saturating_mul(s.f_frsize))
+}
+
+#[cfg(not(unix))]
+fn available_bytes(_dir: &Path) -> Option<u64> {
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_full_disk_is_refused_and_a_tight_one_warned() {
+        assert_eq!(judge(0, 10), Space::Full);
+        assert_eq!(judge(1000, 5_000_000), Space::Full);
+        assert_eq!(judge(FULL_BELOW, 5_000_000), Space::Tight);
+        // A tiny image fits where a little space is left.
+        assert_eq!(judge(2000, 1500), Space::Enough);
+        assert_eq!(judge(1000, 1500), Space::Full);
+        assert_eq!(judge(10_000_000, 5_000_000), Space::Enough);
+    }
+
+    #[test]
+    fn the_space_of_an_existing_directory_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("not/yet/img.png");
+        assert_eq!(existing_dir(&out).unwrap(), dir.path());
+        if cfg!(unix) {
+            let free = available_bytes(dir.path()).expect("statvfs answers for a temporary directory");
+            assert!(free > 0);
+            // Nobody has u64::MAX bytes free: the check says so (a warning
+            // here; an error only on a full disk).
+            let w = check_space(&out, u64::MAX).unwrap().expect("a warning");
+            assert!(w.contains("img.png") && w.contains("may not fit"), "{w}");
+            assert_eq!(check_space(&out, 1).unwrap(), None);
         }
     }
 }
