@@ -49,10 +49,11 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
     for m in &i.meshes {
         let _ = writeln!(
             s,
-            "mesh       {}: {} model{}, {} triangles, {} instance{}",
+            "mesh       {}: {} model{} ({} closed), {} triangles, {} instance{}",
             m.path.display(),
             m.models,
             if m.models == 1 { "" } else { "s" },
+            m.closed_models,
             m.triangles,
             m.instances,
             if m.instances == 1 { "" } else { "s" }
@@ -180,6 +181,7 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
             "models": m.models,
             "triangles": m.triangles,
             "instances": m.instances,
+            "closed_models": m.closed_models,
         })).collect::<Vec<_>>(),
         "triangles": { "stored": i.stored_triangles, "instanced": i.instanced_triangles },
         "materials": i.materials,

@@ -229,6 +229,11 @@ fn an_obj_file_renders_on_its_own_in_frame() {
     let out = prism(dir.path(), &["info", "tetra.obj"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stdout).contains("640×480") && text(&out.stdout).contains("(default)"));
+    // The tetrahedron is closed (a solid); without its last face it is open.
+    assert!(text(&out.stdout).contains("1 model (1 closed), 4 triangles"), "{}", text(&out.stdout));
+    fs::write(dir.path().join("open.obj"), TETRA.trim_end().rsplit_once('\n').unwrap().0).unwrap();
+    let out = prism(dir.path(), &["info", "open.obj"]);
+    assert!(text(&out.stdout).contains("1 model (0 closed), 3 triangles"), "{}", text(&out.stdout));
     let out = prism(dir.path(), &["render", "tetra.obj", "--width", "16", "-q"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(dir.path().join("out/tetra.png").is_file());

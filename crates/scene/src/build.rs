@@ -320,6 +320,7 @@ impl<'a> Build<'a> {
                 models: models.len(),
                 triangles,
                 instances: 0,
+                closed_models: obj.models.iter().filter(|m| m.mesh.is_closed()).count(),
             });
             let slot = MeshSlot { models, mtl_materials: vec![None; obj.materials.len()], info };
             self.slots.insert(key.clone(), slot);

@@ -135,6 +135,10 @@ pub struct MeshInfo {
     pub triangles: usize,
     /// Objects of the scene that use it.
     pub instances: usize,
+    /// Of `models`, those that are closed (watertight and consistently
+    /// oriented, [`prism_geometry::TriangleMesh::is_closed`]): solids for
+    /// refraction, absorption and shadows; the others are open surfaces.
+    pub closed_models: usize,
 }
 
 /// What a scene holds, for `prism info` and for checking.
