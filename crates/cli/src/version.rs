@@ -19,26 +19,11 @@ pub fn simd_paths() -> Vec<(&'static str, bool)> {
     let forced_off = std::env::var_os("PRISM_BVH_NO_SIMD").is_some();
     let kernel = prism_bvh::Kernel::detect();
     vec![
-        // avx2 fma bmi1 bmi2 lzcnt popcnt; off with PRISM_BVH_NO_SIMD.
-        ("bvh-avx2", !forced_off && has_avx2_set()),
+        // The same CPU features as the AVX2 kernel: avx2 fma bmi1 bmi2 lzcnt popcnt.
+        ("bvh-avx2", !forced_off && prism_bvh::Kernel::Avx2.supported()),
         ("bvh8-avx512", kernel == prism_bvh::Kernel::Avx512),
         ("bvh8-avx2", kernel == prism_bvh::Kernel::Avx2),
     ]
-}
-
-#[cfg(target_arch = "x86_64")]
-fn has_avx2_set() -> bool {
-    is_x86_feature_detected!("avx2")
-        && is_x86_feature_detected!("fma")
-        && is_x86_feature_detected!("bmi1")
-        && is_x86_feature_detected!("bmi2")
-        && is_x86_feature_detected!("lzcnt")
-        && is_x86_feature_detected!("popcnt")
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn has_avx2_set() -> bool {
-    false
 }
 
 /// The SIMD paths enabled here, space-separated (`scalar` if none).
