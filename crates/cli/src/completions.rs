@@ -32,7 +32,13 @@ pub fn script(cmd: &mut clap::Command, shell: Shell) -> Vec<u8> {
 pub fn completions_command(args: &CompletionsArgs, mut cmd: clap::Command) -> Result<()> {
     let text = script(&mut cmd, args.shell);
     let mut stdout = std::io::stdout().lock();
-    stdout.write_all(&text).and_then(|()| stdout.flush()).context("cannot write the completion script")
+    match stdout.write_all(&text).and_then(|()| stdout.flush()) {
+        // A reader that stopped early (`prism completions bash | head`) is not an error.
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(e).context("cannot write the completion script")
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Writes one man page per visible command of `cmd` into `args.dir`, and
@@ -42,7 +48,7 @@ pub fn man_command(args: &ManArgs, cmd: clap::Command) -> Result<()> {
     clap_mangen::generate_to(cmd, &args.dir)
         .with_context(|| format!("cannot write man pages into {}", args.dir.display()))?;
     for page in pages(&args.dir)? {
-        println!("wrote {}", page.display());
+        outln!("wrote {}", page.display());
     }
     Ok(())
 }

@@ -325,19 +325,19 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     };
     let sbatch_extra: Vec<String> = a.sbatch_args.iter().map(|s| sh(s)).collect();
     if a.dry_run {
-        println!("# {note}");
-        println!("# {}:\n{tasks}", job.work.join("tasks.sbatch").display());
+        outln!("# {note}");
+        outln!("# {}:\n{tasks}", job.work.join("tasks.sbatch").display());
         if let Some(m) = &merge {
-            println!("# {}:\n{m}", job.work.join("merge.sbatch").display());
+            outln!("# {}:\n{m}", job.work.join("merge.sbatch").display());
         }
-        println!("# submit with:");
-        println!(
+        outln!("# submit with:");
+        outln!(
             "sbatch --parsable {} {}",
             sbatch_extra.join(" "),
             sh(&job.work.join("tasks.sbatch").to_string_lossy())
         );
         if merge.is_some() {
-            println!(
+            outln!(
                 "sbatch --parsable --dependency=afterok:ARRAY_JOB_ID {} {}",
                 sbatch_extra.join(" "),
                 sh(&job.work.join("merge.sbatch").to_string_lossy())
@@ -382,19 +382,19 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
         None => None,
     };
     let what = if tiles { format!("{count} tiles") } else { format!("{count} frames") };
-    println!("submitted job array {array_id} ({what})");
+    outln!("submitted job array {array_id} ({what})");
     if let Some(m) = &merge_id {
-        println!("submitted merge job {m} (after {array_id} succeeds)");
+        outln!("submitted merge job {m} (after {array_id} succeeds)");
     }
     let out_name = if tiles {
         job.output.clone()
     } else {
         job.output.with_file_name(format!("{}.####.{}", stem(&job.output), ext(&job.output)))
     };
-    println!("output: {}", out_name.display());
+    outln!("output: {}", out_name.display());
     if a.wait {
         wait(&job, &array_id, merge_id.as_deref())?;
-        println!("done: {}", out_name.display());
+        outln!("done: {}", out_name.display());
     }
     Ok(())
 }

@@ -35,6 +35,24 @@
 
 #![forbid(unsafe_code)]
 
+/// `println!` that never panics: when standard output is closed early
+/// (`prism info --json | head`), the text is lost but the command goes on
+/// and exits as it would have.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
+/// `print!` that never panics, as [`outln!`].
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 mod completions;
 mod farm;
 mod frames;
@@ -251,9 +269,9 @@ fn info_command(args: &InfoArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     if args.json {
-        println!("{:#}", info::to_json(&loaded, &args.scene));
+        outln!("{:#}", info::to_json(&loaded, &args.scene));
     } else {
-        print!("{}", info::describe(&loaded, &args.scene));
+        out!("{}", info::describe(&loaded, &args.scene));
     }
     Ok(())
 }
@@ -420,14 +438,14 @@ fn render_to(
     }
     if !args.quiet {
         let mrays = stats.rays as f64 / 1e6;
-        println!(
+        outln!(
             "{}: {w}×{h}, {} spp, {wall:.2} s, {mrays:.2} M rays, {:.2} M rays/s",
             output.display(),
             settings.spp,
             if wall > 0.0 { mrays / wall } else { 0.0 }
         );
         for f in &written {
-            println!("wrote {}", f.display());
+            outln!("wrote {}", f.display());
         }
     }
     Ok(())

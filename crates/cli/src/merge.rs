@@ -58,9 +58,9 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
         None => Vec::new(),
     };
     if !args.quiet {
-        println!("{}: {}×{} from {} tiles", args.output.display(), image.width, image.height, tiles.len());
+        outln!("{}: {}×{} from {} tiles", args.output.display(), image.width, image.height, tiles.len());
         for f in &written {
-            println!("wrote {}", f.display());
+            outln!("wrote {}", f.display());
         }
     }
     Ok(())

@@ -132,3 +132,28 @@ fn stats_json_holds_real_figures() {
     assert_eq!(j["outputs"], serde_json::json!(["o.png", "o.aov.exr"]));
     assert_eq!(listing(&dir.path().join("st")), ["s.json"], "written atomically");
 }
+
+#[test]
+fn a_closed_standard_output_is_not_a_crash() {
+    // `prism info --json | head -c 10`: the reader is gone before prism writes.
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    for args in [&["info", "s.toml", "--json"][..], &["info", "s.toml"], &["completions", "bash"]] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = common::prism_cmd(dir.path()).args(args).stdout(writer).output().unwrap();
+        let err = text(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    // A render whose closing line cannot be printed still writes its image.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = common::prism_cmd(dir.path())
+        .args(["render", "s.toml", "-o", "img.png"])
+        .stdout(writer)
+        .output()
+        .unwrap();
+    assert!(out.status.success() && !text(&out.stderr).contains("panicked"), "{}", text(&out.stderr));
+    assert!(dir.path().join("img.png").is_file());
+}
