@@ -50,21 +50,21 @@ impl SceneFile {
                 Some(span) => Location::at_span(file_name, text, &span),
                 None => Location::file(file_name),
             };
-            let object = e.span().and_then(|s| crate::suggest::object_at(text, s.start, e.message()));
-            SceneError::Syntax { location, message: syntax_message(e.message(), object) }
+            let entry = e.span().and_then(|s| crate::suggest::entry_at(text, s.start, e.message()));
+            SceneError::Syntax { location, message: syntax_message(e.message(), entry) }
         })
     }
 }
 
 /// toml's messages, made to say what was expected in scene terms
-/// (`object`: the type of the object the message is about, if any).
-fn syntax_message(m: &str, object: Option<ObjectKind>) -> String {
+/// (`entry`: the object or light the message is about, if any).
+fn syntax_message(m: &str, entry: Option<crate::suggest::Entry>) -> String {
     let m = m.trim();
     if m.starts_with("missing field `camera`") {
         return "missing [camera] table (position and look_at are required)".into();
     }
     let m = m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value");
-    crate::suggest::friendly(&m, object)
+    crate::suggest::friendly(&m, entry)
 }
 
 #[derive(Deserialize, Default)]

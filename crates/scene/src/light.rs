@@ -14,7 +14,7 @@ pub(crate) const DEFAULT_AREA_SAMPLES: u32 = 16;
 pub(crate) const MAX_AREA_SAMPLES: u64 = 4096;
 
 impl LightKindDef {
-    fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Self::Point => "point",
             Self::Spot => "spot",
@@ -194,13 +194,19 @@ fn check_keys(ctx: &Ctx, d: &LightDef, kind: LightKindDef) -> Result<()> {
         ("two_sided", span_of(&d.two_sided)),
         ("adaptive", span_of(&d.adaptive)),
     ];
-    let allowed: &[&str] = match kind {
+    let allowed = light_keys(kind);
+    refuse_foreign(ctx, &present, allowed, &format!("{} light", kind.name()), "color or radiance, intensity")
+}
+
+/// The keys of its own that a light of `kind` takes (besides `type`,
+/// `color`/`radiance` and `intensity`).
+pub(crate) fn light_keys(kind: LightKindDef) -> &'static [&'static str] {
+    match kind {
         LightKindDef::Point => &["position", "falloff"],
         LightKindDef::Spot => &["position", "direction", "inner_angle", "outer_angle", "falloff"],
         LightKindDef::Directional => &["direction"],
         LightKindDef::Quad => &["corner", "edge_u", "edge_v", "samples", "two_sided", "adaptive"],
         LightKindDef::Disk => &["center", "normal", "radius", "samples", "two_sided", "adaptive"],
         LightKindDef::Sphere => &["center", "radius", "samples", "adaptive"],
-    };
-    refuse_foreign(ctx, &present, allowed, &format!("{} light", kind.name()), "color or radiance, intensity")
+    }
 }

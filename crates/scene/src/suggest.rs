@@ -6,13 +6,43 @@
 //! The key lists come from the types themselves: serde's unknown-field
 //! error lists the fields of the struct it was filling, so a key added to
 //! a struct in `format.rs` joins the suggestions with no change here. For
-//! an object, whose struct holds the keys of every shape, the list is
-//! narrowed to the keys its `type` takes ([`crate::object::shape_keys`]).
+//! an object or a light, whose struct holds the keys of every kind, the
+//! list is narrowed to the keys its `type` takes
+//! ([`crate::object::shape_keys`], [`crate::light::light_keys`]).
 
-use crate::format::ObjectKind;
+use crate::format::{LightKindDef, ObjectKind};
 
 /// Keys every object takes, whatever its `type`.
 pub(crate) const OBJECT_KEYS: [&str; 4] = ["type", "material", "transform", "name"];
+
+/// Keys every light takes, whatever its `type`.
+pub(crate) const LIGHT_KEYS: [&str; 4] = ["type", "color", "radiance", "intensity"];
+
+/// An `[[objects]]` or `[[lights]]` entry of a known `type`, whose keys a
+/// message about an unknown key lists instead of every kind's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Entry {
+    Object(ObjectKind),
+    Light(LightKindDef),
+}
+
+impl Entry {
+    /// "a sphere", "a quad light".
+    fn what(self) -> String {
+        match self {
+            Entry::Object(k) => k.name().to_owned(),
+            Entry::Light(k) => format!("{} light", k.name()),
+        }
+    }
+
+    /// Its own keys, then the keys every entry of its table takes.
+    fn keys(self) -> (&'static [&'static str], &'static [&'static str]) {
+        match self {
+            Entry::Object(k) => (crate::object::shape_keys(k), &OBJECT_KEYS),
+            Entry::Light(k) => (crate::light::light_keys(k), &LIGHT_KEYS),
+        }
+    }
+}
 
 /// The candidate closest to `word`, if it is close enough to be what was
 /// meant: at most one edit in four characters (at least one edit), or
@@ -28,23 +58,36 @@ pub(crate) fn closest<'c>(word: &str, candidates: &[&'c str]) -> Option<&'c str>
     candidates.iter().copied().find(|c| c.len() >= 2 && (lower.starts_with(c) || c.starts_with(&lower)))
 }
 
-/// The `type` of the object whose entry holds byte `offset` of the scene
-/// `text` (the last `[[objects]]` entry starting before it), if `message`
-/// is about an unknown key of an object (serde lists every object key).
-pub(crate) fn object_at(text: &str, offset: usize, message: &str) -> Option<ObjectKind> {
+/// The object or light whose entry holds byte `offset` of the scene
+/// `text` (the last `[[objects]]` or `[[lights]]` entry starting before
+/// it), if `message` is about an unknown key of one (serde then lists
+/// every key of its table). A light without `type` is a point light.
+pub(crate) fn entry_at(text: &str, offset: usize, message: &str) -> Option<Entry> {
     #[derive(serde::Deserialize)]
-    struct Objects {
+    struct Tables {
         #[serde(default)]
         objects: Vec<toml::Spanned<toml::Table>>,
+        #[serde(default)]
+        lights: Vec<toml::Spanned<toml::Table>>,
     }
-    if !message.starts_with("unknown field")
-        || !OBJECT_KEYS.iter().all(|k| message.contains(&format!("`{k}`")))
-    {
+    let lists = |keys: &[&str]| keys.iter().all(|k| message.contains(&format!("`{k}`")));
+    if !message.starts_with("unknown field") {
         return None;
     }
-    let objects: Objects = toml::from_str(text).ok()?;
-    let object = objects.objects.iter().rfind(|o| o.span().start <= offset)?;
-    object.get_ref().get("type")?.clone().try_into().ok()
+    let tables = || -> Option<Tables> { toml::from_str(text).ok() };
+    let last = |v: &[toml::Spanned<toml::Table>]| v.iter().rfind(|o| o.span().start <= offset).cloned();
+    if lists(&OBJECT_KEYS) {
+        let object = last(&tables()?.objects)?;
+        return object.get_ref().get("type")?.clone().try_into().ok().map(Entry::Object);
+    }
+    if lists(&LIGHT_KEYS) {
+        let light = last(&tables()?.lights)?;
+        return match light.get_ref().get("type") {
+            None => Some(Entry::Light(LightKindDef::Point)),
+            Some(t) => t.clone().try_into().ok().map(Entry::Light),
+        };
+    }
+    None
 }
 
 /// ` Did you mean `x`?` for `word` among `candidates`, or nothing.
@@ -57,13 +100,13 @@ fn backticked(s: &str) -> Vec<&str> {
     s.split('`').skip(1).step_by(2).collect()
 }
 
-/// `m`, a message of serde or toml, in scene terms. `object` is the
-/// `type` of the `[[objects]]` entry the message is about, if it is about
-/// one (its keys are then the shape's, not every shape's).
-pub(crate) fn friendly(m: &str, object: Option<ObjectKind>) -> String {
+/// `m`, a message of serde or toml, in scene terms. `entry` is the
+/// object or light the message is about, if it is about one (its keys are
+/// then its kind's, not every kind's).
+pub(crate) fn friendly(m: &str, entry: Option<Entry>) -> String {
     let m = m.trim();
     if let Some(rest) = m.strip_prefix("unknown field ") {
-        return unknown(rest, "key", object);
+        return unknown(rest, "key", entry);
     }
     if let Some(rest) = m.strip_prefix("unknown variant ") {
         return unknown(rest, "name", None);
@@ -86,21 +129,20 @@ pub(crate) fn friendly(m: &str, object: Option<ObjectKind>) -> String {
 
 /// `` `radios`, expected one of `a`, `b` `` as an unknown key (or name)
 /// with a suggestion and the list of what is accepted.
-fn unknown(rest: &str, what: &str, object: Option<ObjectKind>) -> String {
+fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
     let (word, expected) = match rest.split_once(", expected ") {
         Some((w, e)) => (w.trim_matches('`'), backticked(e)),
         None => (rest.split(',').next().unwrap_or(rest).trim_matches('`'), Vec::new()),
     };
-    if let Some(kind) = object {
-        let own = crate::object::shape_keys(kind);
-        let all: Vec<&str> = own.iter().chain(OBJECT_KEYS.iter()).copied().collect();
+    if let Some(entry) = entry {
+        let (own, common) = entry.keys();
+        let all: Vec<&str> = own.iter().chain(common.iter()).copied().collect();
+        let name = entry.what();
         return format!(
-            "unknown key `{word}` in a {}{} (a {} takes: {}, plus {})",
-            kind.name(),
+            "unknown key `{word}` in a {name}{} (a {name} takes: {}, plus {})",
             did_you_mean(word, &all),
-            kind.name(),
             own.join(", "),
-            OBJECT_KEYS.join(", ")
+            common.join(", ")
         );
     }
     if expected.is_empty() {
@@ -207,9 +249,33 @@ mod tests {
     fn an_object_lists_only_its_own_keys() {
         let all =
             "`type`, `material`, `transform`, `name`, `center`, `radius`, `point`, `normal`, `vertices`";
-        let m = friendly(&format!("unknown field `radios`, expected one of {all}"), Some(ObjectKind::Sphere));
+        let m = friendly(
+            &format!("unknown field `radios`, expected one of {all}"),
+            Some(Entry::Object(ObjectKind::Sphere)),
+        );
         assert!(m.starts_with("unknown key `radios` in a sphere; did you mean `radius`?"), "{m}");
         assert!(m.contains("a sphere takes: center, radius, plus type, material"), "{m}");
         assert!(!m.contains("vertices") && !m.contains("normal"), "{m}");
+    }
+
+    #[test]
+    fn a_light_lists_only_its_own_keys() {
+        let text = "[[lights]]\ntype = \"quad\"\ncorner = [0, 1, 0]\nedge_uu = [1, 0, 0]\n\n[[lights]]\nposition = [0, 1, 0]\nfallof = \"none\"\n";
+        let all =
+            "`type`, `position`, `color`, `radiance`, `intensity`, `falloff`, `corner`, `edge_u`, `edge_v`";
+        let msg = format!("unknown field `edge_uu`, expected one of {all}");
+        let quad = entry_at(text, text.find("edge_uu").unwrap(), &msg);
+        assert_eq!(quad, Some(Entry::Light(LightKindDef::Quad)));
+        let m = friendly(&msg, quad);
+        assert!(m.starts_with("unknown key `edge_uu` in a quad light; did you mean `edge_u`?"), "{m}");
+        assert!(m.contains("(a quad light takes: corner, edge_u, edge_v, samples"), "{m}");
+        assert!(!m.contains("falloff") && !m.contains("position"), "{m}");
+        // A light without `type` is a point light.
+        let msg = format!("unknown field `fallof`, expected one of {all}");
+        let point = entry_at(text, text.find("fallof").unwrap(), &msg);
+        assert_eq!(point, Some(Entry::Light(LightKindDef::Point)));
+        assert!(
+            friendly(&msg, point).contains("did you mean `falloff`? (a point light takes: position, falloff")
+        );
     }
 }
