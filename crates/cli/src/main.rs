@@ -8,7 +8,8 @@
 //!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
 //!                    [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
 //! prism info SCENE [the same overrides as render] [--set KEY=VALUE]... [--json]
-//! prism view SCENE [the same overrides as render] [--save-dir DIR] [--verbose]
+//! prism view SCENE [the same overrides as render] [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
+//!                  [--save-dir DIR] [--verbose]
 //! prism render SCENE (--pixel-bounds X0,X1,Y0,Y1 | --tile I/N | --tile-from-env N) -o TILE.exr
 //! prism render SCENE --frames N [--orbit DEGREES] [--frame I | --frame-from-env] -o OUT.png
 //! prism merge TILE... -o OUT
@@ -113,6 +114,12 @@ struct ViewArgs {
     scene: PathBuf,
     #[command(flatten)]
     overrides: Overrides,
+    /// Replace a scene value by its dotted path, on every load (repeatable):
+    /// --set render.spp=16 --set fog.enabled=false.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    #[command(flatten)]
+    obj: ObjArgs,
     /// Where `s` saves snapshots [default: the current directory].
     #[arg(long, value_name = "DIR")]
     save_dir: Option<PathBuf>,
@@ -251,6 +258,8 @@ fn view_command(args: ViewArgs) -> Result<()> {
     prism_view::run(prism_view::ViewOptions {
         scene: args.scene,
         overrides: args.overrides,
+        sets: args.set,
+        obj: args.obj.options(),
         save_dir: args.save_dir,
         verbose: args.verbose,
     })?;

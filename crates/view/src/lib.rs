@@ -92,6 +92,12 @@ pub struct ViewOptions {
     /// samples, depth, threads, fog at start, camera), applied once by the
     /// loader, on every load.
     pub overrides: prism_scene::Overrides,
+    /// `--set KEY=VALUE` replacements of scene values by dotted path,
+    /// applied by the loader on every load ([`prism_scene::LoadOptions::sets`]).
+    pub sets: Vec<String>,
+    /// OBJ mode's choices (`--view`, `--light`, `--floor`) for an OBJ file;
+    /// refused by the loader for a TOML scene.
+    pub obj: prism_scene::ObjOptions,
     /// Where `s` saves snapshots (`None`: the current directory).
     pub save_dir: Option<PathBuf>,
     /// Print timings (key-to-frame latency, every frame) to stderr.
@@ -129,8 +135,12 @@ pub type SceneLoader = dyn Fn(&Path) -> Result<SceneSetup, String> + Send + Sync
 /// # Errors
 /// The loader's message (file, line and column).
 pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, String> {
-    let options =
-        prism_scene::LoadOptions { overrides: opts.overrides, ..prism_scene::LoadOptions::default() };
+    let options = prism_scene::LoadOptions {
+        overrides: opts.overrides,
+        sets: opts.sets.clone(),
+        obj: opts.obj,
+        ..prism_scene::LoadOptions::default()
+    };
     // A TOML scene, or an OBJ mesh as a scene of its own.
     let loaded = prism_scene::load_path(path, &options).map_err(|e| e.to_string())?;
     for w in &loaded.warnings {
@@ -222,5 +232,13 @@ mod tests {
         let bad = prism_scene::Overrides { width: Some(0), ..prism_scene::Overrides::default() };
         let err = load_scene_file(&seed, &ViewOptions { overrides: bad, ..ViewOptions::new(&seed) });
         assert!(err.is_err_and(|e| e.contains("--width")));
+        // --set reaches the viewer's load; OBJ flags are refused for a TOML scene.
+        let sets = vec!["render.spp=5".to_owned(), "fog.enabled=false".to_owned()];
+        let setup = load_scene_file(&seed, &ViewOptions { sets, ..ViewOptions::new(&seed) }).unwrap();
+        assert_eq!(setup.settings.spp, 5);
+        assert!(!setup.settings.fog);
+        let obj = prism_scene::ObjOptions { floor: true, ..prism_scene::ObjOptions::default() };
+        let err = load_scene_file(&seed, &ViewOptions { obj, ..ViewOptions::new(&seed) });
+        assert!(err.is_err_and(|e| e.contains("--floor")));
     }
 }
