@@ -40,15 +40,8 @@ pub fn orbit_camera(camera: &Camera, orbit: f32, index: u32, count: u32) -> Resu
     let angle = (f64::from(orbit) * f64::from(index) / f64::from(count.max(1))).to_radians() as f32;
     let turn = Quat::from_axis_angle(Vec3::Y, angle);
     let centre = camera.look_at();
-    let (w, h) = camera.size();
-    Ok(Camera::new(
-        centre + turn * (camera.position() - centre),
-        centre,
-        turn * camera.up(),
-        camera.vfov_deg(),
-        w,
-        h,
-    )?)
+    // Projection and lens travel with the camera: frame 0 is the scene's own view.
+    Ok(camera.moved(centre + turn * (camera.position() - centre), centre, turn * camera.up())?)
 }
 
 /// `OUT.####.ext`: `output` with the frame number (zero-padded to four
@@ -158,5 +151,21 @@ mod tests {
                 .to_string()
                 .starts_with("--frames 0")
         );
+    }
+
+    #[test]
+    fn frame_zero_is_the_scenes_own_camera_lens_and_projection_included() {
+        use prism_shade::Projection;
+        let cam = Camera::new(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 6)
+            .unwrap()
+            .with_projection(Projection::Orthographic)
+            .with_lens(0.2, 5.0)
+            .unwrap();
+        let first = orbit_camera(&cam, 90.0, 0, 4).unwrap();
+        for (x, y) in [(0.5, 0.5), (3.7, 2.2), (7.5, 5.5)] {
+            assert_eq!(first.ray(x, y), cam.ray(x, y));
+        }
+        let turned = orbit_camera(&cam, 90.0, 1, 4).unwrap();
+        assert_eq!((turned.projection(), turned.aperture()), (Projection::Orthographic, 0.2));
     }
 }

@@ -319,6 +319,14 @@ pub fn load_obj_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene,
             message: format!("{set}: --set changes a scene file's values; an OBJ file as a scene has none"),
         });
     }
+    if let Some(camera) = options.overrides.camera {
+        return Err(SceneError::Option {
+            flag: "--camera",
+            message: format!(
+                "`{camera}`: an OBJ file as a scene has one framed camera and no named ones; choose its side with --view"
+            ),
+        });
+    }
     let (canonical, base, name) = read::obj_alone_path(path)?;
     let res = read::read_obj_alone(&base, &name);
     build::build_obj_scene(check::Ctx::new(path, ""), &name, &canonical, &res, options)

@@ -149,6 +149,22 @@ impl Camera {
         })
     }
 
+    /// The same camera (size, field of view, projection, lens) looking
+    /// from `position` at `look_at` with `up`: a turntable frame or a
+    /// viewer's orbit.
+    ///
+    /// # Errors
+    /// As [`Camera::new`].
+    pub fn moved(&self, position: Vec3, look_at: Vec3, up: Vec3) -> Result<Self, ShadeError> {
+        let c = Self::new(position, look_at, up, self.vfov_deg, self.size.0, self.size.1)?;
+        Ok(Self {
+            projection: self.projection,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
+            ..c
+        })
+    }
+
     /// Eye position.
     #[must_use]
     pub fn position(&self) -> Vec3 {
@@ -243,8 +259,12 @@ mod tests {
         assert!(cam().with_lens(-0.1, 1.0).is_err());
         assert!(cam().with_lens(0.1, 0.0).is_err());
         assert!(cam().with_lens(0.1, f32::NAN).is_err());
-        // The lens survives a resize.
+        // The lens survives a resize and a move.
         assert_eq!(c.with_size(8, 8).unwrap().aperture(), 0.5);
+        let moved = c.moved(Vec3::new(5.0, 0.0, 0.0), Vec3::ZERO, Vec3::Y).unwrap();
+        assert_eq!((moved.aperture(), moved.focus_distance(), moved.size()), (0.5, 3.0, (64, 32)));
+        let same = c.moved(c.position(), c.look_at(), c.up()).unwrap();
+        assert_eq!(same.ray(10.3, 4.7), c.ray(10.3, 4.7));
     }
 
     #[test]
@@ -258,5 +278,6 @@ mod tests {
         let height = top.origin.y - bottom.origin.y;
         assert!((height - 10.0 * (30f32).to_radians().tan()).abs() < 1e-4, "{height}");
         assert_eq!(c.with_size(10, 10).unwrap().projection(), Projection::Orthographic);
+        assert_eq!(c.moved(Vec3::X, Vec3::ZERO, Vec3::Y).unwrap().projection(), Projection::Orthographic);
     }
 }

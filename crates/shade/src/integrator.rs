@@ -35,12 +35,33 @@ pub(crate) struct Tracer<'a> {
     primary: Vec3,
     /// Whether any material lets light through (else shadows are yes/no).
     see_through: bool,
-    /// Spread angle of a camera ray's cone (one pixel); 0 point-samples textures.
-    pixel_spread: f32,
+    /// The cone of every camera ray (one pixel wide): from a point at the
+    /// eye for a perspective camera; a parallel beam one pixel wide at the
+    /// look-at distance for an orthographic one.
+    camera_cone: RayCone,
     /// Rays traced so far (camera, secondary, shadow).
     pub rays: u64,
     /// Of `rays`, the shadow rays.
     pub shadow_rays: u64,
+}
+
+/// The footprint cone of the camera's rays: one pixel wide (the image
+/// plane's height at unit distance over the rows); none when textures are
+/// point-sampled.
+fn camera_cone(settings: &RenderSettings) -> RayCone {
+    let cam = &settings.camera;
+    if settings.antialias.point_textures {
+        return RayCone::camera(0.0);
+    }
+    let (_, h) = cam.size();
+    let spread = 2.0 * (cam.vfov_deg().to_radians() * 0.5).tan() / h.max(1) as f32;
+    match cam.projection() {
+        crate::Projection::Perspective => RayCone::camera(spread),
+        // Parallel rays, each a pixel wide: the view spans the field of view at the look-at distance.
+        crate::Projection::Orthographic => {
+            RayCone { width: spread * (cam.look_at() - cam.position()).length(), spread: 0.0 }
+        }
+    }
 }
 
 /// Whether object `object` is a closed solid: [`Scene::is_closed`].
@@ -74,12 +95,7 @@ impl<'a> Tracer<'a> {
             depth_axis: scene.fog.filter(|f| settings.fog && f.by_depth()).map(|_| settings.camera.forward()),
             primary: Vec3::ZERO,
             see_through,
-            pixel_spread: if settings.antialias.point_textures {
-                0.0
-            } else {
-                let (_, h) = settings.camera.size();
-                2.0 * (settings.camera.vfov_deg().to_radians() * 0.5).tan() / h.max(1) as f32
-            },
+            camera_cone: camera_cone(settings),
             rays: 0,
             shadow_rays: 0,
         }
@@ -90,7 +106,7 @@ impl<'a> Tracer<'a> {
     #[inline]
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
         self.primary = ray.dir;
-        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, RayCone::camera(self.pixel_spread))
+        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone)
     }
 
     /// Should a ray of path weight `w` be traced?
@@ -152,7 +168,7 @@ impl<'a> Tracer<'a> {
         let hit = scene.accel.closest_hit(ray);
         // An area light nearer than the surface (or than nothing) is seen.
         if let Some((t, l)) = self.light_hit(ray, hit.as_ref().map_or(ray.t_max, |h| h.hit.t)) {
-            let end = path + t * ray.dir.length();
+            let end = path + self.fog_length(ray, t * ray.dir.length());
             return self.fog_blend(l, self.fog_t(path, end));
         }
         let Some(h) = hit else {
@@ -349,10 +365,12 @@ impl<'a> Tracer<'a> {
         // Optical depth Σ absorption · (±distance), and the absorption of
         // the solids entered and not left.
         let (mut tau, mut open) = (Vec3::ZERO, Vec3::ZERO);
+        let mut peak = 0.0f32;
         scene.accel.for_each_hit(&ray, |sh| {
             let closed = is_closed(scene, sh.object);
             let m = scene.material_of(sh.object);
             if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
+                peak = peak.max(m.absorption.max_element());
                 let s = m.absorption * sh.hit.t;
                 if sh.hit.front_face {
                     (tau, open) = (tau - s, open + m.absorption);
@@ -374,7 +392,11 @@ impl<'a> Tracer<'a> {
         // The shadow ray's direction is unit: `t` is distance. A ray toward
         // a directional light (t_max infinite) that starts inside glass
         // crosses an unbounded length of it in each absorbing channel.
-        let inside = open.max(Vec3::ZERO).to_array().map(|a| if a > 0.0 { a * ray.t_max } else { 0.0 });
+        // Entries and exits of different solids arrive in any order, so
+        // `open` may keep a rounding remainder (0.6 + 0.1 − 0.6 − 0.1 ≠ 0 in
+        // f32): only what exceeds that counts as still inside.
+        let tol = 1e-4 * peak;
+        let inside = open.to_array().map(|a| if a > tol { a * ray.t_max } else { 0.0 });
         let tau = tau + Vec3::from_array(inside);
         t * (-tau.max(Vec3::ZERO)).exp()
     }

@@ -403,3 +403,36 @@ fn world_checker_floor() {
     s.camera = camera(Vec3::new(-0.75, 10.0, -0.75), Vec3::new(-0.75, 0.0, -0.75), Vec3::NEG_Z, 0.5, 1, 1);
     assert_close(px(&render(&s, 1, 0), 0, 0), a, 0.0);
 }
+
+#[test]
+fn a_sun_through_two_absorbing_solids_follows_beer_lambert() {
+    // Sunlight at 45° through two overlapping glass boxes of different
+    // absorption, beside the camera's view: 2√2 of each on the way from
+    // the floor's centre toward the sun.
+    // Entries and exits arrive in any order, and the rounding left over
+    // from adding and removing 0.6 and 0.1 must not count as glass that
+    // goes on for ever (the sun is infinitely far).
+    let floor_albedo = Vec3::new(0.5, 0.7, 0.9);
+    let floor = Material { ambient: 0.2, diffuse: 0.8, ..Material::diffuse(floor_albedo) };
+    let a = Material { absorption: Vec3::splat(0.6), ..glass(1.5) };
+    let b = Material { absorption: Vec3::splat(0.1), ..glass(1.5) };
+    let sun = prism_shade::Light {
+        kind: prism_shade::LightKind::Directional { direction: Vec3::new(-1.0, -1.0, 0.0).normalize() },
+        color: Vec3::ONE,
+        intensity: 1.0,
+    };
+    let cam = camera(Vec3::new(0.0, 10.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 20.0, 33, 33);
+    let s = scene_lit(
+        vec![
+            (plane(Vec3::ZERO, Vec3::Y), I, floor),
+            (cuboid(Vec3::new(1.0, 1.0, -0.5), Vec3::new(3.0, 3.0, 0.5)), I, a),
+            (cuboid(Vec3::new(2.0, 2.0, -0.4), Vec3::new(4.0, 4.0, 0.4)), I, b),
+        ],
+        vec![sun],
+        cam,
+    );
+    let got = px(&render(&s, 1, 4), 16, 16);
+    let shadow = (got - 0.2 * floor_albedo) / (0.8 * floor_albedo * std::f32::consts::FRAC_1_SQRT_2);
+    let inside = 2.0 * std::f32::consts::SQRT_2;
+    assert_close(shadow, Vec3::splat((-(0.6 + 0.1) * inside).exp()), 1e-4);
+}

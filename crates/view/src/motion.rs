@@ -10,9 +10,9 @@ use prism_shade::Camera;
 /// (radians, 2°), so the camera never becomes degenerate.
 const MIN_POLAR: f32 = 2.0 * std::f32::consts::PI / 180.0;
 
+/// `c` (projection and lens included) looking from `position` at `look_at`.
 fn camera_with(c: &Camera, position: Vec3, look_at: Vec3) -> Option<Camera> {
-    let (w, h) = c.size();
-    Camera::new(position, look_at, c.up(), c.vfov_deg(), w, h).ok()
+    c.moved(position, look_at, c.up()).ok()
 }
 
 /// The camera orbited about its target; `None` if that would be degenerate.

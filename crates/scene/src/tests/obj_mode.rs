@@ -109,3 +109,21 @@ fn a_toml_scene_refuses_obj_options_naming_the_flag() {
         assert!(err.starts_with(&format!("{flag}: applies to an OBJ file")), "{err}");
     }
 }
+
+#[test]
+fn an_obj_file_refuses_named_cameras_and_sets_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = deep_box(dir.path());
+    let camera = crate::CameraName::new("top").ok();
+    let opts =
+        LoadOptions { overrides: Overrides { camera, ..Overrides::default() }, ..LoadOptions::default() };
+    let e = load_obj_scene(&path, &opts).unwrap_err().to_string();
+    assert!(
+        e.starts_with("--camera: `top`: an OBJ file as a scene has one framed camera")
+            && e.contains("--view"),
+        "{e}"
+    );
+    let opts = LoadOptions { sets: vec!["render.spp=2".into()], ..LoadOptions::default() };
+    let e = load_obj_scene(&path, &opts).unwrap_err().to_string();
+    assert!(e.starts_with("--set: render.spp=2"), "{e}");
+}
