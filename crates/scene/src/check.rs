@@ -110,6 +110,8 @@ impl<'a> Ctx<'a> {
         v.map_or(Ok(default), |v| self.vec3(v, what))
     }
 
+    /// A reflectance colour (components 0–1 by meaning): checked, and a
+    /// warning when its components look like 8-bit values.
     pub fn color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
         self.color_at(&c.span(), c.get_ref(), what)
     }
@@ -117,24 +119,33 @@ impl<'a> Ctx<'a> {
     /// The colour `c` written at `span`, checked; components that look
     /// like 8-bit values get a warning.
     pub fn color_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
+        let v = self.rgb_at(span, c, what)?;
+        if looks_8bit(&c.0) {
+            let [r, g, b] = c.0.map(|x| x as u8);
+            self.note(
+                span,
+                &format!(
+                    "{what} {v} looks like 8-bit values: colour components are 0–1 (or \"#{r:02x}{g:02x}{b:02x}\")"
+                ),
+            );
+        }
+        Ok(v)
+    }
+
+    /// Three numbers >= 0 that may exceed 1 by meaning (a light's
+    /// radiance, an absorption coefficient): checked, no 8-bit warning.
+    pub fn rgb(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
+        self.rgb_at(&c.span(), c.get_ref(), what)
+    }
+
+    fn rgb_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
         match vec3_of(&c.0) {
-            Some(v) if v.min_element() >= 0.0 => {
-                if looks_8bit(&c.0) {
-                    let [r, g, b] = c.0.map(|x| x as u8);
-                    self.note(
-                        span,
-                        &format!(
-                            "{what} {v} looks like 8-bit values: colour components are 0–1 (or \"#{r:02x}{g:02x}{b:02x}\")"
-                        ),
-                    );
-                }
-                Ok(v)
-            }
+            Some(v) if v.min_element() >= 0.0 => Ok(v),
             _ => Err(self.invalid(span, format!("{what} must be three finite numbers >= 0, got {:?}", c.0))),
         }
     }
 
-    /// `c` checked, or `default` when it is not given.
+    /// `c` checked as a reflectance colour, or `default` when it is not given.
     pub fn opt_color(&self, c: Option<&Spanned<Color>>, what: &str, default: Vec3) -> Result<Vec3> {
         c.map_or(Ok(default), |c| self.color(c, what))
     }

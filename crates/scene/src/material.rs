@@ -103,7 +103,10 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
     set(&mut m.transparency, d.transparency.as_ref(), "transparency", &unit)?;
     set(&mut m.transmission, d.transmission.as_ref(), "transmission", &unit)?;
     set(&mut m.ior, d.ior.as_ref(), "ior", &|n, w| ctx.positive(n, w))?;
-    m.absorption = ctx.opt_color(d.absorption.as_ref(), "absorption", m.absorption)?;
+    if let Some(a) = &d.absorption {
+        // A coefficient per unit length, not a colour: any size is meant.
+        m.absorption = ctx.rgb(a, "absorption")?;
+    }
     let sum = m.reflectivity + m.transparency + m.transmission;
     if sum > 1.0 + 1e-6 {
         return Err(ctx.invalid(
