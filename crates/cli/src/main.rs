@@ -5,7 +5,8 @@
 //!                    [--threads N] [--max-depth N] [--quiet]
 //!                    [--aov LIST] [--aov-preview] [--aov-files] [--stats-json FILE]
 //!                    [--alpha] [--bit-depth 8|16] [--exposure EV] [--tonemap clamp|reinhard|aces]
-//!                    [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
+//!                    [--camera NAME] [--camera-pos X,Y,Z] [--look-at X,Y,Z] [--up X,Y,Z] [--fov DEGREES]
+//!                    [--filter box|gaussian|blackman-harris] [--adaptive THRESHOLD] [--partial]
 //!                    [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
 //! prism info SCENE [the same overrides as render] [--set KEY=VALUE]... [--json]
 //! prism view SCENE [the same overrides as render] [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
@@ -148,8 +149,9 @@ struct RenderArgs {
     /// On Ctrl-C, write the rows rendered so far (the rest black) instead of nothing.
     #[arg(long)]
     partial: bool,
-    /// AOV passes to write next to the image as OUT-stem.PASS.exr, comma-separated:
-    /// depth, normal, geo_normal, albedo, object_id, or all (replaces the scene's `aov`).
+    /// AOV passes, comma-separated: depth, normal, geo_normal, albedo, object_id, or all
+    /// (replaces the scene's `aov`); layers of OUT.exr, or of OUT-stem.aov.exr beside a PNG
+    /// (--aov-files: one OUT-stem.PASS.exr each).
     #[arg(long, value_name = "LIST")]
     aov: Option<String>,
     /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
@@ -325,6 +327,12 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     for w in warnings {
         eprintln!("warning: {w}");
     }
+    if loaded.settings.antialias.adaptive.is_some() && (plan.alpha || !aovs.is_empty()) {
+        eprintln!(
+            "warning: adaptive supersampling is off for this render: with --alpha or AOV passes every pixel takes all {} samples",
+            loaded.settings.spp
+        );
+    }
     if let Some(s) = &args.stats_json {
         overwrite::check_not_an_input(s, &loaded.inputs)?;
     }
@@ -372,6 +380,20 @@ fn render_to(
             "--alpha is not available for part of an image (--pixel-bounds, --tile); render the whole image"
         ));
     }
+    let tile_file = region.is_some() && plan.format() == OutputFormat::Exr;
+    if tile_file && args.partial {
+        return Err(anyhow!("--partial: a tile file is written whole or not at all; render the tile again"));
+    }
+    if tile_file && prism_scene::is_stdin_path(&args.scene) {
+        return Err(anyhow!(
+            "a tile needs its scene in a file (its header names and hashes it for prism merge), not on standard input"
+        ));
+    }
+    if tile_file && plan.previews() {
+        eprintln!(
+            "warning: a tile holds no AOV previews; prism merge --aov-preview writes them for the whole image"
+        );
+    }
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(u64::from(region.map_or(h, |r| r.0.height())));
@@ -418,7 +440,13 @@ fn render_to(
     let write_start = Instant::now();
     let written = match region {
         Some((bounds, tile)) if plan.format() == OutputFormat::Exr => {
-            let inputs = prism_scene::inputs_digest(&loaded.inputs)?;
+            // What made the scene besides its files: a merge refuses tiles that differ in any.
+            let inputs = format!(
+                "{}; set {:?}; obj {:?}",
+                prism_scene::inputs_digest(&loaded.inputs)?,
+                args.set,
+                args.obj.options()
+            );
             let header = tile::TileHeader::new(&args.scene, inputs, settings, aovs, tile);
             let aovs = passes.unwrap_or(prism_shade::AovImages {
                 width: image.width,

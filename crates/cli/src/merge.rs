@@ -22,6 +22,9 @@ pub struct MergeArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub image: crate::outputs::ImageArgs,
+    /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
+    #[arg(long)]
+    pub aov_preview: bool,
     /// No closing line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -36,7 +39,10 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
         args.tiles.iter().map(|p| Ok((p.clone(), read_tile(p)?))).collect::<Result<_>>()?;
     let (image, aovs) = assemble(&tiles)?;
     let has_aovs = !aovs.passes.is_empty();
-    let (plan, warnings) = args.image.plan(args.output.clone(), format, has_aovs, false)?;
+    if args.aov_preview && !has_aovs {
+        eprintln!("warning: --aov-preview: the tiles hold no AOV passes, so no previews are written");
+    }
+    let (plan, warnings) = args.image.plan(args.output.clone(), format, has_aovs, args.aov_preview)?;
     if plan.alpha {
         bail!("--alpha: tiles hold no alpha; render the whole image with --alpha instead");
     }

@@ -63,6 +63,11 @@ impl Plan {
         self.format
     }
 
+    /// Whether 8-bit previews of the passes are written.
+    pub fn previews(&self) -> bool {
+        self.previews
+    }
+
     /// The size in bytes of every file of a `width × height` render with
     /// `aovs`, uncompressed: an upper bound for the free-space check.
     pub fn uncompressed_bytes(&self, width: u32, height: u32, aovs: &[prism_shade::Aov]) -> u64 {

@@ -146,6 +146,15 @@ fn pixel_bounds_tiles_of_one_scene_only_merge() {
     assert_eq!(part.dimensions(), (25, 6));
     let whole = image::open(d.join("full.png")).unwrap().to_rgb8();
     assert_eq!(part.get_pixel(3, 2), whole.get_pixel(10, 7));
+    // The same file with a --set is another scene, refused by name.
+    let set = ["--set", "materials.red.color=[0.1, 0.8, 0.1]"];
+    ok(
+        d,
+        &[&["render", "a.toml", "-q", "--spp", "4", "--pixel-bounds", "0,7,5,18", "-o", "set.exr"][..], &set]
+            .concat(),
+    );
+    let e = fails(d, &["merge", "p0.exr", "set.exr", "p2.exr", "p3.exr", "-o", "m3.png"]);
+    assert!(e.contains("p0.exr and set.exr are tiles of different scenes"), "{e}");
     // Another scene (a changed file) is refused by name.
     fs::write(d.join("a.toml"), GOOD.replace("0.8, 0.1, 0.1", "0.1, 0.8, 0.1")).unwrap();
     ok(d, &["render", "a.toml", "-q", "--spp", "4", "--pixel-bounds", "0,7,5,18", "-o", "other.exr"]);
@@ -172,6 +181,24 @@ fn bad_parts_are_refused_naming_the_flag() {
     assert!(e.contains("--tile 0/19: 19 tiles are more than the image's 18 rows"), "{e}");
     let e = fails(d, &["render", "a.toml", "--tile", "0/2", "--pixel-bounds", "0,1,0,1", "-o", "x.exr"]);
     assert!(e.contains("--pixel-bounds") && e.contains("--tile"), "{e}");
+    // A tile is whole or nothing, and names its scene file.
+    let e = fails(d, &["render", "a.toml", "--tile", "0/2", "--partial", "-o", "x.exr"]);
+    assert!(e.contains("--partial: a tile file is written whole"), "{e}");
+    let mut cmd = prism_cmd(d);
+    cmd.args(["render", "-", "--tile", "0/2", "-o", "x.exr"]).stdin(std::process::Stdio::piped());
+    let mut child =
+        cmd.stdout(std::process::Stdio::piped()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    {
+        use std::io::Write as _;
+        child.stdin.take().unwrap().write_all(&fs::read(d.join("a.toml")).unwrap()).unwrap();
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        !out.status.success() && text(&out.stderr).contains("not on standard input"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(!d.join("x.exr").exists());
     let mut cmd = prism_cmd(d);
     cmd.args(["render", "a.toml", "--tile-from-env", "3", "-o", "x.exr"]);
     cmd.env_remove("SLURM_ARRAY_TASK_ID").env_remove("JOB_COMPLETION_INDEX");

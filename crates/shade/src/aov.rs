@@ -232,7 +232,8 @@ pub fn render_aovs(
 /// The beauty image and the AOV passes `aovs` in one pass over the pixels.
 ///
 /// The image is the same, bit for bit, as [`crate::render`]'s with the same
-/// settings (it is the same sample loop), and the passes as
+/// settings (it is the same sample loop; adaptive supersampling, which
+/// needs a pixel's samples to stop early, is off here), and the passes as
 /// [`render_aovs`]'s; `stats.rays` counts the rays of both (the passes
 /// trace their own primary rays).
 pub fn render_with_aovs(
@@ -264,7 +265,9 @@ pub struct AlphaImage {
 /// `+UA`; Blender's "transparent film").
 ///
 /// Where every sample of a pixel hits a surface, its colour is bit for bit
-/// that of [`crate::render`] and its alpha 1. Each camera ray is tested
+/// that of [`crate::render`] (without adaptive supersampling, which is off
+/// here) and its alpha 1. Area lights are not surfaces: seen against the
+/// background they count as uncovered. Each camera ray is tested
 /// once more for a hit by the pass sink (counted in `stats.aov_rays`).
 pub fn render_with_alpha(
     scene: &Scene,

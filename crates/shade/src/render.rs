@@ -254,6 +254,8 @@ pub(crate) fn render_pixels<'a>(
         }
         let mut tracer = Tracer::new(scene, settings, see_through);
         let mut bad = 0u64;
+        // Camera rays traced for the beauty (fewer than pixels × spp under adaptive sampling).
+        let mut traced = 0u64;
         let row_start = j as u64 * u64::from(w);
         for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
             let index = row_start + i as u64;
@@ -273,6 +275,7 @@ pub(crate) fn render_pixels<'a>(
                 let mut l = Vec3::ZERO;
                 if beauty {
                     l = tracer.trace_camera(&ray);
+                    traced += 1;
                     if !l.is_finite() {
                         bad += 1;
                         l = Vec3::ZERO;
@@ -296,9 +299,7 @@ pub(crate) fn render_pixels<'a>(
         }
         let aov_rays = sink.map_or(0, |s| s.rays);
         rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);
-        let camera =
-            if beauty { u64::from(w) * u64::from(samples.end.saturating_sub(samples.start)) } else { 0 };
-        camera_rays.fetch_add(camera, Ordering::Relaxed);
+        camera_rays.fetch_add(traced, Ordering::Relaxed);
         shadow_rays.fetch_add(tracer.shadow_rays, Ordering::Relaxed);
         aov_rays_all.fetch_add(aov_rays, Ordering::Relaxed);
         if bad > 0 {

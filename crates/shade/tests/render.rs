@@ -293,9 +293,10 @@ fn any_region_on_any_thread_count_is_bit_identical_to_the_full_render() {
         let b = PixelBounds::new(xa.min(xb), xa.max(xb) + 1, ya.min(yb), ya.max(yb) + 1).unwrap();
         let threads = 1 + round % 4;
         let with = if round % 2 == 0 { &aovs[..] } else { &[] };
-        let (img, passes, _) =
+        let (img, passes, stats) =
             render_region(&s, &settings_t(&s, 3, threads), b, with, RenderHooks::default()).unwrap();
         assert_eq!((img.width, img.height), (b.width(), b.height()));
+        assert_eq!(stats.camera_rays, u64::from(b.width() * b.height()) * 3, "camera rays of {b}");
         for y in 0..b.height() {
             for x in 0..b.width() {
                 let (i, j) = (b.x0() + x, b.y0() + y);
