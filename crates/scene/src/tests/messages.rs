@@ -88,7 +88,7 @@ fn colours_that_look_8_bit_warn_and_hex_is_offered() {
     let bg = BASE.replace("spp = 2", "spp = 2\nbackground = [128, 128, 128]");
     assert!(parse(&bg).unwrap().warnings.iter().any(|w| w.contains("background") && w.contains("#808080")));
     // Light colours (HDR radiance) and absorption coefficients are not reflectances: no warning.
-    let hdr = BASE.replace("spp = 2", "spp = 2").replace("[[lights]]", "[[lights]]\ncolor = [20, 20, 20]");
+    let hdr = BASE.replace("[[lights]]", "[[lights]]\ncolor = [20, 20, 20]");
     assert!(hdr.contains("color = [20, 20, 20]"));
     let loaded = parse(&hdr).unwrap();
     assert!(loaded.warnings.iter().all(|w| !w.contains("8-bit")), "{:?}", loaded.warnings);
