@@ -87,7 +87,11 @@ impl Footprint {
         }
         let d = dir.normalize_or_zero();
         let cos = d.dot(n).abs().max(MIN_COS);
-        let along = (d - n * d.dot(n)).normalize_or(n.any_orthonormal_vector());
+        // `normalize_or(n.any_orthonormal_vector())`, with the fallback
+        // (a division) computed only when it is taken.
+        let v = d - n * d.dot(n);
+        let rcp = v.length_recip();
+        let along = if rcp.is_finite() && rcp > 0.0 { v * rcp } else { n.any_orthonormal_vector() };
         let across = n.cross(along);
         Self { dp: [across * width, along * (width / cos)], duv: [Vec2::ZERO; 2] }
     }
