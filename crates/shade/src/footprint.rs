@@ -87,7 +87,11 @@ impl Footprint {
         }
         let d = dir.normalize_or_zero();
         let cos = d.dot(n).abs().max(MIN_COS);
-        let along = (d - n * d.dot(n)).normalize_or(n.any_orthonormal_vector());
+        // `normalize_or(n.any_orthonormal_vector())`, with the fallback
+        // (a division) computed only when it is taken.
+        let v = d - n * d.dot(n);
+        let rcp = v.length_recip();
+        let along = if rcp.is_finite() && rcp > 0.0 { v * rcp } else { n.any_orthonormal_vector() };
         let across = n.cross(along);
         Self { dp: [across * width, along * (width / cos)], duv: [Vec2::ZERO; 2] }
     }
@@ -104,11 +108,19 @@ pub(crate) fn curvature(scene: &Scene, h: &SceneHit) -> f32 {
     let Some(Object::Shape(inst)) = scene.accel.objects().get(h.object as usize) else {
         return 0.0;
     };
+    if !matches!(inst.shape, Shape::Sphere(_) | Shape::Cylinder(_) | Shape::Cone(_)) {
+        // Flat: 0, signed as below (-0 on a back face), without the transform's work.
+        return if h.hit.front_face { 0.0 } else { -0.0 };
+    }
     let m = inst.transform.matrix();
-    let scale = m.matrix3.determinant().abs().cbrt();
+    let det = m.matrix3.determinant().abs();
+    // cbrt(1) is 1 exactly: skip the libm call for unscaled objects.
+    let scale = if det == 1.0 { 1.0 } else { det.cbrt() };
     // On a cap the normal is along the object's axis: flat.
-    let axis = m.transform_vector3(Vec3::Y).normalize_or_zero();
-    let side = |r: f32| if axis.dot(h.hit.geo_normal).abs() > 0.999 { 0.0 } else { 0.5 / (r * scale) };
+    let side = |r: f32| {
+        let axis = m.transform_vector3(Vec3::Y).normalize_or_zero();
+        if axis.dot(h.hit.geo_normal).abs() > 0.999 { 0.0 } else { 0.5 / (r * scale) }
+    };
     let k = match &inst.shape {
         Shape::Sphere(s) => 1.0 / (s.radius() * scale),
         Shape::Cylinder(c) => side(c.radius()),

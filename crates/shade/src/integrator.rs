@@ -264,7 +264,7 @@ impl<'a> Tracer<'a> {
             return *c;
         }
         let mut fp = Footprint::on_surface(ray.dir, h.hit.geo_normal, width);
-        if fp != Footprint::POINT && mat.texture.needs_uv_footprint() {
+        if mat.texture.needs_uv_footprint() && fp != Footprint::POINT {
             fp.duv = uv_axes(self.scene, ray.origin, h, fp.dp);
         }
         mat.texture.color_over(

@@ -39,7 +39,7 @@ impl Level {
         let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
+        let (x0, y0) = (floor_f32(x), floor_f32(y));
         let (fx, fy) = (x - x0, y - y0);
         let (ix, iy) = (x0 as i64, y0 as i64);
         let (ix1, iy1) = (ix.saturating_add(1), iy.saturating_add(1));
@@ -96,7 +96,7 @@ pub(crate) fn trilinear(base: &Level, smaller: &[Level], wrap: Wrap, uv: Vec2, l
         return base.bilinear(uv, wrap);
     }
     let lod = lod.min(last);
-    let k = lod.floor();
+    let k = floor_f32(lod);
     let level = |i: usize| if i == 0 { base } else { &smaller[(i - 1).min(smaller.len() - 1)] };
     let lo = level(k as usize).bilinear(uv, wrap);
     let frac = lod - k;
@@ -111,7 +111,34 @@ pub(crate) fn trilinear(base: &Level, smaller: &[Level], wrap: Wrap, uv: Vec2, l
 #[inline]
 fn odd_integral(x: f64) -> f64 {
     let half = x / 2.0;
-    half.floor() + 2.0 * (half - half.floor() - 0.5).max(0.0)
+    let k = floor_f64(half);
+    k + 2.0 * (half - k - 0.5).max(0.0)
+}
+
+/// `x.floor()`, bit for bit (NaN, infinities and the sign of zero
+/// included), without the libm call that the baseline x86-64 target makes
+/// for it (no `roundsd` before SSE4.1): below `2^52` in magnitude the
+/// truncation through `i64` is exact, and above it every `f64` is an integer.
+#[inline]
+pub(crate) fn floor_f64(x: f64) -> f64 {
+    if !(x.abs() < 4_503_599_627_370_496.0) {
+        return x;
+    }
+    let t = x as i64 as f64;
+    let f = if t > x { t - 1.0 } else { t };
+    // Truncation loses the sign of -0.0; the floor has the sign of `x`.
+    f.copysign(x)
+}
+
+/// `x.floor()` for `f32`, bit for bit, as [`floor_f64`].
+#[inline]
+pub(crate) fn floor_f32(x: f32) -> f32 {
+    if !(x.abs() < 8_388_608.0) {
+        return x;
+    }
+    let t = x as i32 as f32;
+    let f = if t > x { t - 1.0 } else { t };
+    f.copysign(x)
 }
 
 /// The fraction of `[x − w/2, x + w/2]` covered by odd squares (unit
@@ -119,7 +146,7 @@ fn odd_integral(x: f64) -> f64 {
 #[inline]
 fn odd_fraction(x: f64, w: f64) -> f64 {
     if !(w > 1e-6) {
-        return if x.floor().rem_euclid(2.0) == 1.0 { 1.0 } else { 0.0 };
+        return if floor_f64(x).rem_euclid(2.0) == 1.0 { 1.0 } else { 0.0 };
     }
     if !w.is_finite() || w > 1e12 {
         return 0.5;
@@ -151,6 +178,47 @@ mod tests {
         let texels =
             (0..height).flat_map(|j| (0..width).map(move |i| (i, j))).map(|(i, j)| Vec3::splat(f(i, j)));
         Level { width, height, texels: texels.collect() }
+    }
+
+    #[test]
+    fn fast_floors_equal_floor_bit_for_bit() {
+        let mut xs64 = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.5,
+            2.0_f64.powi(52) - 0.5,
+            -(2.0_f64.powi(52) - 0.5),
+            2.0_f64.powi(52),
+            -(2.0_f64.powi(53)),
+            1e300,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut z = 0x1234_5678_9abc_def0u64;
+        for _ in 0..100_000 {
+            z = crate::render::splitmix64(z);
+            let scale = 2.0_f64.powi((z % 120) as i32 - 60);
+            let x = ((z >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * scale;
+            xs64.push(x);
+            xs64.push(f64::from_bits(z));
+        }
+        for &x in &xs64 {
+            assert_eq!(floor_f64(x).to_bits(), x.floor().to_bits(), "{x:e}");
+            let y = x as f32;
+            assert_eq!(floor_f32(y).to_bits(), y.floor().to_bits(), "{y:e}");
+            let y = f32::from_bits(x.to_bits() as u32);
+            if !y.is_nan() {
+                assert_eq!(floor_f32(y).to_bits(), y.floor().to_bits(), "{y:e}");
+            }
+        }
+        assert!(floor_f64(f64::NAN).is_nan() && floor_f32(f32::NAN).is_nan());
     }
 
     #[test]

@@ -261,6 +261,7 @@ pub(crate) fn render_pixels<'a>(
             let index = row_start + i as u64;
             let mut sum = Vec3::ZERO;
             let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            let pixel_pattern = pattern.pixel(index);
             for s in samples.clone() {
                 if let Some(threshold) = adaptive
                     && s == crate::ADAPTIVE_BASE_SAMPLES
@@ -270,7 +271,7 @@ pub(crate) fn render_pixels<'a>(
                     sum *= spp as f32 / s as f32;
                     break;
                 }
-                let (dx, dy) = filter.offset(pattern.offset(index, s));
+                let (dx, dy) = filter.offset(pixel_pattern.offset(s));
                 let ray = cam.ray(i as f32 + dx, j as f32 + dy);
                 let mut l = Vec3::ZERO;
                 if beauty {
@@ -364,7 +365,7 @@ pub fn sample_position(spp: u32, width: u32, i: u32, j: u32, s: u32) -> (f32, f3
 }
 
 /// The stratified, hashed sample positions within a pixel.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct SamplePattern {
     /// Strata per side (`⌈√spp⌉`); 0 means "pixel centre only" (spp = 1).
     m: u32,
@@ -372,41 +373,100 @@ pub(crate) struct SamplePattern {
     strata: u32,
     /// Step through the strata, coprime with `strata`.
     stride: u32,
+    /// The bit mask of [`permute`] for `m` items.
+    mask: u32,
+    /// The stratum `(column, row)` of sample `s`, for `s` below its length
+    /// (at most [`STRATUM_TABLE`]); later samples compute theirs.
+    cells: Vec<(u32, u32)>,
 }
+
+/// Longest table of sample strata kept by a [`SamplePattern`].
+const STRATUM_TABLE: u32 = 4096;
 
 impl SamplePattern {
     pub(crate) fn new(spp: u32) -> Self {
         let spp = spp.max(1);
         if spp == 1 {
-            return Self { m: 0, strata: 1, stride: 1 };
+            return Self { m: 0, strata: 1, stride: 1, mask: 0, cells: Vec::new() };
         }
         let mut m = (spp as f64).sqrt().ceil() as u32;
         while m.saturating_mul(m) < spp {
             m += 1;
         }
         let strata = m.saturating_mul(m);
-        Self { m, strata, stride: golden_stride(strata) }
+        let mut pattern =
+            Self { m, strata, stride: golden_stride(strata), mask: permute_mask(m), cells: Vec::new() };
+        pattern.cells = (0..strata.min(STRATUM_TABLE)).map(|s| pattern.stratum(s)).collect();
+        pattern
+    }
+
+    /// The stratum `(column, row)` of sample `s` (`m > 0`).
+    #[inline]
+    fn stratum(&self, s: u32) -> (u32, u32) {
+        let k = ((u64::from(s) * u64::from(self.stride)) % u64::from(self.strata)) as u32;
+        (k % self.m, k / self.m)
+    }
+
+    /// The pattern of pixel number `pixel`: its permutation keys, computed
+    /// once for all of its samples.
+    #[inline]
+    pub(crate) fn pixel(&self, pixel: u64) -> PixelPattern<'_> {
+        let p = splitmix64(pixel ^ 0x2545_F491_4F6C_DD1D) as u32;
+        let (kx, ky) = (p.wrapping_mul(0xa511_e9b3), p.wrapping_mul(0x63d8_3595));
+        let m = self.m.max(1);
+        PixelPattern {
+            pattern: self,
+            seed: (pixel << 32) ^ 0x5851_F42D_4C95_7F2D,
+            kx,
+            ky,
+            rx: kx % m,
+            ry: ky % m,
+        }
     }
 
     /// Offset of sample `s` of pixel number `pixel` inside its pixel, in `[0, 1)²`.
     #[inline]
     pub(crate) fn offset(&self, pixel: u64, s: u32) -> (f32, f32) {
-        if self.m == 0 {
+        self.pixel(pixel).offset(s)
+    }
+}
+
+/// One pixel's [`SamplePattern`]: the hash seed and permutation keys that
+/// all of its samples share.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PixelPattern<'a> {
+    pattern: &'a SamplePattern,
+    /// `(pixel << 32) ^ constant`: sample `s` hashes `seed ^ s`.
+    seed: u64,
+    /// The keys of the column and row permutations, and each modulo `m`.
+    kx: u32,
+    ky: u32,
+    rx: u32,
+    ry: u32,
+}
+
+impl PixelPattern<'_> {
+    /// Offset of sample `s` inside the pixel, in `[0, 1)²`.
+    #[inline]
+    pub(crate) fn offset(&self, s: u32) -> (f32, f32) {
+        let pat = self.pattern;
+        if pat.m == 0 {
             return (0.5, 0.5);
         }
-        let k = ((u64::from(s) * u64::from(self.stride)) % u64::from(self.strata)) as u32;
-        let (sx, sy) = (k % self.m, k / self.m);
-        let z = splitmix64((pixel << 32) ^ u64::from(s) ^ 0x5851_F42D_4C95_7F2D);
+        let (sx, sy) = match pat.cells.get(s as usize) {
+            Some(&cell) => cell,
+            None => pat.stratum(s),
+        };
+        let z = splitmix64(self.seed ^ u64::from(s));
         let jx = (z >> 40) as f32 * (1.0 / 16_777_216.0);
         let jy = ((z >> 16) & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0);
         // Kensler's correlated multi-jitter: within its stratum, the sample
         // sits in the sub-column given by its row and the sub-row given by
         // its column, each through a per-pixel permutation, so that the
         // samples of a full grid are also stratified in x and in y alone.
-        let p = splitmix64(pixel ^ 0x2545_F491_4F6C_DD1D) as u32;
-        let px = permute(sx, self.m, p.wrapping_mul(0xa511_e9b3));
-        let py = permute(sy, self.m, p.wrapping_mul(0x63d8_3595));
-        let m = self.m as f32;
+        let px = permute_keyed(sx, pat.m, pat.mask, self.kx, self.rx);
+        let py = permute_keyed(sy, pat.m, pat.mask, self.ky, self.ry);
+        let m = pat.m as f32;
         let below_one = 1.0 - f32::EPSILON / 2.0;
         let x = (sx as f32 + (py as f32 + jx) / m) / m;
         let y = (sy as f32 + (px as f32 + jy) / m) / m;
@@ -433,16 +493,33 @@ fn gcd(mut a: u32, mut b: u32) -> u32 {
 
 /// Kensler's hashed permutation of `0..len` ("Correlated Multi-Jittered
 /// Sampling", Pixar 2013): element `i` of the permutation keyed by `key`.
-fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+#[cfg(test)]
+fn permute(i: u32, len: u32, key: u32) -> u32 {
     if len <= 1 {
         return 0;
     }
-    let mut w = len - 1;
+    permute_keyed(i, len, permute_mask(len), key, key % len)
+}
+
+/// The mask of [`permute_keyed`] for `len` items: `len − 1` with every bit
+/// below its highest set.
+fn permute_mask(len: u32) -> u32 {
+    let mut w = len.saturating_sub(1);
     w |= w >> 1;
     w |= w >> 2;
     w |= w >> 4;
     w |= w >> 8;
     w |= w >> 16;
+    w
+}
+
+/// Kensler's permutation ([`permute`]) with its per-key parts given:
+/// `w = permute_mask(len)` and `rem = key % len`; `i < len`.
+#[inline]
+fn permute_keyed(mut i: u32, len: u32, w: u32, key: u32, rem: u32) -> u32 {
+    if len <= 1 {
+        return 0;
+    }
     loop {
         i ^= key;
         i = i.wrapping_mul(0xe170_893d);
@@ -463,7 +540,9 @@ fn permute(mut i: u32, len: u32, key: u32) -> u32 {
         i &= w;
         i ^= i >> 5;
         if i < len {
-            return (i + key % len) % len;
+            // (i + rem) % len, both below len.
+            let j = i + rem;
+            return if j >= len { j - len } else { j };
         }
     }
 }

@@ -113,8 +113,13 @@ impl FogMode {
             }
             FogMode::Exponential { .. } | FogMode::ExponentialSquared { .. } => 1.0,
             FogMode::Linear { .. } | FogMode::LinearDistance { .. } => {
-                let left = if a > 0.0 { 1.0 - self.weight(a) } else { 1.0 };
-                if left > 0.0 { (1.0 - self.weight(b)) / left } else { 0.0 }
+                if a > 0.0 {
+                    let left = 1.0 - self.weight(a);
+                    if left > 0.0 { (1.0 - self.weight(b)) / left } else { 0.0 }
+                } else {
+                    // The first segment: what is left is 1, and `x / 1` is `x`.
+                    1.0 - self.weight(b)
+                }
             }
         };
         if t >= 0.0 { t.min(1.0) } else { 0.0 }
