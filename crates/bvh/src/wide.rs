@@ -116,11 +116,17 @@ impl Kernel {
     }
 
     /// The fastest kernel this CPU runs, or [`Kernel::Portable`] when the
-    /// environment variable `PRISM_BVH_NO_SIMD` is set.
+    /// environment variable `PRISM_BVH_NO_SIMD` is set; `PRISM_BVH_KERNEL`
+    /// (`portable`, `avx2`, `avx512`) picks one for comparisons, where the
+    /// CPU runs it.
     #[must_use]
     pub fn detect() -> Self {
         if std::env::var_os("PRISM_BVH_NO_SIMD").is_some() {
             return Self::Portable;
+        }
+        let named = std::env::var("PRISM_BVH_KERNEL").ok();
+        if let Some(k) = Self::ALL.into_iter().find(|k| named.as_deref() == Some(k.name()) && k.supported()) {
+            return k;
         }
         [Self::Avx512, Self::Avx2].into_iter().find(|k| k.supported()).unwrap_or(Self::Portable)
     }
