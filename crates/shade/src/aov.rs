@@ -266,8 +266,8 @@ pub struct AlphaImage {
 ///
 /// Where every sample of a pixel hits a surface, its colour is bit for bit
 /// that of [`crate::render`] (without adaptive supersampling, which is off
-/// here) and its alpha 1. Area lights are not surfaces: seen against the
-/// background they count as uncovered. Each camera ray is tested
+/// here) and its alpha 1. An area light seen directly covers its samples as
+/// a surface does. Each camera ray is tested
 /// once more for a hit by the pass sink (counted in `stats.aov_rays`).
 pub fn render_with_alpha(
     scene: &Scene,
@@ -408,9 +408,13 @@ impl<'a> AovRow<'a> {
         }
         self.rays += 1;
         let hit = scene.accel.closest_hit(ray);
-        if let (Some(a), Some(_)) = (&mut self.alpha, &hit) {
-            a.hits += 1;
-            a.covered += radiance;
+        if let Some(a) = &mut self.alpha {
+            // A surface, or an area light seen against the background, covers the sample.
+            let seen = hit.is_some() || scene.lights.iter().any(|l| l.intersect(ray, ray.t_max).is_some());
+            if seen {
+                a.hits += 1;
+                a.covered += radiance;
+            }
         }
         let sums = &mut self.sums;
         match &hit {

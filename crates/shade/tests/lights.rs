@@ -290,3 +290,17 @@ fn invalid_lights_are_refused() {
     assert!(spot.validate().is_err(), "outer narrower than inner");
     assert!(point(Vec3::ZERO, Falloff::None, 1.0).validate().is_ok());
 }
+
+#[test]
+fn an_area_light_seen_against_the_background_covers_its_pixels() {
+    // A disk light facing the camera, nothing else: under --alpha its
+    // pixels are covered (alpha 1, its radiance), the rest transparent.
+    let disk = area(AreaShape::Disk { center: Vec3::ZERO, normal: Vec3::Z, radius: 1.0 }, 4, 2.0);
+    let cam = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 40.0, 9, 9);
+    let s = scene_lit(vec![], vec![disk], cam);
+    let (rgba, _, _) = prism_shade::render_with_alpha(&s, &s.settings(1, 0), &[], RenderHooks::default());
+    let centre = 4 * 9 + 4;
+    assert_eq!(rgba.alpha[centre], 1.0);
+    assert_eq!(rgba.color.pixels[centre], Vec3::splat(2.0));
+    assert_eq!((rgba.alpha[0], rgba.color.pixels[0]), (0.0, Vec3::ZERO), "a corner sees only background");
+}
