@@ -58,6 +58,8 @@ pub struct SlurmArgs {
     obj: crate::ObjArgs,
     #[command(flatten)]
     limits: crate::LimitArgs,
+    #[command(flatten)]
+    image: crate::outputs::ImageArgs,
     /// Where the scripts, tiles, logs and task statuses go (shared by the nodes)
     /// [default: OUT-stem.farm next to OUT].
     #[arg(long, value_name = "DIR")]
@@ -190,13 +192,20 @@ fn tasks_script(job: &Job, command: &str) -> String {
     s
 }
 
-fn merge_script(job: &Job, prism: &str) -> String {
+fn merge_script(job: &Job, prism: &str, image_flags: &[String]) -> String {
     let w = &job.work;
     let mut s = String::from("#!/bin/bash\n#SBATCH --job-name=prism-merge\n");
     let _ = writeln!(s, "#SBATCH --output={}", sh(&w.join("logs/merge.log").to_string_lossy()));
     let _ = writeln!(s, "#SBATCH --chdir={}", sh(&w.to_string_lossy()));
     let tiles: Vec<String> = job.tile_files.iter().map(|t| sh(&t.to_string_lossy())).collect();
-    let _ = writeln!(s, "{} merge {} -o {}", sh(prism), tiles.join(" "), sh(&job.output.to_string_lossy()));
+    let _ = writeln!(
+        s,
+        "{} merge {} -o {}{}",
+        sh(prism),
+        tiles.join(" "),
+        sh(&job.output.to_string_lossy()),
+        image_flags.iter().map(|f| format!(" {f}")).collect::<String>()
+    );
     let _ = writeln!(s, "rc=$?");
     let _ = writeln!(s, "echo $rc > {}", sh(&job.status("merge").to_string_lossy()));
     s.push_str("exit $rc\n");
@@ -290,8 +299,16 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     };
     let job = Job { tiles, count, work, output, tile_files };
 
+    if tiles && a.image.alpha() {
+        bail!("--alpha: tiles hold no alpha; render the whole image (--frames, or prism render) for it");
+    }
     let mut flags = render_flags(&a.overrides, a.aov.as_deref(), &a.limits);
     flags.extend(scene_flags(&a.set, &a.obj));
+    // The image flags go to whoever writes the image: each frame's task, or the merge.
+    let image_flags: Vec<String> = a.image.flags().iter().map(|f| sh(f)).collect();
+    if !tiles {
+        flags.extend(a.image.flags());
+    }
     let flags: Vec<String> = flags.iter().map(|f| sh(f)).collect();
     let command = if tiles {
         format!(
@@ -312,7 +329,7 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
         )
     };
     let tasks = tasks_script(&job, &command);
-    let merge = tiles.then(|| merge_script(&job, &prism));
+    let merge = tiles.then(|| merge_script(&job, &prism, &image_flags));
 
     let mut shared: Vec<PathBuf> = loaded.inputs.clone();
     shared.push(PathBuf::from(&prism));

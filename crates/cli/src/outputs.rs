@@ -86,6 +86,33 @@ impl Plan {
 }
 
 impl ImageArgs {
+    /// Whether `--alpha` was given.
+    pub fn alpha(&self) -> bool {
+        self.alpha
+    }
+
+    /// The flags that give another `prism render` or `prism merge` these
+    /// choices (the defaults are left out).
+    pub fn flags(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if self.alpha {
+            v.push("--alpha".to_owned());
+        }
+        if self.bit_depth != "8" {
+            v.extend(["--bit-depth".to_owned(), self.bit_depth.clone()]);
+        }
+        if self.exposure != 0.0 {
+            v.extend(["--exposure".to_owned(), self.exposure.to_string()]);
+        }
+        if self.tonemap != Tonemap::Clamp {
+            v.extend(["--tonemap".to_owned(), self.tonemap.name().to_owned()]);
+        }
+        if self.aov_files {
+            v.push("--aov-files".to_owned());
+        }
+        v
+    }
+
     /// The plan for `output` (format known), with or without passes; warns
     /// (returned as text) about flags that do not apply.
     ///

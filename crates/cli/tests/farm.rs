@@ -270,6 +270,10 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
         "--no-fog",
         "--aov",
         "depth",
+        "--bit-depth",
+        "16",
+        "--tonemap",
+        "aces",
         "-o",
         "out/x.png",
         "--dry-run",
@@ -292,6 +296,11 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
     ] {
         assert!(out.contains(want), "`{want}` in\n{out}");
     }
+    // The image flags go to the merge, which writes the image, not to the tiles.
+    let merge = out.lines().find(|l| l.contains(" merge ")).unwrap_or_else(|| panic!("{out}"));
+    assert!(merge.ends_with("--bit-depth 16 --tonemap aces"), "{merge}");
+    let task = out.lines().find(|l| l.contains("--tile-from-env")).unwrap_or_else(|| panic!("{out}"));
+    assert!(!task.contains("--bit-depth"), "{task}");
     assert_eq!(listing(d), ["a.toml"], "a dry run writes nothing");
     let frames = ok(
         d,
@@ -303,6 +312,8 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
             "5",
             "--orbit",
             "45",
+            "--exposure",
+            "1.5",
             "-o",
             "t.png",
             "--dry-run",
@@ -310,11 +321,15 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
         ],
     );
     assert!(
-        frames.contains("--frames 5 --orbit 45 --frame-from-env") && !frames.contains(" merge "),
+        frames.contains("--frames 5 --orbit 45 --frame-from-env")
+            && frames.contains("--exposure 1.5")
+            && !frames.contains(" merge "),
         "{frames}"
     );
     let e = fails(d, &["farm", "slurm", "a.toml", "--tiles", "40", "-o", "x.png", "--dry-run"]);
     assert!(e.contains("--tiles 40: 40 tiles are more than the image's 18 rows"), "{e}");
+    let e = fails(d, &["farm", "slurm", "a.toml", "--tiles", "2", "--alpha", "-o", "x.png", "--dry-run"]);
+    assert!(e.contains("--alpha: tiles hold no alpha"), "{e}");
     let e = fails(d, &["farm", "slurm", "a.toml", "-o", "x.png", "--dry-run"]);
     assert!(e.contains("required arguments were not provided") && e.contains("--tiles"), "{e}");
 }
