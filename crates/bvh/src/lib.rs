@@ -65,9 +65,9 @@
 //! Rust over eight-lane arrays (no `unsafe`; the compiler vectorises it),
 //! AVX2 intrinsics, and AVX-512 (mask-register compare and compress-store
 //! of the children hit, on 256-bit vectors); the walk and its leaf tests
-//! are compiled once per kernel, and [`Kernel::detect`] picks the widest
-//! the CPU has when the structure is built ([`Accel::set_kernel`] selects
-//! another). All give bit-for-bit the same answers (same operations in the
+//! are compiled once per kernel, and [`Kernel::detect`] picks the
+//! portable one, measured fastest, when the structure is built
+//! ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects another). All give bit-for-bit the same answers (same operations in the
 //! same order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
 //! bit-identical to the scalar test. [`Accel::closest_hit`] and
@@ -891,7 +891,7 @@ mod tests {
     /// Every kernel this CPU has is selectable and actually walks (so the
     /// kernel comparisons in `tests/blas_kinds.rs` ran it): this FAILS,
     /// rather than skipping, where the host has AVX2 or AVX-512 and that
-    /// path did not run; and detection picks the widest one.
+    /// path did not run; and detection picks the portable one (measured fastest).
     #[test]
     fn every_kernel_the_host_has_is_exercised() {
         let (positions, indices) = wavy_grid(20, [9.0, 7.0, 0.3]);
@@ -916,10 +916,9 @@ mod tests {
             assert!(after >= before + 2, "the {} kernel did not run", k.name());
             assert_eq!(*reference.get_or_insert(hit), hit, "{}", k.name());
         }
-        if std::env::var_os("PRISM_BVH_NO_SIMD").is_none() {
-            let best =
-                [Kernel::Avx512, Kernel::Avx2].into_iter().find(|&k| host_has(k)).unwrap_or(Kernel::Portable);
-            assert_eq!(Kernel::detect(), best);
+        if std::env::var_os("PRISM_BVH_KERNEL").is_none() {
+            // The measured fastest (docs/benchmarks.md), whatever the CPU has.
+            assert_eq!(Kernel::detect(), Kernel::Portable);
         }
     }
 

@@ -10,10 +10,11 @@ pub const COMMIT: &str = env!("PRISM_GIT_COMMIT");
 /// The SIMD paths of prism and whether this CPU (and environment) enables
 /// each: `(path, enabled)`. Two today, both chosen when the structure is
 /// built and both off with `PRISM_BVH_NO_SIMD`: the AVX2 compilation of
-/// the BVH walks (`bvh-avx2`), and the node-test kernel of the wide
-/// (8-child) hierarchies (`bvh8-avx512` or `bvh8-avx2`, the widest the CPU
-/// runs, [`prism_bvh::Kernel::detect`]; the portable kernel is the
-/// fallback). A new run-time path adds a line here.
+/// the BVH walks (`bvh-avx2`), and an intrinsics kernel for the node test
+/// of the wide (8-child) hierarchies (`bvh8-avx512` or `bvh8-avx2`, only
+/// when `PRISM_BVH_KERNEL` asks for it: the default portable kernel,
+/// [`prism_bvh::Kernel::detect`], measured faster and is vectorised by the
+/// compiler inside `bvh-avx2`). A new run-time path adds a line here.
 #[must_use]
 pub fn simd_paths() -> Vec<(&'static str, bool)> {
     let forced_off = std::env::var_os("PRISM_BVH_NO_SIMD").is_some();
