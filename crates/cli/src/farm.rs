@@ -96,7 +96,7 @@ pub fn render_flags(o: &Overrides, aov: Option<&str>, limits: &crate::LimitArgs)
             v.push(value);
         }
     };
-    let vec3 = |p: Option<prism_geometry::glam::Vec3>| p.map(|p| format!("{},{},{}", p.x, p.y, p.z));
+    let vec3 = |p: Option<prism_geometry::glam::Vec3>| p.map(vec3_flag);
     push("--width", o.width.map(|x| x.to_string()));
     push("--height", o.height.map(|x| x.to_string()));
     push("--spp", o.spp.map(|x| x.to_string()));
@@ -121,6 +121,11 @@ pub fn render_flags(o: &Overrides, aov: Option<&str>, limits: &crate::LimitArgs)
     v
 }
 
+/// `X,Y,Z` as a vector flag takes it (shortest round-trip forms).
+fn vec3_flag(p: prism_geometry::glam::Vec3) -> String {
+    format!("{},{},{}", p.x, p.y, p.z)
+}
+
 /// The `prism render` flags that carry `--set` and OBJ mode's choices to a task.
 fn scene_flags(sets: &[String], obj: &crate::ObjArgs) -> Vec<String> {
     let mut v: Vec<String> = Vec::new();
@@ -134,7 +139,7 @@ fn scene_flags(sets: &[String], obj: &crate::ObjArgs) -> Vec<String> {
     }
     if let Some(p) = obj.light {
         v.push("--light".into());
-        v.push(format!("{},{},{}", p.x, p.y, p.z));
+        v.push(vec3_flag(p));
     }
     if obj.floor {
         v.push("--floor".into());
@@ -558,5 +563,22 @@ mod tests {
         assert_eq!(r.limits.limits(), limits.limits());
         let none = render_flags(&Overrides::default(), None, &limits);
         assert_eq!(none.len(), 6, "{none:?}");
+        // --set and OBJ mode's choices come back too.
+        let sets = vec!["render.spp=3".to_owned(), "objects.0.radius=0.1".to_owned()];
+        let obj = crate::ObjArgs {
+            view: Some(prism_scene::ObjView::Iso),
+            light: Some(Vec3::new(-0.5, 1e-7, 3.25)),
+            floor: true,
+        };
+        let flags = scene_flags(&sets, &obj);
+        let cli = crate::Cli::try_parse_from(
+            [&["prism", "render", "m.obj"][..], &flags.iter().map(String::as_str).collect::<Vec<_>>()]
+                .concat(),
+        )
+        .unwrap();
+        let crate::Command::Render(r) = cli.command else { panic!("not render") };
+        assert_eq!(r.set, sets);
+        assert_eq!(r.obj.options(), obj.options());
+        assert!(scene_flags(&[], &crate::ObjArgs { view: None, light: None, floor: false }).is_empty());
     }
 }
