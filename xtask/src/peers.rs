@@ -204,6 +204,8 @@ fn vs_embree(root: &Path, peer: &Path, bench: &Path, data: &Path, o: &Options) -
                     ) else {
                         continue;
                     };
+                    // prism's best of its single-ray and packet queries.
+                    let q = q.strip_suffix("-packet").unwrap_or(q);
                     let Some(q) = ["primary", "incoherent", "shadow"].into_iter().find(|&k| k == q) else {
                         continue;
                     };

@@ -12,9 +12,12 @@
 //! Without `--mesh`: the Stanford bunny, the kitchen, and a 6×6×6 grid of
 //! bunny instances, from `DIR` (default `../shared/data`).
 
+use prism_bvh::PACKET_SIZE;
 use prism_bvh::{Accel, BuildOptions, BuildQuality, Object};
 use prism_geometry::{Aabb, Ray, Transform, TriangleMesh};
-use prism_testkit::bench::{grid_offsets, incoherent_rays, offset_hit_points, primary_rays, shadow_rays};
+use prism_testkit::bench::{
+    grid_offsets, incoherent_rays, offset_hit_points, primary_rays, shadow_rays, tile_order,
+};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -22,8 +25,8 @@ use std::time::Instant;
 
 type Error = Box<dyn std::error::Error>;
 
-/// A query over one ray: whether it counts as a hit.
-type Query<'a> = &'a (dyn Fn(&Ray) -> bool + Sync);
+/// A query over a slice of rays: how many count as hits.
+type Query<'a> = &'a (dyn Fn(&[Ray]) -> usize + Sync);
 
 struct Options {
     data: PathBuf,
@@ -84,6 +87,7 @@ fn parse(args: &[String]) -> Result<Options, Error> {
 
 /// Runs `f` over `rays` on `threads` threads; returns how many it counted.
 fn trace(rays: &[Ray], threads: usize, f: Query<'_>) -> usize {
+    // A multiple of the packet size.
     const CHUNK: usize = 4096;
     let next = AtomicUsize::new(0);
     let work = || {
@@ -93,7 +97,7 @@ fn trace(rays: &[Ray], threads: usize, f: Query<'_>) -> usize {
             if start >= rays.len() {
                 return n;
             }
-            n += rays[start..(start + CHUNK).min(rays.len())].iter().filter(|r| f(r)).count();
+            n += f(&rays[start..(start + CHUNK).min(rays.len())]);
         }
     };
     if threads <= 1 {
@@ -127,7 +131,9 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
     let stats = accel.stats();
     let b = accel.bounds();
     let t0 = Instant::now();
-    let primary = primary_rays(b, o.width, o.height);
+    // In 8×8 pixel blocks, so that the packet queries get neighbouring
+    // pixels (the single-ray queries trace the same rays in the same order).
+    let primary = tile_order(&primary_rays(b, o.width, o.height), o.width, o.height, 8);
     let points =
         offset_hit_points(&primary, b, |r| accel.closest_hit(r).map(|h| (h.hit.point, h.hit.geo_normal)));
     let incoherent = incoherent_rays(&points, 8);
@@ -144,12 +150,32 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
         shadow.len(),
         t0.elapsed().as_secs_f64()
     );
-    let closest = |r: &Ray| accel.closest_hit(r).is_some();
-    let occluded = |r: &Ray| accel.occluded(r);
-    let sets: [(&'static str, &[Ray], Query<'_>); 3] = [
+    let closest = |rays: &[Ray]| rays.iter().filter(|r| accel.closest_hit(r).is_some()).count();
+    let occluded = |rays: &[Ray]| rays.iter().filter(|r| accel.occluded(r)).count();
+    let closest_packet = |rays: &[Ray]| {
+        let mut out = [None; PACKET_SIZE];
+        rays.chunks(PACKET_SIZE)
+            .map(|p| {
+                accel.closest_hit_packet(p, &mut out);
+                out[..p.len()].iter().filter(|h| h.is_some()).count()
+            })
+            .sum()
+    };
+    let occluded_packet = |rays: &[Ray]| {
+        let mut out = [false; PACKET_SIZE];
+        rays.chunks(PACKET_SIZE)
+            .map(|p| {
+                accel.occluded_packet(p, &mut out);
+                out[..p.len()].iter().filter(|&&h| h).count()
+            })
+            .sum()
+    };
+    let sets: [(&'static str, &[Ray], Query<'_>); 5] = [
         ("primary", &primary, &closest),
+        ("primary-packet", &primary, &closest_packet),
         ("incoherent", &incoherent, &closest),
         ("shadow", &shadow, &occluded),
+        ("shadow-packet", &shadow, &occluded_packet),
     ];
     for (query, rays, f) in sets {
         for &threads in &o.threads {
@@ -227,12 +253,12 @@ fn run() -> Result<(), Error> {
         bench_scene(&name, &accel, &o, &mut rows);
     }
     eprintln!(
-        "\n{:<14} {:<11} {:>3} {:>10} {:>10} {:>9} {:>10} {:>10}",
+        "\n{:<14} {:<14} {:>3} {:>10} {:>10} {:>9} {:>10} {:>10}",
         "scene", "query", "thr", "rays", "hits", "Mrays/s", "build ms", "BVH MB"
     );
     for r in &rows {
         eprintln!(
-            "{:<14} {:<11} {:>3} {:>10} {:>10} {:>9.2} {:>10.1} {:>10.2}",
+            "{:<14} {:<14} {:>3} {:>10} {:>10} {:>9.2} {:>10.1} {:>10.2}",
             r.scene,
             r.query,
             r.threads,

@@ -5,6 +5,7 @@
 //! Every triangle is tested by prism-geometry's [`TriangleRay`], the one
 //! watertight ray/triangle test.
 
+use crate::packet::{self, Leaf, bits};
 use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
 use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
@@ -212,6 +213,82 @@ impl Blas {
         v.hit
     }
 
+    /// [`Blas::closest`] for each object-space ray `rays[k]` of `mask`,
+    /// walked together as packets ([`crate::packet`]) where the layout is
+    /// wide: `found[k]` gets ray `k`'s hit, the one `closest` gives.
+    #[inline(always)]
+    pub fn closest_packet<const N: usize>(
+        &self,
+        rays: &[Ray; N],
+        mask: u64,
+        found: &mut [Option<(u32, f32, f32, f32)>; N],
+    ) {
+        let Nodes::Wide(tree) = &self.nodes else {
+            for k in bits(mask) {
+                found[k] = self.closest(&rays[k]);
+            }
+            return;
+        };
+        let mut br = packet_rays(rays, mask);
+        let mut v: [Option<ClosestTriangle<'_>>; N] = std::array::from_fn(|k| {
+            (mask >> k & 1 == 1).then(|| ClosestTriangle {
+                tris: &self.tris,
+                blocks: &self.blocks,
+                tr: TriangleRay::new(&rays[k]),
+                found: None,
+            })
+        });
+        for (m, fr) in packet::plan(&br, mask) {
+            match fr {
+                Some(fr) => tree.walk_packet::<false, N>(self.depth, &fr, &mut br, m, EachRay(&mut v)),
+                None => {
+                    for k in bits(m) {
+                        if let Some(v) = v[k].as_mut() {
+                            self.walk(&mut br[k], v);
+                        }
+                    }
+                }
+            }
+        }
+        for k in bits(mask) {
+            found[k] = v[k]
+                .as_ref()
+                .and_then(|v| v.found)
+                .map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
+        }
+    }
+
+    /// [`Blas::occluded`] for each object-space ray `rays[k]` of `mask`,
+    /// walked together where the layout is wide; returns the occluded rays.
+    #[inline(always)]
+    pub fn occluded_packet<const N: usize>(&self, rays: &[Ray; N], mask: u64) -> u64 {
+        let Nodes::Wide(tree) = &self.nodes else {
+            return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
+        };
+        let mut br = packet_rays(rays, mask);
+        let mut v: [Option<AnyTriangle<'_>>; N] = std::array::from_fn(|k| {
+            (mask >> k & 1 == 1).then(|| AnyTriangle {
+                tris: &self.tris,
+                blocks: &self.blocks,
+                tr: TriangleRay::new(&rays[k]),
+                hit: false,
+            })
+        });
+        for (m, fr) in packet::plan(&br, mask) {
+            match fr {
+                Some(fr) => tree.walk_packet::<true, N>(self.depth, &fr, &mut br, m, EachRay(&mut v)),
+                None => {
+                    for k in bits(m) {
+                        if let Some(v) = v[k].as_mut() {
+                            self.walk(&mut br[k], v);
+                        }
+                    }
+                }
+            }
+        }
+        bits(mask).filter(|&k| v[k].as_ref().is_some_and(|v| v.hit)).fold(0, |m, k| m | 1 << k)
+    }
+
     /// Calls `f(face, t, b1, b2)` for every triangle crossing in the
     /// interval, each face once, until `f` breaks.
     pub fn crossings(
@@ -240,6 +317,33 @@ impl Blas {
             }),
         );
         flow
+    }
+}
+
+/// The box rays of `mask` (the others meet nothing).
+#[inline(always)]
+fn packet_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [BoxRay; N] {
+    std::array::from_fn(|k| if mask >> k & 1 == 1 { BoxRay::new(&rays[k]) } else { BoxRay::NONE })
+}
+
+/// A packet leaf visited by each meeting ray's own single-ray visitor;
+/// the rays whose visitor stops (an occluded ray) are done.
+struct EachRay<'v, V, const N: usize>(&'v mut [Option<V>; N]);
+
+impl<V, const N: usize> Leaf for EachRay<'_, V, N>
+where
+    for<'x> &'x mut V: Visit,
+{
+    #[inline(always)]
+    fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
+        let mut done = 0u64;
+        for k in bits(meet) {
+            if let (Some(Some(v)), Some(b)) = (self.0.get_mut(k), br.get_mut(k)) {
+                let go_on = Visit::visit_leaf(&mut &mut *v, first, count, b);
+                done |= u64::from(!go_on) << k;
+            }
+        }
+        done
     }
 }
 

@@ -52,6 +52,12 @@
 //!   once per instance (also with pre-split builds, where a triangle may sit
 //!   in several leaves); the callback may break early (an opaque occluder).
 //!
+//! * [`Accel::closest_hit_packet`] and [`Accel::occluded_packet`] answer
+//!   the first two for up to [`PACKET_SIZE`] coherent rays at a time,
+//!   walked together (a frustum per octant prefilters each node, then each
+//!   ray's own box test; see `packet.rs`), with the same answers ray for
+//!   ray. A scene without mesh instances is traced ray by ray.
+//!
 //! Every query honours `[t_min, t_max]` inclusively, so rays spawned with
 //! [`Ray::spawn`] (origin offset off the surface, `t_min = 0`) find
 //! surfaces arbitrarily close; unlike obvhs's own box test, ours does not
@@ -85,17 +91,21 @@
 mod blas;
 mod bvh2;
 mod cwbvh;
+mod packet;
 mod traverse;
 mod wide;
 
 use blas::Blas;
 use obvhs::BvhBuildParams;
+use packet::{Leaf, MIN_PACKET, SMALL_PACKET, bits};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
 use traverse::{BoxRay, Tree, Visit, visitor, walk_any};
+
+pub use packet::PACKET as PACKET_SIZE;
 pub use wide::Kernel;
 use wide::WideBvh;
 
@@ -358,6 +368,79 @@ impl Visit for &mut AnyObject<'_> {
     }
 }
 
+/// A packet's closest-hit walk over the top level's objects: a mesh
+/// instance that several rays meet walks its hierarchy as a packet;
+/// anything else is tested ray by ray by [`ClosestObject`].
+struct ClosestObjects<'v, 'a, const N: usize> {
+    accel: &'a Accel,
+    v: &'v mut [Option<ClosestObject<'a>>; N],
+}
+
+impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
+    #[inline(always)]
+    fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
+        let accel = self.accel;
+        for slot in first..first + count {
+            let i = accel.tlas_objects[slot as usize];
+            if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
+                && meet.count_ones() >= MIN_PACKET
+            {
+                let v = &mut *self.v;
+                let local: [Ray; N] = Accel::local_rays(transform, meet, |k| v[k].as_ref().map(|c| c.ray));
+                let mut found = [None; N];
+                accel.blas[*mesh as usize].closest_packet(&local, meet, &mut found);
+                for k in bits(meet) {
+                    if let (Some((face, t, b1, b2)), Some(Some(c)), Some(b)) =
+                        (found[k], v.get_mut(k), br.get_mut(k))
+                    {
+                        c.ray.t_max = t;
+                        c.best = Best::Mesh { object: i, face, t, b1, b2, dir: local[k].dir };
+                        b.set_t_max(t);
+                    }
+                }
+                continue;
+            }
+            for k in bits(meet) {
+                if let (Some(Some(c)), Some(b)) = (self.v.get_mut(k), br.get_mut(k)) {
+                    Visit::visit(&mut &mut *c, slot, b);
+                }
+            }
+        }
+        0
+    }
+}
+
+/// A packet's occlusion walk over the top level's objects (a mesh instance
+/// met by several rays is walked as a packet); collects the occluded rays.
+struct AnyObjects<'a, const N: usize> {
+    accel: &'a Accel,
+    rays: &'a [Ray],
+    done: u64,
+}
+
+impl<const N: usize> Leaf for &mut AnyObjects<'_, N> {
+    #[inline(always)]
+    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
+        let (accel, rays) = (self.accel, self.rays);
+        let mut hit = 0u64;
+        for slot in first..first + count {
+            let meet = meet & !hit;
+            let i = accel.tlas_objects[slot as usize];
+            hit |= match &accel.objects[i as usize] {
+                Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
+                    let local: [Ray; N] = Accel::local_rays(transform, meet, |k| rays.get(k).copied());
+                    accel.blas[*mesh as usize].occluded_packet(&local, meet)
+                }
+                _ => bits(meet)
+                    .filter(|&k| rays.get(k).is_some_and(|r| accel.object_occludes(i, r)))
+                    .fold(0, |m, k| m | 1 << k),
+            };
+        }
+        self.done |= hit;
+        hit
+    }
+}
+
 /// The best hit so far during a closest-hit query (world hits are made
 /// only once, for the winner).
 #[derive(Clone, Copy)]
@@ -387,6 +470,9 @@ pub struct Accel {
     identity: Vec<bool>,
     /// Which compiled variant of the queries this CPU runs.
     simd: Simd,
+    /// Some top-level slot is a mesh instance: only then do packets pay
+    /// (analytic shapes are tested ray by ray either way).
+    packets: bool,
 }
 
 /// The CPU features the queries may use, detected once per build.
@@ -503,7 +589,8 @@ impl Accel {
         }
         let (tlas, _) = WideBvh::build(tlas_boxes, None, options.top_quality, kernel)
             .ok_or(BuildError::TooManyObjects { objects: top.len() })?;
-        let tlas_objects = tlas.order().iter().map(|&k| top[k as usize]).collect();
+        let tlas_objects: Vec<u32> = tlas.order().iter().map(|&k| top[k as usize]).collect();
+        let packets = tlas_objects.iter().any(|&i| matches!(objects[i as usize], Object::Mesh { .. }));
         let stats = BuildStats {
             build_seconds: start.elapsed().as_secs_f64(),
             bvh_bytes: tlas.bytes()
@@ -530,6 +617,7 @@ impl Accel {
             unbounded,
             identity: objects_identity,
             simd: Simd::detect(),
+            packets,
         })
     }
 
@@ -708,6 +796,190 @@ impl Accel {
         let mut v = AnyObject { accel: self, ray, hit: false };
         walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
         v.hit
+    }
+
+    /// Whether the packet queries walk packets here (the scene has mesh
+    /// instances); otherwise they trace ray by ray, and a caller may as
+    /// well not gather its rays.
+    #[must_use]
+    pub fn packets_pay(&self) -> bool {
+        self.packets
+    }
+
+    /// [`Accel::closest_hit`] for each of `rays`, into the same index of
+    /// `out` (as many as the shorter of the two holds), tracing up to
+    /// [`PACKET_SIZE`] rays at a time together: for coherent rays such as
+    /// the camera rays of neighbouring pixels. The hits are the ones
+    /// `closest_hit` gives ray by ray (the tests compare them); incoherent
+    /// rays cost more this way, never a different answer. A scene without
+    /// mesh instances is traced ray by ray: its analytic shapes are tested
+    /// per ray anyway, and the packet's bookkeeping measured slower there.
+    pub fn closest_hit_packet(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
+        if !self.packets {
+            for (r, o) in rays.iter().zip(out) {
+                *o = self.closest_hit(r);
+            }
+            return;
+        }
+        for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+            #[cfg(target_arch = "x86_64")]
+            if self.simd.wide {
+                // SAFETY: `wide` is set only when the running CPU reports
+                // every feature `closest_packet_wide` is compiled for.
+                unsafe { self.closest_packet_wide(rays, out) };
+                continue;
+            }
+            self.closest_packet_sized(rays, out);
+        }
+    }
+
+    /// [`Accel::closest_hit_packet`]'s packets compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn closest_packet_wide(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
+        self.closest_packet_sized(rays, out);
+    }
+
+    /// One packet, with per-ray arrays of the size it needs.
+    #[inline(always)]
+    fn closest_packet_sized(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
+        if rays.len() <= SMALL_PACKET {
+            self.closest_packet_impl::<SMALL_PACKET>(rays, out);
+        } else {
+            self.closest_packet_impl::<PACKET_SIZE>(rays, out);
+        }
+    }
+
+    /// One packet of at most `N` rays (see [`crate::packet`]).
+    #[inline(always)]
+    fn closest_packet_impl<const N: usize>(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
+        let mut v: [Option<ClosestObject<'_>>; N] = std::array::from_fn(|k| {
+            let ray = rays.get(k).filter(|r| usable(r))?;
+            let mut c = ClosestObject { accel: self, ray: *ray, best: Best::None };
+            for &i in &self.unbounded {
+                self.closest_object(i, &mut c.ray, &mut c.best);
+            }
+            Some(c)
+        });
+        let mask = v.iter().enumerate().fold(0u64, |m, (k, c)| m | u64::from(c.is_some()) << k);
+        let mut br: [BoxRay; N] =
+            std::array::from_fn(|k| v[k].as_ref().map_or(BoxRay::NONE, |c| BoxRay::new(&c.ray)));
+        for (m, fr) in packet::plan(&br, mask) {
+            match fr {
+                Some(fr) => self.tlas.walk_packet::<false, N>(
+                    self.tlas_depth,
+                    &fr,
+                    &mut br,
+                    m,
+                    ClosestObjects { accel: self, v: &mut v },
+                ),
+                None => {
+                    for k in bits(m) {
+                        if let Some(c) = v[k].as_mut() {
+                            walk_any(&self.tlas, self.tlas_depth, &mut br[k], c);
+                        }
+                    }
+                }
+            }
+        }
+        for (o, c) in out.iter_mut().zip(&v).take(rays.len()) {
+            *o = c.as_ref().and_then(|c| self.finish(c.best));
+        }
+    }
+
+    /// The object-space rays of `mask` under `transform` (`ray(k)` gives
+    /// ray `k`; the others are placeholders no walk reads).
+    #[inline(always)]
+    fn local_rays<const N: usize>(
+        transform: &Transform,
+        mask: u64,
+        ray: impl Fn(usize) -> Option<Ray>,
+    ) -> [Ray; N] {
+        std::array::from_fn(|k| match ray(k) {
+            Some(r) if mask >> k & 1 == 1 => transform.ray_to_object(&r),
+            _ => Ray::new(Vec3::ZERO, Vec3::X),
+        })
+    }
+
+    /// [`Accel::occluded`] for each of `rays`, into the same index of
+    /// `out` (as many as the shorter holds), up to [`PACKET_SIZE`] rays at
+    /// a time together: for coherent rays such as the shadow rays from one
+    /// point toward an area light's samples. The answers are `occluded`'s.
+    /// As for [`Accel::closest_hit_packet`], a scene without mesh instances
+    /// is traced ray by ray.
+    pub fn occluded_packet(&self, rays: &[Ray], out: &mut [bool]) {
+        if !self.packets {
+            for (r, o) in rays.iter().zip(out) {
+                *o = self.occluded(r);
+            }
+            return;
+        }
+        for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+            #[cfg(target_arch = "x86_64")]
+            if self.simd.wide {
+                // SAFETY: `wide` is set only when the running CPU reports
+                // every feature `occluded_packet_wide` is compiled for.
+                unsafe { self.occluded_packet_wide(rays, out) };
+                continue;
+            }
+            self.occluded_packet_sized(rays, out);
+        }
+    }
+
+    /// [`Accel::occluded_packet`]'s packets compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn occluded_packet_wide(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_packet_sized(rays, out);
+    }
+
+    /// One packet, with per-ray arrays of the size it needs.
+    #[inline(always)]
+    fn occluded_packet_sized(&self, rays: &[Ray], out: &mut [bool]) {
+        if rays.len() <= SMALL_PACKET {
+            self.occluded_packet_impl::<SMALL_PACKET>(rays, out);
+        } else {
+            self.occluded_packet_impl::<PACKET_SIZE>(rays, out);
+        }
+    }
+
+    /// One packet of at most `N` rays.
+    #[inline(always)]
+    fn occluded_packet_impl<const N: usize>(&self, rays: &[Ray], out: &mut [bool]) {
+        let mut live = 0u64;
+        let mut done = 0u64;
+        for (k, ray) in rays.iter().enumerate().take(N) {
+            if usable(ray) {
+                if self.unbounded.iter().any(|&i| self.object_occludes(i, ray)) {
+                    done |= 1 << k;
+                } else {
+                    live |= 1 << k;
+                }
+            }
+        }
+        let mut br: [BoxRay; N] = std::array::from_fn(|k| match rays.get(k) {
+            Some(r) if live >> k & 1 == 1 => BoxRay::new(r),
+            _ => BoxRay::NONE,
+        });
+        for (m, fr) in packet::plan(&br, live) {
+            match fr {
+                Some(fr) => {
+                    let mut leaf = AnyObjects::<N> { accel: self, rays, done: 0 };
+                    self.tlas.walk_packet::<true, N>(self.tlas_depth, &fr, &mut br, m, &mut leaf);
+                    done |= leaf.done;
+                }
+                None => {
+                    for k in bits(m) {
+                        let mut v = AnyObject { accel: self, ray: &rays[k], hit: false };
+                        walk_any(&self.tlas, self.tlas_depth, &mut br[k], &mut v);
+                        done |= u64::from(v.hit) << k;
+                    }
+                }
+            }
+        }
+        for (k, o) in out.iter_mut().enumerate().take(rays.len()) {
+            *o = done >> k & 1 == 1;
+        }
     }
 
     /// Every crossing of object `i` in the ray's interval.

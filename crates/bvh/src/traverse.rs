@@ -31,6 +31,15 @@ fn inv(d: f32) -> f32 {
 }
 
 impl BoxRay {
+    /// A ray that meets nothing (an unused packet slot).
+    pub const NONE: Self = Self {
+        origin: Vec3A::ZERO,
+        inv: Vec3A::INFINITY,
+        oct_inv4: 0,
+        t_min: f32::INFINITY,
+        reach: f32::NEG_INFINITY,
+    };
+
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.dir;

@@ -40,9 +40,9 @@ use obvhs::bvh2::Bvh2;
 pub(crate) const WIDTH: usize = 8;
 
 /// Marks a leaf reference in [`Node::child`].
-const LEAF: u32 = 1 << 31;
+pub(crate) const LEAF: u32 = 1 << 31;
 /// Bits of a leaf's first primitive slot.
-const FIRST_BITS: u32 = 27;
+pub(crate) const FIRST_BITS: u32 = 27;
 /// Most primitives in one leaf: one SIMD block of four triangles.
 pub(crate) const MAX_LEAF: u32 = 4;
 /// Marks a padding slot in [`WideBvh::slots`].
@@ -53,14 +53,14 @@ pub(crate) const PAD: u32 = u32::MAX;
 #[repr(C, align(64))]
 pub(crate) struct Node {
     /// Rows `[min x, min y, min z, max x, max y, max z]`, one lane per child.
-    planes: [[f32; WIDTH]; 6],
+    pub(crate) planes: [[f32; WIDTH]; 6],
     /// Per lane: an inner node's index, or a leaf `LEAF | (count - 1) << 27
     /// | first slot`. Unused lanes are never hit (inverted box).
-    child: [u32; WIDTH],
+    pub(crate) child: [u32; WIDTH],
 }
 
 impl Node {
-    const EMPTY: Self = Self {
+    pub(crate) const EMPTY: Self = Self {
         planes: [
             [f32::INFINITY; WIDTH],
             [f32::INFINITY; WIDTH],
@@ -229,6 +229,11 @@ impl WideBvh {
         ok
     }
 
+    /// The nodes, root first.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
     /// Bytes held by the nodes.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>() + self.slots.len() * std::mem::size_of::<u32>()
@@ -321,13 +326,13 @@ impl WideRay {
 
 /// `_mm_max_ps(a, b)` on one lane: `b` when either is `NaN`.
 #[inline(always)]
-fn max_ps(a: f32, b: f32) -> f32 {
+pub(crate) fn max_ps(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
 /// `_mm_min_ps(a, b)` on one lane: `b` when either is `NaN`.
 #[inline(always)]
-fn min_ps(a: f32, b: f32) -> f32 {
+pub(crate) fn min_ps(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 

@@ -66,6 +66,7 @@ pub fn to_json(
             "shadow": stats.shadow_rays,
             "secondary": stats.secondary_rays(),
             "aov": stats.aov_rays,
+            "packet": stats.packet_rays,
         },
         "mrays_per_second": if phases.render > 0.0 { stats.rays as f64 / 1e6 / phases.render } else { 0.0 },
         "nonfinite_samples": stats.nonfinite_samples,

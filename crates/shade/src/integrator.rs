@@ -35,6 +35,8 @@ pub(crate) struct Tracer<'a> {
     primary: Vec3,
     /// Whether any material lets light through (else shadows are yes/no).
     see_through: bool,
+    /// Trace an area light's shadow rays from one point as a packet.
+    pub(crate) packets: bool,
     /// The cone of every camera ray (one pixel wide): from a point at the
     /// eye for a perspective camera; a parallel beam one pixel wide at the
     /// look-at distance for an orthographic one.
@@ -43,6 +45,8 @@ pub(crate) struct Tracer<'a> {
     pub rays: u64,
     /// Of `rays`, the shadow rays.
     pub shadow_rays: u64,
+    /// Of `rays`, those traced in packets.
+    pub packet_rays: u64,
 }
 
 /// The footprint cone of the camera's rays: one pixel wide (the image
@@ -61,6 +65,19 @@ fn camera_cone(settings: &RenderSettings) -> RayCone {
         crate::Projection::Orthographic => {
             RayCone { width: spread * (cam.look_at() - cam.position()).length(), spread: 0.0 }
         }
+    }
+}
+
+/// Most shadow rays from one shading point traced as one packet (an area
+/// light's samples go in groups of this many).
+const SHADOW_PACKET: usize = 16;
+
+/// The shadow ray from the surface point of `hit` toward `target`.
+#[inline]
+fn shadow_ray(hit: &Hit, target: Target) -> Ray {
+    match target {
+        Target::Point(q) => Ray::spawn_to(hit.point, hit.geo_normal, q),
+        Target::Away(dir) => Ray::spawn(hit.point, hit.geo_normal, dir),
     }
 }
 
@@ -95,9 +112,11 @@ impl<'a> Tracer<'a> {
             depth_axis: scene.fog.filter(|f| settings.fog && f.by_depth()).map(|_| settings.camera.forward()),
             primary: Vec3::ZERO,
             see_through,
+            packets: false,
             camera_cone: camera_cone(settings),
             rays: 0,
             shadow_rays: 0,
+            packet_rays: 0,
         }
     }
 
@@ -107,6 +126,14 @@ impl<'a> Tracer<'a> {
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
         self.primary = ray.dir;
         self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone)
+    }
+
+    /// [`Tracer::trace_camera`] with the ray's closest hit already found
+    /// (by a packet of camera rays): the same radiance.
+    #[inline]
+    pub(crate) fn trace_camera_hit(&mut self, ray: &Ray, hit: Option<SceneHit>) -> Vec3 {
+        self.primary = ray.dir;
+        self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone)
     }
 
     /// Should a ray of path weight `w` be traced?
@@ -163,9 +190,24 @@ impl<'a> Tracer<'a> {
         skip_exit: u32,
         cone: RayCone,
     ) -> Vec3 {
+        let hit = self.scene.accel.closest_hit(ray);
+        self.trace_hit(ray, hit, depth, weight, path, skip_exit, cone)
+    }
+
+    /// [`Tracer::trace`] past the closest-hit query: `hit` is the ray's.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_hit(
+        &mut self,
+        ray: &Ray,
+        hit: Option<SceneHit>,
+        depth: u32,
+        weight: Vec3,
+        path: f32,
+        skip_exit: u32,
+        cone: RayCone,
+    ) -> Vec3 {
         self.rays += 1;
         let scene = self.scene;
-        let hit = scene.accel.closest_hit(ray);
         // An area light nearer than the surface (or than nothing) is seen.
         if let Some((t, l)) = self.light_hit(ray, hit.as_ref().map_or(ray.t_max, |h| h.hit.t)) {
             let end = path + self.fog_length(ray, t * ray.dir.length());
@@ -302,37 +344,86 @@ impl<'a> Tracer<'a> {
             }
             let p = hit.point;
             let shared = light.probes(p).and_then(|probes| {
-                let first = self.shadow(hit, Target::Point(probes[0]));
-                probes[1..].iter().all(|q| self.shadow(hit, Target::Point(*q)) == first).then_some(first)
+                let mut seen = [Vec3::ZERO; 4];
+                self.shadows(hit, &probes.map(|q| Some(Target::Point(q))), &mut seen);
+                seen[1..].iter().all(|s| *s == seen[0]).then_some(seen[0])
             });
             if shared == Some(Vec3::ZERO) {
                 continue;
             }
             let seed = sample_seed(p, index, light.sample_count());
-            for k in 0..light.sample_count() {
-                let Some(ls) = light.sample(p, k, seed) else { continue };
-                let n_dot_l = n.dot(ls.dir);
-                if !(n_dot_l > 0.0) {
-                    continue;
+            let count = light.sample_count();
+            let mut k = 0;
+            while k < count {
+                // Up to a packet's worth of samples; their shadow rays are
+                // traced together.
+                let end = count.min(k + SHADOW_PACKET as u32);
+                let mut batch = [None; SHADOW_PACKET];
+                let mut targets = [None; SHADOW_PACKET];
+                for (slot, j) in (k..end).enumerate().take(SHADOW_PACKET) {
+                    batch[slot] = light.sample(p, j, seed).filter(|ls| n.dot(ls.dir) > 0.0);
+                    targets[slot] = batch[slot].filter(|_| shared.is_none()).map(|ls| ls.target);
                 }
-                let shadow = match shared {
-                    Some(s) => s,
-                    None => self.shadow(hit, ls.target),
-                };
-                if !(shadow.max_element() > 0.0) {
-                    continue;
-                }
-                let mut s = mat.diffuse * n_dot_l * albedo;
-                if mat.specular > 0.0 {
-                    let r_dot_v = (2.0 * n_dot_l * n - ls.dir).dot(v);
-                    if r_dot_v > 0.0 {
-                        s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+                let len = (end - k) as usize;
+                let mut seen = [Vec3::ZERO; SHADOW_PACKET];
+                self.shadows(hit, &targets[..len], &mut seen[..len]);
+                for (slot, ls) in batch[..len].iter().enumerate() {
+                    let Some(ls) = ls else { continue };
+                    let n_dot_l = n.dot(ls.dir);
+                    let shadow = shared.unwrap_or(seen[slot]);
+                    if !(shadow.max_element() > 0.0) {
+                        continue;
                     }
+                    let mut s = mat.diffuse * n_dot_l * albedo;
+                    if mat.specular > 0.0 {
+                        let r_dot_v = (2.0 * n_dot_l * n - ls.dir).dot(v);
+                        if r_dot_v > 0.0 {
+                            s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+                        }
+                    }
+                    c += shadow * ls.e * s;
                 }
-                c += shadow * ls.e * s;
+                k = end;
             }
         }
         c
+    }
+
+    /// [`Tracer::shadow`] toward each target (`None`: left as it is in
+    /// `out`). Four or more are traced together as one packet of
+    /// occlusion rays: an unoccluded ray's transmittance is exactly 1, and
+    /// only an occluded one in a see-through scene is traced again for its
+    /// crossings. The values are `shadow`'s either way.
+    fn shadows(&mut self, hit: &Hit, targets: &[Option<Target>], out: &mut [Vec3]) {
+        let n = targets.len().min(out.len());
+        if !self.packets || !(4..=SHADOW_PACKET).contains(&n) {
+            for (t, o) in targets.iter().zip(out.iter_mut()) {
+                if let Some(t) = t {
+                    *o = self.shadow(hit, *t);
+                }
+            }
+            return;
+        }
+        let mut rays = [Ray { dir: Vec3::ZERO, ..Ray::new(hit.point, Vec3::X) }; SHADOW_PACKET];
+        for (r, t) in rays.iter_mut().zip(targets) {
+            if let Some(t) = t {
+                *r = shadow_ray(hit, *t);
+                self.rays += 1;
+                self.shadow_rays += 1;
+                self.packet_rays += 1;
+            }
+        }
+        let mut occluded = [false; SHADOW_PACKET];
+        self.scene.accel.occluded_packet(&rays[..n], &mut occluded[..n]);
+        for ((t, o), &occ) in targets.iter().zip(out.iter_mut()).zip(&occluded) {
+            if let Some(t) = t {
+                *o = match (occ, self.see_through) {
+                    (false, _) => Vec3::ONE,
+                    (true, false) => Vec3::ZERO,
+                    (true, true) => self.shadow(hit, *t),
+                };
+            }
+        }
     }
 
     /// The fraction of a light at `target` that reaches the surface point
@@ -351,10 +442,7 @@ impl<'a> Tracer<'a> {
     /// come unordered); a segment that starts inside a solid counts from its
     /// start, one that ends inside (a light in the glass) up to its end.
     fn shadow(&mut self, hit: &Hit, target: Target) -> Vec3 {
-        let ray = match target {
-            Target::Point(q) => Ray::spawn_to(hit.point, hit.geo_normal, q),
-            Target::Away(dir) => Ray::spawn(hit.point, hit.geo_normal, dir),
-        };
+        let ray = shadow_ray(hit, target);
         self.rays += 1;
         self.shadow_rays += 1;
         let scene = self.scene;

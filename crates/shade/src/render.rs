@@ -3,6 +3,7 @@
 use crate::aov::{Aov, AovRow, render_passes};
 use crate::integrator::Tracer;
 use crate::{Antialias, AovImages, BoundsError, Camera, PixelBounds, Scene};
+use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -97,6 +98,9 @@ pub struct RenderStats {
     pub camera_rays: u64,
     /// Of `rays`, the shadow rays.
     pub shadow_rays: u64,
+    /// Of `rays`, those traced together in packets (camera rays, and an
+    /// area light's shadow rays where enabled); see [`render`].
+    pub packet_rays: u64,
     /// Of `rays`, the rays the AOV passes (and the coverage test of
     /// [`crate::render_with_alpha`]) traced for themselves.
     pub aov_rays: u64,
@@ -237,8 +241,10 @@ pub(crate) fn render_pixels<'a>(
         beauty && aovs.is_empty() && !alpha && samples == (0..spp) && spp > crate::ADAPTIVE_BASE_SAMPLES
     });
     let see_through = beauty && Tracer::scene_is_see_through(scene);
+    let (camera_packets, shadow_packets) = packet_choice(scene);
+    let packets = camera_packets && beauty && aovs.is_empty() && !alpha && adaptive.is_none();
     let rays = AtomicU64::new(0);
-    let [camera_rays, shadow_rays, aov_rays_all] = [(); 3].map(|()| AtomicU64::new(0));
+    let [camera_rays, shadow_rays, aov_rays_all, packet_rays] = [(); 4].map(|()| AtomicU64::new(0));
     let nonfinite = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let mut pixels = vec![Vec3::ZERO; if beauty { rw as usize * rh as usize } else { 0 }];
@@ -253,55 +259,75 @@ pub(crate) fn render_pixels<'a>(
             return;
         }
         let mut tracer = Tracer::new(scene, settings, see_through);
+        tracer.packets = shadow_packets;
         let mut bad = 0u64;
         // Camera rays traced for the beauty (fewer than pixels × spp under adaptive sampling).
         let mut traced = 0u64;
         let row_start = j as u64 * u64::from(w);
-        for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
-            let index = row_start + i as u64;
-            let mut sum = Vec3::ZERO;
-            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-            let pixel_pattern = pattern.pixel(index);
-            for s in samples.clone() {
-                if let Some(threshold) = adaptive
-                    && s == crate::ADAPTIVE_BASE_SAMPLES
-                    && !((hi - lo).max_element() > threshold)
-                {
-                    // Flat pixel: the base samples' mean stands for all `spp`.
-                    sum *= spp as f32 / s as f32;
-                    break;
+        if packets && sink.is_none() {
+            // The same camera rays in the same order, traced PACKET_SIZE at
+            // a time; each sample is shaded and summed as below (bit for bit
+            // the same pixels).
+            let mut batch = CameraBatch::default();
+            for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+                let pixel_pattern = pattern.pixel(row_start + i as u64);
+                for s in samples.clone() {
+                    let (dx, dy) = filter.offset(pixel_pattern.offset(s));
+                    batch.push(k, cam.ray(i as f32 + dx, j as f32 + dy));
+                    if batch.is_full() {
+                        batch.flush(scene, &mut tracer, row, &mut bad, &mut traced);
+                    }
                 }
-                let (dx, dy) = filter.offset(pixel_pattern.offset(s));
-                let ray = cam.ray(i as f32 + dx, j as f32 + dy);
-                let mut l = Vec3::ZERO;
-                if beauty {
-                    l = tracer.trace_camera(&ray);
-                    traced += 1;
-                    if !l.is_finite() {
-                        bad += 1;
-                        l = Vec3::ZERO;
+            }
+            batch.flush(scene, &mut tracer, row, &mut bad, &mut traced);
+        } else {
+            for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+                let index = row_start + i as u64;
+                let mut sum = Vec3::ZERO;
+                let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+                let pixel_pattern = pattern.pixel(index);
+                for s in samples.clone() {
+                    if let Some(threshold) = adaptive
+                        && s == crate::ADAPTIVE_BASE_SAMPLES
+                        && !((hi - lo).max_element() > threshold)
+                    {
+                        // Flat pixel: the base samples' mean stands for all `spp`.
+                        sum *= spp as f32 / s as f32;
+                        break;
                     }
-                    sum += l;
-                    if adaptive.is_some() && s < crate::ADAPTIVE_BASE_SAMPLES {
-                        let c = l.clamp(Vec3::ZERO, Vec3::ONE);
-                        (lo, hi) = (lo.min(c), hi.max(c));
+                    let (dx, dy) = filter.offset(pixel_pattern.offset(s));
+                    let ray = cam.ray(i as f32 + dx, j as f32 + dy);
+                    let mut l = Vec3::ZERO;
+                    if beauty {
+                        l = tracer.trace_camera(&ray);
+                        traced += 1;
+                        if !l.is_finite() {
+                            bad += 1;
+                            l = Vec3::ZERO;
+                        }
+                        sum += l;
+                        if adaptive.is_some() && s < crate::ADAPTIVE_BASE_SAMPLES {
+                            let c = l.clamp(Vec3::ZERO, Vec3::ONE);
+                            (lo, hi) = (lo.min(c), hi.max(c));
+                        }
                     }
+                    if let Some(sink) = sink.as_deref_mut() {
+                        sink.sample(scene, &ray, l);
+                    }
+                }
+                if let Some(px) = row.get_mut(k) {
+                    *px = sum;
                 }
                 if let Some(sink) = sink.as_deref_mut() {
-                    sink.sample(scene, &ray, l);
+                    sink.end_pixel(scene, cam, i as u32, j as u32);
                 }
-            }
-            if let Some(px) = row.get_mut(k) {
-                *px = sum;
-            }
-            if let Some(sink) = sink.as_deref_mut() {
-                sink.end_pixel(scene, cam, i as u32, j as u32);
             }
         }
         let aov_rays = sink.map_or(0, |s| s.rays);
         rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);
         camera_rays.fetch_add(traced, Ordering::Relaxed);
         shadow_rays.fetch_add(tracer.shadow_rays, Ordering::Relaxed);
+        packet_rays.fetch_add(tracer.packet_rays, Ordering::Relaxed);
         aov_rays_all.fetch_add(aov_rays, Ordering::Relaxed);
         if bad > 0 {
             nonfinite.fetch_add(bad, Ordering::Relaxed);
@@ -332,11 +358,83 @@ pub(crate) fn render_pixels<'a>(
         rays: rays.into_inner(),
         camera_rays: camera_rays.into_inner(),
         shadow_rays: shadow_rays.into_inner(),
+        packet_rays: packet_rays.into_inner(),
         aov_rays: aov_rays_all.into_inner(),
         cancelled: hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)),
         nonfinite_samples: nonfinite.into_inner(),
     };
     (Image { width: rw, height: rh, pixels }, aov_rows, stats)
+}
+
+/// Which rays a render traces in packets (prism_bvh's `closest_hit_packet`
+/// and `occluded_packet`): `(camera rays, an area light's shadow rays from
+/// one shading point)`. Only where the scene has mesh instances (else the
+/// queries go ray by ray anyway). By default the camera rays (a pixel row's
+/// samples, a packet at a time), measured a little faster; the shadow rays
+/// measured slower (docs/benchmarks.md, issue 11) and are traced together
+/// only with `PRISM_PACKETS=all` (or `shadow`); `PRISM_PACKETS=0` traces
+/// everything ray by ray. The image is the same bit for bit in every case;
+/// only the speed differs. Unknown values count as the default.
+fn packet_choice(scene: &Scene) -> (bool, bool) {
+    if !scene.accel.packets_pay() {
+        return (false, false);
+    }
+    match std::env::var("PRISM_PACKETS").as_deref() {
+        Ok("0") => (false, false),
+        Ok("all") => (true, true),
+        Ok("shadow") => (false, true),
+        _ => (true, false),
+    }
+}
+
+/// Camera rays waiting to be traced together, with the row pixel each
+/// belongs to.
+#[derive(Default)]
+struct CameraBatch {
+    rays: Vec<Ray>,
+    pixel: Vec<usize>,
+    hits: Vec<Option<prism_bvh::SceneHit>>,
+}
+
+impl CameraBatch {
+    fn push(&mut self, pixel: usize, ray: Ray) {
+        self.rays.push(ray);
+        self.pixel.push(pixel);
+    }
+
+    fn is_full(&self) -> bool {
+        self.rays.len() >= prism_bvh::PACKET_SIZE
+    }
+
+    /// Traces the waiting rays as one packet and adds each one's radiance
+    /// to its pixel's sum in `row`, in the order they came (a non-finite
+    /// radiance counts in `bad` and adds nothing).
+    fn flush(
+        &mut self,
+        scene: &Scene,
+        tracer: &mut Tracer<'_>,
+        row: &mut [Vec3],
+        bad: &mut u64,
+        traced: &mut u64,
+    ) {
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        scene.accel.closest_hit_packet(&self.rays, &mut self.hits);
+        tracer.packet_rays += self.rays.len() as u64;
+        for ((ray, &k), hit) in self.rays.iter().zip(&self.pixel).zip(&self.hits) {
+            let mut l = tracer.trace_camera_hit(ray, *hit);
+            *traced += 1;
+            if !l.is_finite() {
+                *bad += 1;
+                l = Vec3::ZERO;
+            }
+            if let Some(px) = row.get_mut(k) {
+                *px += l;
+            }
+        }
+        self.rays.clear();
+        self.pixel.clear();
+    }
 }
 
 /// Runs `f` on a pool of `threads` workers (`None`: the global pool, every

@@ -52,6 +52,28 @@ pub fn primary_rays(b: Aabb, w: u32, h: u32) -> Vec<Ray> {
     rays
 }
 
+/// `rays` (one per pixel of a `w`×`h` image, row by row) reordered into
+/// `tile`×`tile` pixel blocks, blocks row by row and pixels row by row in
+/// each: consecutive rays then belong to neighbouring pixels, as a
+/// renderer's packets do.
+#[must_use]
+pub fn tile_order(rays: &[Ray], w: u32, h: u32, tile: u32) -> Vec<Ray> {
+    let tile = tile.max(1);
+    let mut out = Vec::with_capacity(rays.len());
+    for ty in (0..h).step_by(tile as usize) {
+        for tx in (0..w).step_by(tile as usize) {
+            for j in ty..(ty + tile).min(h) {
+                for i in tx..(tx + tile).min(w) {
+                    if let Some(r) = rays.get((j * w + i) as usize) {
+                        out.push(*r);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
 /// For each of `primary` that `closest` hits (it returns the hit point and
 /// geometric normal), the point offset off the surface toward the ray's
 /// side, and that side's normal: the origins of the secondary sets.
@@ -120,6 +142,22 @@ pub fn grid_offsets(extent: Vec3, n: u32) -> Vec<Vec3> {
 mod tests {
     use super::*;
     use prism_geometry::{Intersect, Sphere};
+
+    #[test]
+    fn tile_order_is_a_permutation_into_blocks() {
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::ONE);
+        let rays = primary_rays(b, 20, 11);
+        let tiled = tile_order(&rays, 20, 11, 8);
+        assert_eq!(tiled.len(), rays.len());
+        // The first block's second row starts with pixel (0, 1).
+        assert_eq!(tiled[8].dir, rays[20].dir);
+        // Every ray appears once.
+        let mut a: Vec<_> = rays.iter().map(|r| r.dir.to_array().map(f32::to_bits)).collect();
+        let mut t: Vec<_> = tiled.iter().map(|r| r.dir.to_array().map(f32::to_bits)).collect();
+        a.sort_unstable();
+        t.sort_unstable();
+        assert_eq!(a, t);
+    }
 
     #[test]
     fn the_camera_frames_the_box_and_secondary_rays_leave_the_surface() {

@@ -1,0 +1,528 @@
+//! Packets of coherent rays walked through a wide BVH together: camera
+//! rays of neighbouring pixels, shadow rays from one point toward an area
+//! light's samples.
+//!
+//! # How a packet walks
+//!
+//! The rays of one octant (every direction component of one sign, none
+//! zero) are bounded by a [`Frustum`]: per axis, the interval of their
+//! origins and of their direction reciprocals. A node's eight children are
+//! tested once for the whole packet by interval arithmetic: a child's
+//! entry distance is bounded below by the smallest of the four corner
+//! products `(plane − origin) · (1/d)` over those intervals, its exit
+//! distance above by the largest. Floating-point subtraction and
+//! multiplication are monotone in each operand, so the bounds hold for the
+//! rounded per-ray distances too: every child a ray of the packet would
+//! enter on its own, the packet enters. Inner nodes are taken front to
+//! back by the packet's entry bound and skipped when it exceeds the
+//! farthest reach of the rays still looking.
+//!
+//! The frustum only prefilters. Each child it may enter is then tested
+//! against the rays that reached its parent, each with its own interval
+//! and by the same operations as the single-ray node test, eight rays at a
+//! time (SoA); a child no ray enters is culled, and a stack entry carries
+//! the rays that enter it. At a leaf those rays test the leaf's primitives,
+//! each with its own single-ray visitor. A ray therefore tests every
+//! primitive its single-ray walk would find nearest, with the same
+//! primitive test: packet and single queries return the same hits (the
+//! tests compare them), whatever the packet's spread. A spread-out packet
+//! costs more box tests, never a different answer.
+//!
+//! Rays that fit no frustum (a zero direction component, whose reciprocal
+//! is infinite) and octants holding fewer than [`MIN_PACKET`] rays walk
+//! alone.
+
+use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
+use crate::wide::{FIRST_BITS, LEAF, Node, WIDTH, WideBvh, max_ps, min_ps};
+
+/// Most rays in one packet (bits of its masks).
+pub const PACKET: usize = 64;
+
+/// The capacity of a small packet (an area light's shadow rays): its
+/// per-ray arrays are a quarter of a full packet's to set up.
+pub(crate) const SMALL_PACKET: usize = 16;
+
+/// What a packet walk calls at each leaf it reaches, with the active rays
+/// that meet the leaf's box (`meet`): tests them against the leaf's
+/// primitives `first..first + count`, may shrink their reach in `br`, and
+/// returns those that are done (an occlusion query's occluded rays).
+/// Named types rather than closures, so that the call is compiled into a
+/// `#[target_feature]` caller (see [`crate::traverse::Visit`]).
+pub(crate) trait Leaf {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64;
+}
+
+/// Fewer rays of one octant than this walk one by one.
+pub(crate) const MIN_PACKET: u32 = 4;
+
+/// The rays of `mask`, lowest first.
+#[inline(always)]
+pub(crate) fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            k
+        })
+    })
+}
+
+/// The rays of `mask` by octant (entries 0–7, bit `a` of the index set when
+/// axis `a` runs negative), and in entry 8 those with a zero direction
+/// component (an infinite reciprocal), which fit no frustum.
+#[inline]
+pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
+    let mut groups = [0u64; 9];
+    for k in bits(mask) {
+        let Some(b) = br.get(k) else { continue };
+        let inv = b.inv.to_array();
+        let o = if inv.iter().all(|v| v.is_finite()) {
+            usize::from(inv[0] < 0.0) | usize::from(inv[1] < 0.0) << 1 | usize::from(inv[2] < 0.0) << 2
+        } else {
+            8
+        };
+        groups[o] |= 1 << k;
+    }
+    groups
+}
+
+/// How the rays of `mask` walk: per octant, the rays and, when there are
+/// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one).
+pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
+    let groups = octants(br, mask);
+    std::array::from_fn(|o| {
+        let m = groups[o];
+        let packet = o < 8 && m.count_ones() >= MIN_PACKET;
+        (m, if packet { Frustum::new(br, m) } else { None })
+    })
+}
+
+/// Bounds of a packet's rays, all of one octant with finite reciprocals.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frustum {
+    o_lo: [f32; 3],
+    o_hi: [f32; 3],
+    inv_lo: [f32; 3],
+    inv_hi: [f32; 3],
+    /// Rows of the near and far planes per axis (as [`crate::wide`]'s).
+    near_row: [usize; 3],
+    far_row: [usize; 3],
+    /// The smallest `t_min`.
+    t_min: f32,
+    /// Every ray starts at the same point (a pinhole camera's rays, shadow
+    /// rays from one shading point): two corner products instead of four.
+    same_origin: bool,
+}
+
+impl Frustum {
+    /// Over the rays of `mask`, which [`octants`] put in one octant.
+    pub fn new(br: &[BoxRay], mask: u64) -> Option<Self> {
+        let mut f = Self {
+            o_lo: [f32::INFINITY; 3],
+            o_hi: [f32::NEG_INFINITY; 3],
+            inv_lo: [f32::INFINITY; 3],
+            inv_hi: [f32::NEG_INFINITY; 3],
+            near_row: [0, 1, 2],
+            far_row: [3, 4, 5],
+            t_min: f32::INFINITY,
+            same_origin: false,
+        };
+        let first = br.get(mask.trailing_zeros() as usize)?.inv.to_array();
+        for (a, inv) in first.iter().enumerate() {
+            let neg = usize::from(*inv < 0.0) * 3;
+            f.near_row[a] = a + neg;
+            f.far_row[a] = a + 3 - neg;
+        }
+        for k in bits(mask) {
+            let b = br.get(k)?;
+            let (o, inv) = (b.origin.to_array(), b.inv.to_array());
+            for a in 0..3 {
+                if !inv[a].is_finite() || (inv[a] < 0.0) != (first[a] < 0.0) {
+                    return None;
+                }
+                f.o_lo[a] = f.o_lo[a].min(o[a]);
+                f.o_hi[a] = f.o_hi[a].max(o[a]);
+                f.inv_lo[a] = f.inv_lo[a].min(inv[a]);
+                f.inv_hi[a] = f.inv_hi[a].max(inv[a]);
+            }
+            f.t_min = f.t_min.min(b.t_min);
+        }
+        f.same_origin = f.o_lo == f.o_hi;
+        Some(f)
+    }
+
+    /// Writes the children the packet may enter before `reach` (entry
+    /// bound, reference, lane) to the front of `out`; returns how many.
+    #[inline(always)]
+    fn hits(&self, node: &Node, reach: f32, out: &mut Hits) -> usize {
+        if self.same_origin {
+            self.hits_in::<true>(node, reach, out)
+        } else {
+            self.hits_in::<false>(node, reach, out)
+        }
+    }
+
+    #[inline(always)]
+    fn hits_in<const SAME_ORIGIN: bool>(&self, node: &Node, reach: f32, out: &mut Hits) -> usize {
+        let p = &node.planes;
+        let mut near = [0.0f32; WIDTH];
+        let mut mask = 0u32;
+        for (k, near_k) in near.iter_mut().enumerate() {
+            let (mut n, mut f) = (self.t_min, reach);
+            for a in 0..3 {
+                let (lo, hi) = (self.inv_lo[a], self.inv_hi[a]);
+                let d_hi = p[self.near_row[a]][k] - self.o_lo[a];
+                let e_hi = p[self.far_row[a]][k] - self.o_lo[a];
+                let (low, high) = if SAME_ORIGIN {
+                    (min_ps(d_hi * lo, d_hi * hi), max_ps(e_hi * lo, e_hi * hi))
+                } else {
+                    let d_lo = p[self.near_row[a]][k] - self.o_hi[a];
+                    let e_lo = p[self.far_row[a]][k] - self.o_hi[a];
+                    (
+                        min_ps(min_ps(d_lo * lo, d_lo * hi), min_ps(d_hi * lo, d_hi * hi)),
+                        max_ps(max_ps(e_lo * lo, e_lo * hi), max_ps(e_hi * lo, e_hi * hi)),
+                    )
+                };
+                n = max_ps(low, n);
+                f = min_ps(high, f);
+            }
+            *near_k = n;
+            mask |= u32::from(n <= f) << k;
+        }
+        let mut count = 0;
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize & (WIDTH - 1);
+            mask &= mask - 1;
+            let c = count & (WIDTH - 1);
+            out.near[c] = near[k];
+            out.child[c] = node.child[k];
+            out.lane[c] = k as u8;
+            count += 1;
+        }
+        count
+    }
+}
+
+/// A node test's result for a packet.
+struct Hits {
+    near: [f32; WIDTH],
+    child: [u32; WIDTH],
+    lane: [u8; WIDTH],
+    /// The rays that meet each child on their own.
+    rays: [u64; WIDTH],
+}
+
+/// The packet's rays in SoA form, so that a leaf's box is tested against
+/// eight of them at a time.
+struct Soa<const N: usize> {
+    origin: [[f32; N]; 3],
+    inv: [[f32; N]; 3],
+    t_min: [f32; N],
+    /// `-inf` for a ray not (or no longer) in the walk.
+    reach: [f32; N],
+    /// Lanes to test: the highest active ray's, rounded up to eight.
+    len: usize,
+}
+
+impl<const N: usize> Soa<N> {
+    #[inline(always)]
+    fn new(br: &[BoxRay], active: u64) -> Self {
+        let mut s = Self {
+            origin: [[0.0; N]; 3],
+            inv: [[1.0; N]; 3],
+            t_min: [f32::INFINITY; N],
+            reach: [f32::NEG_INFINITY; N],
+            len: ((64 - active.leading_zeros() as usize).div_ceil(8) * 8).min(N),
+        };
+        for k in bits(active) {
+            let Some(b) = br.get(k) else { continue };
+            let (o, inv) = (b.origin.to_array(), b.inv.to_array());
+            for a in 0..3 {
+                s.origin[a][k] = o[a];
+                s.inv[a][k] = inv[a];
+            }
+            s.t_min[k] = b.t_min;
+            s.reach[k] = b.reach();
+        }
+        s
+    }
+
+    /// The rays that meet lane `lane` of `node` within their own `[t_min,
+    /// reach]`, by the single-ray node test, eight rays at a time.
+    #[inline(always)]
+    fn meet(&self, fr: &Frustum, node: &Node, lane: usize) -> u64 {
+        let p = &node.planes;
+        let l = lane & (WIDTH - 1);
+        let (nr, fr) = (fr.near_row, fr.far_row);
+        let near = [p[nr[0]][l], p[nr[1]][l], p[nr[2]][l]];
+        let far = [p[fr[0]][l], p[fr[1]][l], p[fr[2]][l]];
+        // The single-ray node test's operations, in its order.
+        let mut mask = 0u64;
+        for c in 0..(self.len / 8).min(N / 8) {
+            let lanes = c * 8..c * 8 + 8;
+            let (Some(ox), Some(oy), Some(oz)) = (
+                self.origin[0].get(lanes.clone()),
+                self.origin[1].get(lanes.clone()),
+                self.origin[2].get(lanes.clone()),
+            ) else {
+                break;
+            };
+            let (Some(ix), Some(iy), Some(iz)) = (
+                self.inv[0].get(lanes.clone()),
+                self.inv[1].get(lanes.clone()),
+                self.inv[2].get(lanes.clone()),
+            ) else {
+                break;
+            };
+            let (Some(t_min), Some(reach)) = (self.t_min.get(lanes.clone()), self.reach.get(lanes)) else {
+                break;
+            };
+            let mut m = 0u32;
+            for j in 0..8 {
+                let n = max_ps(
+                    (near[0] - ox[j]) * ix[j],
+                    max_ps((near[1] - oy[j]) * iy[j], max_ps((near[2] - oz[j]) * iz[j], t_min[j])),
+                );
+                let f = min_ps(
+                    (far[0] - ox[j]) * ix[j],
+                    min_ps((far[1] - oy[j]) * iy[j], min_ps((far[2] - oz[j]) * iz[j], reach[j])),
+                );
+                m |= u32::from(n <= f) << j;
+            }
+            mask |= u64::from(m) << (c * 8);
+        }
+        mask
+    }
+
+    /// The farthest reach of the rays in the walk.
+    #[inline(always)]
+    fn max_reach(&self) -> f32 {
+        self.reach[..self.len.min(N)].iter().fold(f32::NEG_INFINITY, |r, &x| max_ps(x, r))
+    }
+}
+
+/// A stack entry: a child's reference, the packet's entry bound, and the
+/// rays that meet the child's box.
+pub(crate) type Entry = (u32, f32, u64);
+
+impl WideBvh {
+    /// Walks the packet of rays `br` (those of `active`, bounded by `fr`)
+    /// through the tree: calls `leaf` ([`Leaf`]) for each leaf with the
+    /// active rays that meet its box. `N` is the packet's capacity (the
+    /// rays of `active` lie below it). `ANY` skips the front-to-back ordering. `need` is
+    /// [`WideBvh::stack_need`] (kept by the owner: computing it walks the
+    /// tree).
+    #[inline(always)]
+    pub(crate) fn walk_packet<const ANY: bool, const N: usize>(
+        &self,
+        need: usize,
+        fr: &Frustum,
+        br: &mut [BoxRay],
+        active: u64,
+        leaf: impl Leaf,
+    ) {
+        if need <= INLINE_STACK {
+            self.walk_packet_in::<ANY, N, _>(
+                &mut InlineStack::<Entry, INLINE_STACK>::new(),
+                fr,
+                br,
+                active,
+                leaf,
+            );
+        } else {
+            self.walk_packet_in::<ANY, N, _>(&mut Vec::with_capacity(need), fr, br, active, leaf);
+        }
+    }
+
+    #[inline(always)]
+    fn walk_packet_in<const ANY: bool, const N: usize, S: Stack<Entry>>(
+        &self,
+        stack: &mut S,
+        fr: &Frustum,
+        br: &mut [BoxRay],
+        mut active: u64,
+        mut leaf: impl Leaf,
+    ) {
+        let nodes = self.nodes();
+        if nodes.is_empty() || active == 0 {
+            return;
+        }
+        let mut soa = Soa::<N>::new(br, active & (u64::MAX >> (64 - N.min(64))));
+        let mut reach = soa.max_reach();
+        // The node or leaf taken next, and the rays that meet its box.
+        let (mut cur, mut rays) = (0u32, active);
+        loop {
+            if cur & LEAF == 0 {
+                let Some(node) = nodes.get(cur as usize) else { return };
+                let mut out =
+                    Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
+                let n = fr.hits(node, reach, &mut out).min(WIDTH);
+                // Of the children the frustum may enter, keep those that
+                // some ray enters on its own test, with those rays.
+                let mut kept = 0;
+                for c in 0..n {
+                    let m = soa.meet(fr, node, usize::from(out.lane[c])) & rays & active;
+                    if m != 0 {
+                        out.near[kept] = out.near[c];
+                        out.child[kept] = out.child[c];
+                        out.rays[kept] = m;
+                        kept += 1;
+                    }
+                }
+                if kept > 0 {
+                    if kept > 1 && !ANY {
+                        sort(&mut out, kept);
+                    }
+                    for k in (1..kept).rev() {
+                        stack.push((out.child[k], out.near[k], out.rays[k]));
+                    }
+                    (cur, rays) = (out.child[0], out.rays[0]);
+                    continue;
+                }
+            } else {
+                let first = cur & ((1 << FIRST_BITS) - 1);
+                let count = ((cur & !LEAF) >> FIRST_BITS) + 1;
+                let meet = rays & active;
+                if meet != 0 {
+                    let done = leaf.visit(first, count, meet, br);
+                    for k in bits(meet) {
+                        let r = if done >> k & 1 == 1 {
+                            f32::NEG_INFINITY
+                        } else {
+                            br.get(k).map_or(f32::NEG_INFINITY, BoxRay::reach)
+                        };
+                        if let Some(x) = soa.reach.get_mut(k) {
+                            *x = r;
+                        }
+                    }
+                    active &= !done;
+                    if active == 0 {
+                        return;
+                    }
+                    if !ANY {
+                        reach = soa.max_reach();
+                    }
+                }
+            }
+            loop {
+                let Some((c, d, m)) = stack.pop() else { return };
+                if d <= reach && m & active != 0 {
+                    (cur, rays) = (c, m);
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Sorts the first `n` hits by entry bound, stable (insertion sort).
+#[inline(always)]
+fn sort(h: &mut Hits, n: usize) {
+    for i in 1..n.min(WIDTH) {
+        let (d, c, r) = (h.near[i], h.child[i], h.rays[i]);
+        let mut j = i;
+        while j > 0 && d < h.near[j - 1] {
+            h.near[j] = h.near[j - 1];
+            h.child[j] = h.child[j - 1];
+            h.rays[j] = h.rays[j - 1];
+            j -= 1;
+        }
+        h.near[j] = d;
+        h.child[j] = c;
+        h.rays[j] = r;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prism_geometry::Ray;
+    use prism_geometry::glam::Vec3;
+
+    #[test]
+    fn bits_lists_the_set_bits_in_order() {
+        assert_eq!(bits(0).count(), 0);
+        assert_eq!(bits(0b1010_0001).collect::<Vec<_>>(), vec![0, 5, 7]);
+        assert_eq!(bits(1 << 63).collect::<Vec<_>>(), vec![63]);
+    }
+
+    #[test]
+    fn octants_split_by_sign_and_set_zero_components_apart() {
+        let rays = [
+            Ray::new(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0)),
+            Ray::new(Vec3::ZERO, Vec3::new(-1.0, 2.0, -3.0)),
+            Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 3.0)),
+            Ray::new(Vec3::ZERO, Vec3::new(1.0, -0.0, 3.0)),
+            Ray::new(Vec3::ZERO, Vec3::new(0.5, 0.5, 0.5)),
+        ];
+        let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+        let g = octants(&br, 0b11111);
+        assert_eq!(g[0], 0b10001);
+        assert_eq!(g[0b101], 0b00010);
+        assert_eq!(g[8], 0b01100);
+        assert_eq!(g.iter().fold(0, |a, m| a | m), 0b11111);
+        assert!(Frustum::new(&br, g[0]).is_some());
+        assert!(Frustum::new(&br, 0b00011).is_none(), "mixed octants fit no frustum");
+        assert!(Frustum::new(&br, g[8]).is_none(), "zero components fit no frustum");
+    }
+
+    /// The frustum's bounds contain every ray's own entry and exit
+    /// distances (random boxes and packets): a box one ray meets, the
+    /// packet meets; each ray's own leaf test is the same alone or in the packet.
+    #[test]
+    fn frustum_bounds_contain_each_rays_distances() {
+        let mut r = prism_testkit::Rng::new(7);
+        let mut rng = move || r.f32();
+        for _ in 0..2000 {
+            let base = Vec3::new(rng() - 0.5, rng() - 0.5, rng() - 0.5).normalize_or(Vec3::X);
+            let rays: Vec<Ray> = (0..8)
+                .map(|_| {
+                    let o = Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0;
+                    let d = base + 0.2 * Vec3::new(rng() - 0.5, rng() - 0.5, rng() - 0.5);
+                    Ray::new(o, d)
+                })
+                .collect();
+            let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+            let g = octants(&br, 0xff);
+            for &m in &g[..8] {
+                if m == 0 {
+                    continue;
+                }
+                let Some(fr) = Frustum::new(&br, m) else { panic!("one octant") };
+                let mut node = Node::EMPTY;
+                for k in 0..WIDTH {
+                    let c = Vec3::new(rng(), rng(), rng()) * 10.0 - 5.0;
+                    let h = Vec3::new(rng(), rng(), rng()) * 2.0;
+                    for a in 0..3 {
+                        node.planes[a][k] = c[a] - h[a];
+                        node.planes[a + 3][k] = c[a] + h[a];
+                    }
+                    node.child[k] = k as u32;
+                }
+                let mut out =
+                    Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
+                let n = fr.hits(&node, f32::INFINITY, &mut out);
+                let entered: Vec<u8> = out.lane[..n].to_vec();
+                let soa = Soa::<PACKET>::new(&br, m);
+                for lane in 0..WIDTH {
+                    let meet = soa.meet(&fr, &node, lane);
+                    assert_eq!(meet & !m, 0, "only the packet's rays");
+                    if meet != 0 {
+                        assert!(
+                            entered.contains(&(lane as u8)),
+                            "rays {meet:b} meet lane {lane}, the packet does not"
+                        );
+                    }
+                    for k in bits(m) {
+                        let alone = Soa::<SMALL_PACKET>::new(&br, 1 << k).meet(&fr, &node, lane) != 0;
+                        assert_eq!(
+                            meet >> k & 1 == 1,
+                            alone,
+                            "ray {k}, lane {lane}: tested alone or together"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

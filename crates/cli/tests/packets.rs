@@ -1,0 +1,106 @@
+//! Rays traced in packets (`PRISM_PACKETS`) give the very same image as
+//! rays traced one by one, and the statistics say which were packed.
+
+mod common;
+
+use common::{prism_cmd, text};
+use std::fs;
+use std::path::Path;
+
+/// Mesh instances (so that packets pay), an opaque and a glass material,
+/// an area light of 16 samples and a point light.
+fn scene() -> String {
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let torus = assets.join("torus.obj");
+    let gem = assets.join("gem.obj");
+    format!(
+        r#"[render]
+width = 64
+height = 40
+spp = 3
+background = [0.4, 0.5, 0.7]
+
+[camera]
+position = [0, 2.5, 6]
+look_at = [0, 0.6, 0]
+fov = 45
+
+[[lights]]
+type = "quad"
+corner = [-2, 5, 1]
+edge_u = [1.5, 0, 0]
+edge_v = [0, 0, 1.5]
+samples = 16
+adaptive = {adaptive}
+intensity = 4
+
+[[lights]]
+position = [4, 6, 3]
+intensity = 0.4
+
+[materials.floor]
+texture = {{ type = "checker", a = [0.8, 0.8, 0.8], b = [0.3, 0.3, 0.3], size = 0.5 }}
+
+[materials.red]
+color = [0.8, 0.2, 0.1]
+specular = 0.4
+
+[[objects]]
+type = "plane"
+material = "floor"
+
+[[objects]]
+type = "mesh"
+path = "{torus}"
+material = "red"
+transform = [{{ rotate_x = 30 }}, {{ translate = [-0.8, 0.7, 0] }}]
+
+[[objects]]
+type = "mesh"
+path = "{gem}"
+transform = [{{ scale = 0.7 }}, {{ translate = [1.2, 0.7, 0.5] }}]
+"#,
+        torus = torus.display(),
+        gem = gem.display(),
+        adaptive = "{adaptive}",
+    )
+}
+
+/// Renders `scene` with `PRISM_PACKETS=choice` (or unset); returns the
+/// PNG's bytes and the statistics.
+fn render(dir: &Path, choice: Option<&str>, name: &str) -> (Vec<u8>, serde_json::Value) {
+    let mut cmd = prism_cmd(dir);
+    cmd.env_remove("PRISM_PACKETS");
+    if let Some(c) = choice {
+        cmd.env("PRISM_PACKETS", c);
+    }
+    let png = format!("{name}.png");
+    let json = format!("{name}.json");
+    let out = cmd.args(["render", "s.toml", "-q", "-o", &png, "--stats-json", &json]).output().unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stats = serde_json::from_slice(&fs::read(dir.join(&json)).unwrap()).unwrap();
+    (fs::read(dir.join(&png)).unwrap(), stats)
+}
+
+#[test]
+fn packets_change_no_pixel() {
+    for adaptive in ["false", "true"] {
+        let dir = tempfile::tempdir().unwrap();
+        let text = scene().replace("{adaptive}", adaptive);
+        fs::write(dir.path().join("s.toml"), text).unwrap();
+        let (alone, s0) = render(dir.path(), Some("0"), "alone");
+        let (default, s1) = render(dir.path(), None, "default");
+        let (all, s2) = render(dir.path(), Some("all"), "all");
+        assert!(alone == default, "adaptive = {adaptive}: camera packets changed the image");
+        assert!(alone == all, "adaptive = {adaptive}: shadow packets changed the image");
+        let packed = |s: &serde_json::Value| s["rays"]["packet"].as_u64().unwrap();
+        let camera = s0["rays"]["camera"].as_u64().unwrap();
+        assert_eq!(camera, 64 * 40 * 3);
+        assert_eq!(packed(&s0), 0, "PRISM_PACKETS=0 packs nothing");
+        assert_eq!(packed(&s1), camera, "by default the camera rays, all of them");
+        assert!(packed(&s2) > camera, "all: shadow rays too ({})", packed(&s2));
+        for s in [&s1, &s2] {
+            assert_eq!(s["rays"]["camera"], s0["rays"]["camera"]);
+        }
+    }
+}
