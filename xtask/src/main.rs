@@ -56,6 +56,7 @@ fn print_help() {
          fuzz [TARGET] [--seconds N]  run the cargo-fuzz targets (scene, obj, texture); see docs/fuzzing.md\n  \
          man [DIR]               write the man pages of prism (clap_mangen) into DIR (default target/man)\n  \
          rmse A.png B.png        RMSE of two images (sRGB values in [0, 1]), whole and by thirds\n  \
+                                 [--diff OUT.png] [--worst-rows N]: the difference ×8; the rows with most error\n  \
          ci                      fmt --check, clippy -D warnings, tests (with tidy), docs, fuzz build: what CI runs\n"
     );
 }

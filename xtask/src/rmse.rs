@@ -4,15 +4,30 @@
 //! middle and bottom thirds (issue 12's measure: a few-sample render
 //! against a many-sample one of the same build; see docs/benchmarks.md).
 //! `--diff OUT.png` also writes the absolute difference, times 8.
+//! `--worst-rows N` also lists the `N` rows holding the largest shares of
+//! the squared error, and the RMSE with their error counted as zero (a
+//! single horizontal edge, such as a horizon, can hold half of it).
 
 use anyhow::{Context, Result, bail};
 
 pub fn run(args: &[String]) -> Result<()> {
-    let (a, b, diff) = match args {
-        [a, b] => (a, b, None),
-        [a, b, flag, out] if flag == "--diff" => (a, b, Some(out)),
-        _ => bail!("usage: cargo xtask rmse A.png B.png [--diff OUT.png]"),
-    };
+    let usage = "usage: cargo xtask rmse A.png B.png [--diff OUT.png] [--worst-rows N]";
+    let [a, b, flags @ ..] = args else { bail!(usage) };
+    let (mut diff, mut worst) = (None, 0usize);
+    let mut rest = flags;
+    while let [flag, value, tail @ ..] = rest {
+        match flag.as_str() {
+            "--diff" => diff = Some(value),
+            "--worst-rows" => {
+                worst = value.parse().with_context(|| format!("--worst-rows {value}: not a count"))?
+            }
+            _ => bail!(usage),
+        }
+        rest = tail;
+    }
+    if !rest.is_empty() {
+        bail!(usage);
+    }
     let load = |p: &String| -> Result<image::RgbImage> {
         Ok(image::open(p).with_context(|| format!("cannot read {p}"))?.to_rgb8())
     };
@@ -36,6 +51,18 @@ pub fn run(args: &[String]) -> Result<()> {
         part(h / 3, 2 * h / 3),
         part(2 * h / 3, h)
     );
+    if worst > 0 {
+        let sums = row_squared_errors(a.as_raw(), b.as_raw(), w as usize * 3);
+        let total: f64 = sums.iter().sum();
+        let ranked = worst_rows(&sums, worst);
+        for &y in &ranked {
+            let share = if total > 0.0 { 100.0 * sums[y] / total } else { 0.0 };
+            println!("row {y}: rmse {:.5}, {share:.1}% of the squared error", part(y as u32, y as u32 + 1));
+        }
+        let left: f64 = total - ranked.iter().map(|&y| sums[y]).sum::<f64>();
+        let values = (w as usize * h as usize * 3).max(1) as f64;
+        println!("rmse {:.5} with the error of those rows counted as zero", (left.max(0.0) / values).sqrt());
+    }
     Ok(())
 }
 
@@ -44,13 +71,31 @@ fn rmse(a: &[u8], b: &[u8]) -> f64 {
     if a.is_empty() {
         return 0.0;
     }
-    let sum: f64 = a.iter().zip(b).map(|(&x, &y)| ((f64::from(x) - f64::from(y)) / 255.0).powi(2)).sum();
-    (sum / a.len() as f64).sqrt()
+    (squared_error(a, b) / a.len() as f64).sqrt()
+}
+
+/// The summed squared difference of two equally long byte slices, each
+/// byte read as `b / 255`.
+fn squared_error(a: &[u8], b: &[u8]) -> f64 {
+    a.iter().zip(b).map(|(&x, &y)| ((f64::from(x) - f64::from(y)) / 255.0).powi(2)).sum()
+}
+
+/// The summed squared error of each row of `row_len` bytes.
+fn row_squared_errors(a: &[u8], b: &[u8], row_len: usize) -> Vec<f64> {
+    a.chunks(row_len.max(1)).zip(b.chunks(row_len.max(1))).map(|(x, y)| squared_error(x, y)).collect()
+}
+
+/// The indices of the `n` largest of `sums`, largest first (ties: lower index first).
+fn worst_rows(sums: &[f64], n: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..sums.len()).collect();
+    order.sort_by(|&i, &j| sums[j].total_cmp(&sums[i]).then(i.cmp(&j)));
+    order.truncate(n);
+    order
 }
 
 #[cfg(test)]
 mod tests {
-    use super::rmse;
+    use super::{rmse, row_squared_errors, worst_rows};
 
     #[test]
     fn rmse_of_known_differences() {
@@ -60,5 +105,19 @@ mod tests {
         // One of four off by 255: sqrt(1/4).
         assert!((rmse(&[0, 0, 0, 0], &[255, 0, 0, 0]) - 0.5).abs() < 1e-12);
         assert_eq!(rmse(&[], &[]), 0.0);
+    }
+
+    #[test]
+    fn rows_ranked_by_squared_error() {
+        // Three rows of two values: row 1 off by 255 once, row 2 by 51 twice, row 0 exact.
+        let a = [0, 0, 255, 0, 51, 51];
+        let b = [0, 0, 0, 0, 0, 0];
+        let sums = row_squared_errors(&a, &b, 2);
+        assert_eq!(sums.len(), 3);
+        assert_eq!(sums[0], 0.0);
+        assert!((sums[1] - 1.0).abs() < 1e-12 && (sums[2] - 0.08).abs() < 1e-12);
+        assert_eq!(worst_rows(&sums, 2), vec![1, 2]);
+        assert_eq!(worst_rows(&sums, 9), vec![1, 2, 0]);
+        assert_eq!(worst_rows(&sums, 0), Vec::<usize>::new());
     }
 }
