@@ -104,11 +104,12 @@ impl FromStr for PixelFilter {
 pub struct Antialias {
     /// The pixel reconstruction filter, by which sample positions are drawn.
     pub filter: PixelFilter,
-    /// Adaptive supersampling (POV-Ray's `antialias_threshold`, within one
-    /// pixel): with `Some(threshold)`, a pixel first takes
-    /// [`ADAPTIVE_BASE_SAMPLES`] samples and takes the rest of its `spp`
-    /// only if two of them differ by more than `threshold` in a colour
-    /// channel (each clamped to `[0, 1]` first); `None` always takes `spp`.
+    /// Adaptive supersampling (POV-Ray's `antialias_threshold`): with
+    /// `Some(threshold)`, every pixel first takes [`ADAPTIVE_BASE_SAMPLES`]
+    /// samples; a pixel then takes the rest of its `spp` if two of its own
+    /// differ by more than `threshold` in a colour channel, or if its mean
+    /// differs by more than that from one of its eight neighbours' means
+    /// (colours clamped to `[0, 1]` first); `None` always takes `spp`.
     pub adaptive: Option<f32>,
     /// Point-sample textures instead of filtering them over each hit's
     /// footprint (for comparison; filtering is the default).

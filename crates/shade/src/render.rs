@@ -142,7 +142,8 @@ impl RenderStats {
 /// CDF ([`crate::FilterSampler`]), so samples spread over the filter's
 /// support about the pixel centre, each of weight 1: a pixel is still the
 /// mean of its own samples. With [`crate::Antialias::adaptive`], a pixel
-/// whose first [`crate::ADAPTIVE_BASE_SAMPLES`] samples agree stops there.
+/// whose first [`crate::ADAPTIVE_BASE_SAMPLES`] samples agree with each
+/// other and with its neighbours' stops there.
 pub fn render(scene: &Scene, settings: &RenderSettings, hooks: RenderHooks<'_>) -> (Image, RenderStats) {
     let (mut image, stats) = render_samples(scene, settings, 0..settings.spp.max(1), hooks);
     scale_to_mean(&mut image, settings.spp);
@@ -253,7 +254,7 @@ pub(crate) fn render_pixels<'a>(
     } else {
         (0..rh).map(|_| AovRow::new(aovs, rw, spp, alpha).starting_at(xs.start)).collect()
     };
-    let render_row = |r: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>| {
+    let render_row = |r: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>, mut pass: Pass<'_>| {
         let j = ys.start as usize + r;
         if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             return;
@@ -286,15 +287,22 @@ pub(crate) fn render_pixels<'a>(
                 let mut sum = Vec3::ZERO;
                 let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
                 let pixel_pattern = pattern.pixel(index);
-                for s in samples.clone() {
-                    if let Some(threshold) = adaptive
-                        && s == crate::ADAPTIVE_BASE_SAMPLES
-                        && !((hi - lo).max_element() > threshold)
-                    {
-                        // Flat pixel: the base samples' mean stands for all `spp`.
-                        sum *= spp as f32 / s as f32;
-                        break;
+                let run = match &pass {
+                    Pass::All => samples.clone(),
+                    Pass::Base(_) => 0..crate::ADAPTIVE_BASE_SAMPLES,
+                    Pass::Refine(refine) => {
+                        let Some(px) = row.get_mut(k) else { continue };
+                        if !refine.get(k).copied().unwrap_or(false) {
+                            // Flat: the base samples' mean stands for all `spp`.
+                            *px *= spp as f32 / crate::ADAPTIVE_BASE_SAMPLES as f32;
+                            continue;
+                        }
+                        // The sum goes on from the base samples', in order.
+                        sum = *px;
+                        crate::ADAPTIVE_BASE_SAMPLES..spp
                     }
+                };
+                for s in run {
                     let (dx, dy) = filter.offset(pixel_pattern.offset(s));
                     let ray = cam.ray(i as f32 + dx, j as f32 + dy);
                     let mut l = Vec3::ZERO;
@@ -306,7 +314,7 @@ pub(crate) fn render_pixels<'a>(
                             l = Vec3::ZERO;
                         }
                         sum += l;
-                        if adaptive.is_some() && s < crate::ADAPTIVE_BASE_SAMPLES {
+                        if let Pass::Base(_) = pass {
                             let c = l.clamp(Vec3::ZERO, Vec3::ONE);
                             (lo, hi) = (lo.min(c), hi.max(c));
                         }
@@ -317,6 +325,11 @@ pub(crate) fn render_pixels<'a>(
                 }
                 if let Some(px) = row.get_mut(k) {
                     *px = sum;
+                }
+                if let Pass::Base(ranges) = &mut pass
+                    && let Some(r) = ranges.get_mut(k)
+                {
+                    *r = [lo, hi];
                 }
                 if let Some(sink) = sink.as_deref_mut() {
                     sink.end_pixel(scene, cam, i as u32, j as u32);
@@ -334,21 +347,44 @@ pub(crate) fn render_pixels<'a>(
         }
         let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = hooks.progress {
-            p(done as u32, rh);
+            // Adaptive sampling renders every row twice (base, then refine).
+            p(done as u32, rh * if adaptive.is_some() { 2 } else { 1 });
         }
     };
     let row_len = rw as usize;
     in_pool(settings.threads, || match (beauty, aov_rows.is_empty()) {
-        (true, true) => {
-            pixels.par_chunks_mut(row_len).enumerate().for_each(|(j, row)| render_row(j, row, None));
-        }
+        (true, true) => match adaptive {
+            None => {
+                pixels
+                    .par_chunks_mut(row_len)
+                    .enumerate()
+                    .for_each(|(j, row)| render_row(j, row, None, Pass::All));
+            }
+            Some(threshold) => {
+                let mut ranges = vec![[Vec3::ZERO; 2]; pixels.len()];
+                pixels
+                    .par_chunks_mut(row_len)
+                    .zip(ranges.par_chunks_mut(row_len))
+                    .enumerate()
+                    .for_each(|(j, (row, r))| render_row(j, row, None, Pass::Base(r)));
+                let refine = refine_flags(&pixels, &ranges, row_len, threshold);
+                pixels
+                    .par_chunks_mut(row_len)
+                    .zip(refine.par_chunks(row_len))
+                    .enumerate()
+                    .for_each(|(j, (row, f))| render_row(j, row, None, Pass::Refine(f)));
+            }
+        },
         (true, false) => pixels
             .par_chunks_mut(row_len)
             .zip(aov_rows.par_iter_mut())
             .enumerate()
-            .for_each(|(j, (row, sink))| render_row(j, row, Some(sink))),
+            .for_each(|(j, (row, sink))| render_row(j, row, Some(sink), Pass::All)),
         (false, false) => {
-            aov_rows.par_iter_mut().enumerate().for_each(|(j, sink)| render_row(j, &mut [], Some(sink)));
+            aov_rows
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(j, sink)| render_row(j, &mut [], Some(sink), Pass::All));
         }
         // Nothing asked for.
         (false, true) => {}
@@ -364,6 +400,45 @@ pub(crate) fn render_pixels<'a>(
         nonfinite_samples: nonfinite.into_inner(),
     };
     (Image { width: rw, height: rh, pixels }, aov_rows, stats)
+}
+
+/// What one pass over a row renders of each pixel.
+enum Pass<'p> {
+    /// Every sample of the render's range.
+    All,
+    /// Adaptive sampling's base samples, recording each pixel's range of
+    /// (clamped) sample colours `[lo, hi]`.
+    Base(&'p mut [[Vec3; 2]]),
+    /// The rest of the samples of the pixels marked here (their sums go on
+    /// from the base samples'); the others' base mean is scaled to `spp`.
+    Refine(&'p [bool]),
+}
+
+/// POV-Ray's adaptive criterion over the base samples' sums `sums` (rows
+/// of `width`) and colour ranges: a pixel takes the rest of its samples
+/// when its own samples differ by more than `threshold` in some channel,
+/// or when its base mean differs by more than that from one of its eight
+/// neighbours' (an edge its own samples happened to miss, such as a
+/// horizon crossing the pixel's top few percent). Colours clamped to
+/// `[0, 1]`.
+fn refine_flags(sums: &[Vec3], ranges: &[[Vec3; 2]], width: usize, threshold: f32) -> Vec<bool> {
+    let base = crate::ADAPTIVE_BASE_SAMPLES as f32;
+    let mean: Vec<Vec3> = sums.iter().map(|s| (*s / base).clamp(Vec3::ZERO, Vec3::ONE)).collect();
+    let height = mean.len().checked_div(width).unwrap_or(0);
+    let differs = |a: Vec3, b: Vec3| (a - b).abs().max_element() > threshold;
+    (0..mean.len())
+        .map(|p| {
+            let [lo, hi] = ranges.get(p).copied().unwrap_or([Vec3::ZERO; 2]);
+            if differs(hi, lo) {
+                return true;
+            }
+            let (x, y) = (p % width, p / width);
+            (y.saturating_sub(1)..(y + 2).min(height)).any(|ny| {
+                (x.saturating_sub(1)..(x + 2).min(width))
+                    .any(|nx| mean.get(ny * width + nx).is_some_and(|&m| differs(m, mean[p])))
+            })
+        })
+        .collect()
 }
 
 /// Which rays a render traces in packets (prism_bvh's `closest_hit_packet`
@@ -657,6 +732,37 @@ pub(crate) fn splitmix64(mut z: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn refine_flags_follow_own_range_and_neighbours() {
+        let b = crate::ADAPTIVE_BASE_SAMPLES as f32;
+        let flat = [Vec3::splat(0.5); 2];
+        // 4×3 pixels of grey 0.5; pixel (3, 0) is white: itself and its
+        // neighbours (2, 0), (2, 1), (3, 1) are refined, the rest not.
+        let mut sums = vec![Vec3::splat(0.5 * b); 12];
+        sums[3] = Vec3::splat(b);
+        let ranges = [flat; 12];
+        let f = refine_flags(&sums, &ranges, 4, 0.1);
+        let on: Vec<usize> = (0..12).filter(|&p| f[p]).collect();
+        assert_eq!(on, vec![2, 3, 6, 7]);
+        // A pixel whose own samples differ, among flat neighbours.
+        let mut ranges = [flat; 12];
+        ranges[9] = [Vec3::splat(0.2), Vec3::splat(0.5)];
+        let f = refine_flags(&[Vec3::splat(0.5 * b); 12], &ranges, 4, 0.1);
+        assert_eq!((0..12).filter(|&p| f[p]).collect::<Vec<_>>(), vec![9]);
+        // Differences under the threshold refine nothing; colours are
+        // clamped to [0, 1] first (3 and 5 both count as 1).
+        let mut sums = vec![Vec3::splat(0.5 * b); 12];
+        sums[11] = Vec3::splat(0.55 * b);
+        sums[0] = Vec3::splat(3.0 * b);
+        sums[1] = Vec3::splat(5.0 * b);
+        let f = refine_flags(&sums, &[flat; 12], 4, 0.1);
+        assert!(!f[7] && !f[10] && !f[11], "0.05 apart, under the threshold");
+        assert!(f[0] && f[1] && f[4] && f[5], "1 against 0.5");
+        assert!(!f[8]);
+        let f = refine_flags(&[Vec3::splat(3.0 * b), Vec3::splat(5.0 * b)], &[flat; 2], 2, 0.1);
+        assert_eq!(f, [false, false], "3 and 5 both clamp to 1");
+    }
 
     #[test]
     fn one_sample_is_the_centre() {

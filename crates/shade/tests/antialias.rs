@@ -107,10 +107,10 @@ fn renders_are_identical_on_any_number_of_threads_with_every_filter_and_adaptive
 
 #[test]
 fn adaptive_sampling_refines_only_where_samples_disagree() {
-    // Looking down at the floor from above: squares of 1 under a camera
-    // that sees ~6 squares across 24 pixels; only pixels on square edges
-    // see two colours.
-    let checker = Texture::Checker { a: A, b: B, size: 1.0, world: true };
+    // Looking down at the floor from above: squares of 4 under a camera
+    // that sees ~6 units across 24 pixels; only pixels on square edges
+    // see two colours (and they and their neighbours are refined).
+    let checker = Texture::Checker { a: A, b: B, size: 4.0, world: true };
     let plane = Plane::new(Vec3::ZERO, Vec3::Y).expect("valid").into();
     let cam = camera(Vec3::new(0.37, 5.0, 0.21), Vec3::new(0.37, 0.0, 0.2), Vec3::Y, 60.0, 24, 24);
     let shot = scene(vec![(plane, Transform::IDENTITY, flat_texture(checker))], vec![], cam);
