@@ -344,9 +344,14 @@ impl<'a> Tracer<'a> {
             }
             let p = hit.point;
             let shared = light.probes(p).and_then(|probes| {
-                let mut seen = [Vec3::ZERO; 4];
-                self.shadows(hit, &probes.map(|q| Some(Target::Point(q))), &mut seen);
-                seen[1..].iter().all(|s| *s == seen[0]).then_some(seen[0])
+                if self.packets {
+                    let mut seen = [Vec3::ZERO; 4];
+                    self.shadows(hit, &probes.map(|q| Some(Target::Point(q))), &mut seen);
+                    return seen[1..].iter().all(|s| *s == seen[0]).then_some(seen[0]);
+                }
+                // One by one, stopping at the first probe that differs.
+                let first = self.shadow(hit, Target::Point(probes[0]));
+                probes[1..].iter().all(|q| self.shadow(hit, Target::Point(*q)) == first).then_some(first)
             });
             if shared == Some(Vec3::ZERO) {
                 continue;
