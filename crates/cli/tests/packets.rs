@@ -7,7 +7,7 @@ use common::{prism_cmd, text};
 use std::fs;
 use std::path::Path;
 
-/// Mesh instances (so that packets pay), an opaque and a glass material,
+/// Mesh instances (packets are used only in scenes with them), an opaque and a glass material,
 /// an area light of 16 samples and a point light.
 fn scene() -> String {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
@@ -89,17 +89,20 @@ fn packets_change_no_pixel() {
         let text = scene().replace("{adaptive}", adaptive);
         fs::write(dir.path().join("s.toml"), text).unwrap();
         let (alone, s0) = render(dir.path(), Some("0"), "alone");
-        let (default, s1) = render(dir.path(), None, "default");
+        let (default, sd) = render(dir.path(), None, "default");
+        let (camera_only, s1) = render(dir.path(), Some("camera"), "camera");
         let (all, s2) = render(dir.path(), Some("all"), "all");
-        assert!(alone == default, "adaptive = {adaptive}: camera packets changed the image");
+        assert!(alone == default, "adaptive = {adaptive}: the default changed the image");
+        assert!(alone == camera_only, "adaptive = {adaptive}: camera packets changed the image");
         assert!(alone == all, "adaptive = {adaptive}: shadow packets changed the image");
         let packed = |s: &serde_json::Value| s["rays"]["packet"].as_u64().unwrap();
         let camera = s0["rays"]["camera"].as_u64().unwrap();
         assert_eq!(camera, 64 * 40 * 3);
         assert_eq!(packed(&s0), 0, "PRISM_PACKETS=0 packs nothing");
-        assert_eq!(packed(&s1), camera, "by default the camera rays, all of them");
+        assert_eq!(packed(&sd), 0, "by default nothing is packed");
+        assert_eq!(packed(&s1), camera, "camera: the camera rays, all of them");
         assert!(packed(&s2) > camera, "all: shadow rays too ({})", packed(&s2));
-        for s in [&s1, &s2] {
+        for s in [&sd, &s1, &s2] {
             assert_eq!(s["rays"]["camera"], s0["rays"]["camera"]);
         }
     }
