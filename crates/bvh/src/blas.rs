@@ -103,7 +103,8 @@ impl Blas {
             }
             BlasKind::Wide => {
                 let aabbs = tris.iter().map(obvhs::triangle::Triangle::aabb).collect();
-                let Some((w, split)) = WideBvh::build(aabbs, Some(&tris), quality, kernel) else {
+                let Some((w, split)) = WideBvh::build(aabbs, Some(&tris), quality, wide::MAX_LEAF, kernel)
+                else {
                     // Too many triangles for the wide layout's references.
                     return Self::build(mesh, quality, BlasKind::Cwbvh, kernel);
                 };

@@ -331,6 +331,29 @@ const DEFAULT_MESH_LAYOUT: BlasKind = BlasKind::Wide;
 /// (the compressed node boxes cannot represent them well).
 const MAX_BOUNDED_COORD: f32 = 1e18;
 
+/// Rounding slack of a top-level box, in units of `f32::EPSILON` times the
+/// box's largest coordinate and the transform's condition number.
+const ROUNDING_ULPS: f32 = 32.0;
+
+/// Widens an object's world box (its local box's transformed corners) by
+/// the rounding of the ray's trip into object space: the object reports a
+/// crossing of the mapped ray, which can lie a few ulps of the world
+/// coordinates (scaled by how far the map stretches one axis against
+/// another) outside the exact box. Without the slack a box of one object
+/// could cull a grazing hit that brute force finds.
+fn widen_for_rounding(b: Aabb, t: &Transform) -> Aabb {
+    if b.is_empty() || !b.is_finite() {
+        return b;
+    }
+    let norm = |m: prism_geometry::glam::Mat3A| {
+        m.x_axis.abs().element_sum().max(m.y_axis.abs().element_sum()).max(m.z_axis.abs().element_sum())
+    };
+    let cond = norm(t.matrix().matrix3) * norm(t.inverse_matrix().matrix3);
+    let scale = b.min.abs().max(b.max.abs()).max_element();
+    let pad = Vec3::splat(scale * cond.max(1.0) * ROUNDING_ULPS * f32::EPSILON);
+    Aabb::new(b.min - pad, b.max + pad)
+}
+
 /// The closest-hit walk over the top level's objects.
 struct ClosestObject<'a> {
     accel: &'a Accel,
@@ -581,13 +604,23 @@ impl Accel {
             }
             let finite = b.is_finite() && b.min.abs().max(b.max.abs()).max_element() <= MAX_BOUNDED_COORD;
             if finite {
+                let transform = match o {
+                    Object::Shape(s) => &s.transform,
+                    Object::Mesh { transform, .. } => transform,
+                };
+                let b = widen_for_rounding(*b, transform);
                 top.push(i as u32);
                 tlas_boxes.push(cwbvh::to_obvhs(b.min, b.max));
             } else {
                 unbounded.push(i as u32);
             }
         }
-        let (tlas, _) = WideBvh::build(tlas_boxes, None, options.top_quality, kernel)
+        // Leaves of one object: an object test (a transformed shape or a
+        // whole instance walk) costs far more than a box test, so each
+        // object gets its own box. Leaves of up to four measured 10-20 %
+        // slower on the seed scene, mesh.toml and an instance grid
+        // (docs/benchmarks.md, "Top-level leaves of one object").
+        let (tlas, _) = WideBvh::build(tlas_boxes, None, options.top_quality, 1, kernel)
             .ok_or(BuildError::TooManyObjects { objects: top.len() })?;
         let tlas_objects: Vec<u32> = tlas.order().iter().map(|&k| top[k as usize]).collect();
         let packets = tlas_objects.iter().any(|&i| matches!(objects[i as usize], Object::Mesh { .. }));

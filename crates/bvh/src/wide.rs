@@ -204,17 +204,18 @@ impl WideBvh {
     }
 
     /// Builds obvhs's binary tree over `aabbs` (pre-splitting `tris` if the
-    /// quality asks for it) with leaves of at most [`MAX_LEAF`], and
-    /// converts it; `None` as [`WideBvh::from_bvh2`]. Also says whether the
+    /// quality asks for it) with leaves of at most `max_leaf` primitives
+    /// (clamped to `1..=`[`MAX_LEAF`]), and converts it; `None` as [`WideBvh::from_bvh2`]. Also says whether the
     /// build pre-split (a primitive may then sit in several leaves).
     pub fn build(
         aabbs: Vec<obvhs::aabb::Aabb>,
         tris: Option<&[obvhs::triangle::Triangle]>,
         quality: crate::BuildQuality,
+        max_leaf: u32,
         kernel: Kernel,
     ) -> Option<(Self, bool)> {
         let mut p = quality.params();
-        p.max_prims_per_leaf = MAX_LEAF;
+        p.max_prims_per_leaf = max_leaf.clamp(1, MAX_LEAF);
         let b = crate::bvh2::build(aabbs, tris, p);
         Some((Self::from_bvh2(&b, kernel)?, b.uses_spatial_splits))
     }

@@ -141,6 +141,15 @@ mod tests {
         (Vec3::new(x, 0.0, z).normalize() + 0.5 * Vec3::Y) / 1.25f32.sqrt()
     }
 
+    /// As the cylinder's: a crossing the side accepts just below the base
+    /// lies inside the bounds.
+    #[test]
+    fn bounds_hold_the_sealed_rim() {
+        let ray = Ray::new(Vec3::new(-5.0, -1e-6, 0.0), Vec3::X);
+        assert!(cone().intersect_t(&ray).is_some());
+        assert!(cone().bounds().intersect_ray(&ray).is_some());
+    }
+
     #[test]
     fn side_from_outside() {
         // At y = 1 the radius is 1/2.
@@ -243,6 +252,7 @@ mod tests {
         assert!(Cone::new(Vec3::ZERO, 0.0, 1.0).is_err());
         assert!(Cone::new(Vec3::ZERO, 1.0, 0.0).is_err());
         assert!(Cone::new(Vec3::INFINITY, 1.0, 1.0).is_err());
-        assert_eq!(cone().bounds(), Aabb::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0)));
+        let e = 2e-6; // SEAL · height
+        assert_eq!(cone().bounds(), Aabb::new(Vec3::new(-1.0, -e, -1.0), Vec3::new(1.0, 2.0 + e, 1.0)));
     }
 }

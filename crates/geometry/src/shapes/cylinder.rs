@@ -121,6 +121,19 @@ mod tests {
         Cylinder::new(Vec3::new(0.0, -1.0, 0.0), 1.0, 2.0).unwrap()
     }
 
+    /// The side accepts crossings up to `SEAL · height` beyond a cap; the
+    /// bounds hold them, so that a hierarchy's box test cannot cull a hit
+    /// the shape reports (a BVH leaf of one object found this).
+    #[test]
+    fn bounds_hold_the_sealed_rim() {
+        let c = cyl();
+        for y in [1.0 + 1e-6, -1.0 - 1e-6] {
+            let ray = Ray::new(Vec3::new(-5.0, y, 0.0), Vec3::X);
+            assert!(c.intersect_t(&ray).is_some(), "side accepts y = {y}");
+            assert!(c.bounds().intersect_ray(&ray).is_some(), "bounds hold y = {y}");
+        }
+    }
+
     #[test]
     fn side_from_outside() {
         let h = cyl().intersect(&Ray::new(Vec3::new(5.0, 0.0, 0.0), Vec3::NEG_X)).unwrap();
@@ -212,6 +225,11 @@ mod tests {
         assert!(Cylinder::new(Vec3::ZERO, 0.0, 1.0).is_err());
         assert!(Cylinder::new(Vec3::ZERO, 1.0, -1.0).is_err());
         assert!(Cylinder::new(Vec3::NAN, 1.0, 1.0).is_err());
-        assert_eq!(cyl().bounds(), Aabb::new(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 1.0, 1.0)));
+        // y widened by SEAL · height = 2e-6 at both ends.
+        let e = 2e-6;
+        assert_eq!(
+            cyl().bounds(),
+            Aabb::new(Vec3::new(-1.0, -1.0 - e, -1.0), Vec3::new(1.0, -1.0 + (2.0 + e), 1.0))
+        );
     }
 }

@@ -102,9 +102,11 @@ impl Upright {
     }
 
     /// Bounds: `radius` about the Y axis through `base`, from `base.y` up
-    /// to `base.y + height`.
+    /// to `base.y + height`, widened by the side's [`SEAL`]` · height` at
+    /// both ends: the side accepts crossings that far beyond a cap, so a
+    /// ray that grazes the rim just outside the exact box can still hit.
     pub fn bounds(&self) -> Aabb {
-        let (b, r) = (self.base, self.radius);
-        Aabb::new(b - Vec3::new(r, 0.0, r), b + Vec3::new(r, self.height, r))
+        let (b, r, eps) = (self.base, self.radius, SEAL * self.height);
+        Aabb::new(b - Vec3::new(r, eps, r), b + Vec3::new(r, self.height + eps, r))
     }
 }
