@@ -1151,6 +1151,27 @@ const MAX_SHAPE_CROSSINGS: usize = 8;
 mod tests {
     use super::*;
 
+    /// The slack grows with the box's coordinates and with how unevenly the
+    /// transform stretches space, and leaves empty and infinite boxes alone.
+    #[test]
+    fn top_level_boxes_are_widened_by_rounding_slack() {
+        let b = Aabb::new(Vec3::new(1.0, -2.0, 3.0), Vec3::new(2.0, 4.0, 5.0));
+        let pad = |w: Aabb| (b.min - w.min).max_element().max((w.max - b.max).max_element());
+        let plain = widen_for_rounding(b, &Transform::IDENTITY);
+        assert!(plain.min.cmplt(b.min).all() && plain.max.cmpgt(b.max).all());
+        // 32 ULPs of the largest coordinate (5), to within the rounding of
+        // the widened planes.
+        let want = 5.0 * ROUNDING_ULPS * f32::EPSILON;
+        assert!((pad(plain) / want - 1.0).abs() < 0.02, "{} vs {want}", pad(plain));
+        let squash = Transform::scale(Vec3::new(100.0, 1.0, 0.01)).unwrap();
+        let cond = 100.0 * 100.0; // ‖M‖ · ‖M⁻¹‖
+        let squashed = widen_for_rounding(b, &squash);
+        let ratio = pad(squashed) / pad(plain);
+        assert!((ratio / cond - 1.0).abs() < 0.02, "{ratio}");
+        assert_eq!(widen_for_rounding(Aabb::EMPTY, &squash), Aabb::EMPTY);
+        assert_eq!(widen_for_rounding(Aabb::INFINITE, &squash), Aabb::INFINITE);
+    }
+
     /// An `n`×`n` grid over the unit square in x/z, two triangles a cell,
     /// raised to `y = sin(fx·u)·cos(fz·v)·amp` for `[fx, fz, amp]`.
     pub(crate) fn wavy_grid(n: u32, [fx, fz, amp]: [f32; 3]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
