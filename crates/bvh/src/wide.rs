@@ -205,8 +205,10 @@ impl WideBvh {
 
     /// Builds obvhs's binary tree over `aabbs` (pre-splitting `tris` if the
     /// quality asks for it) with leaves of at most `max_leaf` primitives
-    /// (clamped to `1..=`[`MAX_LEAF`]), and converts it; `None` as [`WideBvh::from_bvh2`]. Also says whether the
-    /// build pre-split (a primitive may then sit in several leaves).
+    /// (clamped to `1..=`[`MAX_LEAF`]: the mesh BLAS takes four, the top
+    /// level one), and converts it; `None` as [`WideBvh::from_bvh2`]. Also
+    /// says whether the build pre-split (a primitive may then sit in
+    /// several leaves).
     pub fn build(
         aabbs: Vec<obvhs::aabb::Aabb>,
         tris: Option<&[obvhs::triangle::Triangle]>,
