@@ -210,8 +210,9 @@ impl Camera {
     #[must_use]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let (w, h) = (self.size.0 as f32, self.size.1 as f32);
-        let sx = (2.0 * x / w - 1.0) * self.tan_half * w / h;
-        let sy = (1.0 - 2.0 * y / h) * self.tan_half;
+        // (2x/w − 1)·tan·(w/h) and (1 − 2y/h)·tan, with one division.
+        let k = self.tan_half / h;
+        let (sx, sy) = ((2.0 * x - w) * k, (h - 2.0 * y) * k);
         let offset = sx * self.right + sy * self.true_up;
         let (origin, dir) = match self.projection {
             Projection::Perspective => (self.position, (self.forward + offset).normalize()),
