@@ -275,3 +275,32 @@ fn for_each_hit_stops_when_asked() {
     });
     assert_eq!(n, 3);
 }
+
+/// A cylinder and a cone, each alone in a top-level leaf (the top level
+/// keeps one object a leaf): a ray grazing a cap just outside the exact box,
+/// where the side still accepts it (`SEAL`), is found as brute force finds
+/// it. Two guards keep it: the shapes' bounds hold that slack, and the top
+/// level widens every box for rounding; with both removed this fails
+/// (checked), with either it passes.
+#[test]
+fn grazing_rims_are_not_culled_by_a_leaf_of_one() {
+    use prism_geometry::{Cone, Cylinder};
+    let objects = vec![
+        shape(Cylinder::new(Vec3::new(0.0, -1.0, 0.0), 1.0, 2.0).unwrap()),
+        shape(Cone::new(Vec3::new(4.0, 0.0, 0.0), 1.0, 2.0).unwrap()),
+        shape(Sphere::new(Vec3::new(-4.0, 0.0, 0.0), 1.0).unwrap()),
+    ];
+    let accel = Accel::build(vec![], objects).unwrap();
+    let rays = [
+        // Along +x through the cylinder at 1e-6 above its top cap and below its base.
+        Ray::new(Vec3::new(-2.5, 1.0 + 1e-6, 0.0), Vec3::X),
+        Ray::new(Vec3::new(-2.5, -1.0 - 1e-6, 0.0), Vec3::X),
+        // Along -x through the cone just below its base.
+        Ray::new(Vec3::new(7.0, -1e-6, 0.0), Vec3::NEG_X),
+    ];
+    for ray in rays {
+        let hit = compare_closest(&accel, &ray).unwrap();
+        assert!(hit.is_some(), "{ray:?}");
+        compare_all(&accel, &ray).unwrap();
+    }
+}
