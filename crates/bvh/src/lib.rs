@@ -76,11 +76,12 @@
 //! ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects another). All give bit-for-bit the same answers (same operations in the
 //! same order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
-//! bit-identical to the scalar test. [`Accel::closest_hit`] and
-//! [`Accel::occluded`] are also compiled for AVX2 as a whole (the CWBVH and
-//! BVH2 walks, and the analytic shapes, then use 256-bit registers).
-//! Setting the environment variable `PRISM_BVH_NO_SIMD` when the structure
-//! is built selects the plain variants of both, for comparison.
+//! bit-identical to the scalar test. [`Accel::closest_hit`] is also
+//! compiled for AVX2 as a whole (the CWBVH and BVH2 walks, and the analytic
+//! shapes, then use 256-bit registers); the other queries are not, as their
+//! AVX2 builds measured slower. Setting the environment variable
+//! `PRISM_BVH_NO_SIMD` when the structure is built selects the plain
+//! `closest_hit`, for comparison.
 //!
 //! [`Accel::closest_hit_brute_force`] and [`Accel::for_each_hit_brute_force`]
 //! answer the same questions by testing everything; the tests compare the
@@ -799,21 +800,12 @@ impl Accel {
     }
 
     /// Whether anything lies in `[ray.t_min, ray.t_max]` (early exit).
+    ///
+    /// Compiled for the baseline target only: an AVX2 build of it, as
+    /// [`Accel::closest_hit`] has, measured 4-11 % slower on shadow rays
+    /// (docs/benchmarks.md, "AVX2 builds of the queries").
     #[must_use]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if self.simd.wide {
-            // SAFETY: `wide` is set only when the running CPU reports
-            // every feature `occluded_wide` is compiled for.
-            return unsafe { self.occluded_wide(ray) };
-        }
-        self.occluded_impl(ray)
-    }
-
-    /// [`Accel::occluded`] compiled for AVX2 (8-wide node tests).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn occluded_wide(&self, ray: &Ray) -> bool {
         self.occluded_impl(ray)
     }
 
@@ -854,23 +846,10 @@ impl Accel {
             }
             return;
         }
+        // Baseline target only, as `occluded`: an AVX2 build measured slower.
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-            #[cfg(target_arch = "x86_64")]
-            if self.simd.wide {
-                // SAFETY: `wide` is set only when the running CPU reports
-                // every feature `closest_packet_wide` is compiled for.
-                unsafe { self.closest_packet_wide(rays, out) };
-                continue;
-            }
             self.closest_packet_sized(rays, out);
         }
-    }
-
-    /// [`Accel::closest_hit_packet`]'s packets compiled for AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn closest_packet_wide(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
-        self.closest_packet_sized(rays, out);
     }
 
     /// One packet, with per-ray arrays of the size it needs.
@@ -947,23 +926,10 @@ impl Accel {
             }
             return;
         }
+        // Baseline target only, as `occluded`: an AVX2 build measured slower.
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-            #[cfg(target_arch = "x86_64")]
-            if self.simd.wide {
-                // SAFETY: `wide` is set only when the running CPU reports
-                // every feature `occluded_packet_wide` is compiled for.
-                unsafe { self.occluded_packet_wide(rays, out) };
-                continue;
-            }
             self.occluded_packet_sized(rays, out);
         }
-    }
-
-    /// [`Accel::occluded_packet`]'s packets compiled for AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn occluded_packet_wide(&self, rays: &[Ray], out: &mut [bool]) {
-        self.occluded_packet_sized(rays, out);
     }
 
     /// One packet, with per-ray arrays of the size it needs.
@@ -1282,11 +1248,11 @@ mod tests {
             }
             let ray = Ray::with_interval(o, d, 0.0, if k % 3 == 0 { 1.5 } else { f32::INFINITY });
             // SAFETY: `accel.simd.wide` says this CPU has the features.
-            let (wide, any_wide) = unsafe { (accel.closest_hit_wide(&ray), accel.occluded_wide(&ray)) };
+            let wide = unsafe { accel.closest_hit_wide(&ray) };
             let plain = accel.closest_hit_impl(&ray);
             let bits = |h: Option<SceneHit>| h.map(|h| (h.object, h.triangle, h.hit.t.to_bits()));
             assert_eq!(bits(wide), bits(plain), "{ray:?}");
-            assert_eq!(any_wide, accel.occluded_impl(&ray), "{ray:?}");
+            assert_eq!(accel.occluded(&ray), plain.is_some(), "{ray:?}");
             hits += usize::from(plain.is_some());
         }
         assert!(hits > 500, "{hits}");
