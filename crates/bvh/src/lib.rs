@@ -502,8 +502,8 @@ pub struct Accel {
 /// The CPU features the queries may use, detected once per build.
 #[derive(Clone, Copy, Debug)]
 struct Simd {
-    /// AVX2, FMA, BMI1/2, LZCNT and POPCNT: the queries' `*_wide`
-    /// variants (compiled with these features) may run.
+    /// AVX2, FMA, BMI1/2, LZCNT and POPCNT: `closest_hit_wide` (compiled
+    /// with these features) may run.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     wide: bool,
 }
