@@ -802,7 +802,7 @@ impl Accel {
     /// Whether anything lies in `[ray.t_min, ray.t_max]` (early exit).
     ///
     /// Compiled for the baseline target only: an AVX2 build of it, as
-    /// [`Accel::closest_hit`] has, measured 4-11 % slower on shadow rays
+    /// [`Accel::closest_hit`] has, measured 5-13 % slower on shadow rays
     /// (docs/benchmarks.md, "AVX2 builds of the queries").
     #[must_use]
     pub fn occluded(&self, ray: &Ray) -> bool {
