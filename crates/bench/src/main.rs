@@ -37,7 +37,12 @@ struct Options {
     quality: Option<BuildQuality>,
     width: u32,
     height: u32,
+    /// Ray sets to run (all when empty).
+    queries: Vec<String>,
 }
+
+/// The ray sets and queries the harness runs, in order.
+const QUERIES: [&str; 5] = ["primary", "primary-packet", "incoherent", "shadow", "shadow-packet"];
 
 fn parse(args: &[String]) -> Result<Options, Error> {
     let mut o = Options {
@@ -49,6 +54,7 @@ fn parse(args: &[String]) -> Result<Options, Error> {
         quality: None,
         width: 1920,
         height: 1080,
+        queries: Vec::new(),
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -72,10 +78,17 @@ fn parse(args: &[String]) -> Result<Options, Error> {
             }
             "--width" => o.width = value()?.parse()?,
             "--height" => o.height = value()?.parse()?,
+            "--queries" => {
+                o.queries = value()?.split(',').map(str::to_string).collect();
+                if let Some(q) = o.queries.iter().find(|q| !QUERIES.contains(&q.as_str())) {
+                    return Err(format!("unknown query {q} (one of {})", QUERIES.join(", ")).into());
+                }
+            }
             "-h" | "--help" => {
                 eprintln!(
                     "prism-bench [--data DIR] [--mesh PATH [--grid N]] [--reps N] [--threads 1,2] \
-                     [--quality fastest|very-fast|fast|medium|slow|very-slow] [--width W --height H]"
+                     [--quality fastest|very-fast|fast|medium|slow|very-slow] [--width W --height H] \
+                     [--queries primary,primary-packet,incoherent,shadow,shadow-packet]"
                 );
                 std::process::exit(0);
             }
@@ -177,7 +190,11 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
         ("shadow", &shadow, &occluded),
         ("shadow-packet", &shadow, &occluded_packet),
     ];
+    debug_assert!(sets.iter().map(|s| s.0).eq(QUERIES), "QUERIES names the sets");
     for (query, rays, f) in sets {
+        if !o.queries.is_empty() && !o.queries.iter().any(|q| q == query) {
+            continue;
+        }
         for &threads in &o.threads {
             let mut times = Vec::new();
             let mut hits = 0;

@@ -231,31 +231,31 @@ impl Blas {
             return;
         };
         let mut br = packet_rays(rays, mask);
-        let mut v: [Option<ClosestTriangle<'_>>; N] = std::array::from_fn(|k| {
-            (mask >> k & 1 == 1).then(|| ClosestTriangle {
-                tris: &self.tris,
-                blocks: &self.blocks,
-                tr: TriangleRay::new(&rays[k]),
-                found: None,
-            })
-        });
+        let mut v = Closest4 {
+            tris: &self.tris,
+            blocks: &self.blocks,
+            tr: triangle_rays(rays, mask),
+            found: [None; N],
+        };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<false, N>(self.depth, &fr, &mut br, m, EachRay(&mut v)),
+                Some(fr) => tree.walk_packet::<false, N>(self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
-                        if let Some(v) = v[k].as_mut() {
-                            self.walk(&mut br[k], v);
-                        }
+                        let mut c = ClosestTriangle {
+                            tris: v.tris,
+                            blocks: v.blocks,
+                            tr: v.tr[k],
+                            found: v.found[k],
+                        };
+                        self.walk(&mut br[k], &mut c);
+                        (v.tr[k], v.found[k]) = (c.tr, c.found);
                     }
                 }
             }
         }
         for k in bits(mask) {
-            found[k] = v[k]
-                .as_ref()
-                .and_then(|v| v.found)
-                .map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
+            found[k] = v.found[k].map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
         }
     }
 
@@ -267,27 +267,20 @@ impl Blas {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
         let mut br = packet_rays(rays, mask);
-        let mut v: [Option<AnyTriangle<'_>>; N] = std::array::from_fn(|k| {
-            (mask >> k & 1 == 1).then(|| AnyTriangle {
-                tris: &self.tris,
-                blocks: &self.blocks,
-                tr: TriangleRay::new(&rays[k]),
-                hit: false,
-            })
-        });
+        let mut v = Any4 { tris: &self.tris, blocks: &self.blocks, tr: triangle_rays(rays, mask), hit: 0 };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<true, N>(self.depth, &fr, &mut br, m, EachRay(&mut v)),
+                Some(fr) => tree.walk_packet::<true, N>(self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
-                        if let Some(v) = v[k].as_mut() {
-                            self.walk(&mut br[k], v);
-                        }
+                        let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr: v.tr[k], hit: false };
+                        self.walk(&mut br[k], &mut c);
+                        v.hit |= u64::from(c.hit) << k;
                     }
                 }
             }
         }
-        bits(mask).filter(|&k| v[k].as_ref().is_some_and(|v| v.hit)).fold(0, |m, k| m | 1 << k)
+        v.hit & mask
     }
 
     /// Calls `f(face, t, b1, b2)` for every triangle crossing in the
@@ -327,25 +320,116 @@ fn packet_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [BoxRay; N] {
     std::array::from_fn(|k| if mask >> k & 1 == 1 { BoxRay::new(&rays[k]) } else { BoxRay::NONE })
 }
 
-/// A packet leaf visited by each meeting ray's own single-ray visitor;
-/// the rays whose visitor stops (an occluded ray) are done.
-struct EachRay<'v, V, const N: usize>(&'v mut [Option<V>; N]);
+/// The triangle rays of `mask` (placeholders elsewhere, never read).
+#[inline(always)]
+fn triangle_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [TriangleRay; N] {
+    let none = TriangleRay::new(&Ray::new(Vec3::ZERO, Vec3::X));
+    std::array::from_fn(|k| if mask >> k & 1 == 1 { TriangleRay::new(&rays[k]) } else { none })
+}
 
-impl<V, const N: usize> Leaf for EachRay<'_, V, N>
-where
-    for<'x> &'x mut V: Visit,
-{
+/// A packet's closest-hit walk over one mesh's triangles: each ray that
+/// meets a leaf tests it as [`ClosestTriangle`] does (per-ray state in flat
+/// arrays, cheaper to set up than a visitor per ray).
+struct Closest4<'a, const N: usize> {
+    tris: &'a [[Vec3; 3]],
+    blocks: &'a [Triangles4],
+    tr: [TriangleRay; N],
+    found: [Option<(u32, f32, f32, f32)>; N],
+}
+
+impl<const N: usize> Leaf for &mut Closest4<'_, N> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
-        let mut done = 0u64;
         for k in bits(meet) {
-            if let (Some(Some(v)), Some(b)) = (self.0.get_mut(k), br.get_mut(k)) {
-                let go_on = Visit::visit_leaf(&mut &mut *v, first, count, b);
-                done |= u64::from(!go_on) << k;
+            if let (Some(tr), Some(found), Some(b)) =
+                (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k))
+            {
+                closest_in_leaf(self.tris, self.blocks, tr, found, first, count, b);
             }
         }
+        0
+    }
+}
+
+/// A packet's occlusion walk over one mesh's triangles: collects the
+/// occluded rays in `hit` (and reports them done).
+struct Any4<'a, const N: usize> {
+    tris: &'a [[Vec3; 3]],
+    blocks: &'a [Triangles4],
+    tr: [TriangleRay; N],
+    hit: u64,
+}
+
+impl<const N: usize> Leaf for &mut Any4<'_, N> {
+    #[inline(always)]
+    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
+        let mut done = 0u64;
+        for k in bits(meet) {
+            if let Some(tr) = self.tr.get(k) {
+                done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
+            }
+        }
+        self.hit |= done;
         done
     }
+}
+
+/// The nearest hit of `tr` among the leaf's slots `first..first + count`
+/// (a wide leaf's block at once, [`TriangleRay::intersect4`], else slot by
+/// slot in order): narrows `tr` and `br` and records it in `found`.
+#[inline(always)]
+fn closest_in_leaf(
+    tris: &[[Vec3; 3]],
+    blocks: &[Triangles4],
+    tr: &mut TriangleRay,
+    found: &mut Option<(u32, f32, f32, f32)>,
+    first: u32,
+    count: u32,
+    br: &mut BoxRay,
+) {
+    let Some(block) = blocks.get(first as usize / 4) else {
+        for slot in first..first + count {
+            closest_in_slot(tris, tr, found, slot, br);
+        }
+        return;
+    };
+    if let Some((lane, t, b1, b2)) = tr.intersect4(block) {
+        tr.set_t_max(t);
+        br.set_t_max(t);
+        *found = Some((first + lane as u32, t, b1, b2));
+    }
+}
+
+/// The hit of `tr` on slot `slot`, if nearer: narrows `tr` and `br` and
+/// records it in `found`.
+#[inline(always)]
+fn closest_in_slot(
+    tris: &[[Vec3; 3]],
+    tr: &mut TriangleRay,
+    found: &mut Option<(u32, f32, f32, f32)>,
+    slot: u32,
+    br: &mut BoxRay,
+) {
+    if let Some((t, b1, b2)) = tris.get(slot as usize).and_then(|v| tr.intersect(v)) {
+        tr.set_t_max(t);
+        br.set_t_max(t);
+        *found = Some((slot, t, b1, b2));
+    }
+}
+
+/// Whether `tr` hits any triangle of the leaf's slots.
+#[inline(always)]
+fn any_in_leaf(tris: &[[Vec3; 3]], blocks: &[Triangles4], tr: &TriangleRay, first: u32, count: u32) -> bool {
+    match blocks.get(first as usize / 4) {
+        Some(block) => tr.intersect4(block).is_some(),
+        None => (first..first + count).any(|slot| any_in_slot(tris, tr, slot)),
+    }
+}
+
+/// Whether `tr` hits the triangle of slot `slot`.
+#[inline(always)]
+fn any_in_slot(tris: &[[Vec3; 3]], tr: &TriangleRay, slot: u32) -> bool {
+    tris.get(slot as usize).is_some_and(|v| tr.intersect(v).is_some())
 }
 
 /// The closest-hit walk over one mesh's triangles.
@@ -360,11 +444,7 @@ struct ClosestTriangle<'a> {
 impl Visit for &mut ClosestTriangle<'_> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
-        if let Some((t, b1, b2)) = self.tr.intersect(&self.tris[slot as usize]) {
-            self.tr.set_t_max(t);
-            br.set_t_max(t);
-            self.found = Some((slot, t, b1, b2));
-        }
+        closest_in_slot(self.tris, &mut self.tr, &mut self.found, slot, br);
         true
     }
 
@@ -372,14 +452,7 @@ impl Visit for &mut ClosestTriangle<'_> {
     /// order ([`TriangleRay::intersect4`]).
     #[inline(always)]
     fn visit_leaf(&mut self, first: u32, count: u32, br: &mut BoxRay) -> bool {
-        let Some(block) = self.blocks.get(first as usize / 4) else {
-            return (first..first + count).all(|slot| self.visit(slot, br));
-        };
-        if let Some((lane, t, b1, b2)) = self.tr.intersect4(block) {
-            self.tr.set_t_max(t);
-            br.set_t_max(t);
-            self.found = Some((first + lane as u32, t, b1, b2));
-        }
+        closest_in_leaf(self.tris, self.blocks, &mut self.tr, &mut self.found, first, count, br);
         true
     }
 }
@@ -397,16 +470,13 @@ impl Visit for &mut AnyTriangle<'_> {
 
     #[inline(always)]
     fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
-        self.hit = self.tr.intersect(&self.tris[slot as usize]).is_some();
+        self.hit = any_in_slot(self.tris, &self.tr, slot);
         !self.hit
     }
 
     #[inline(always)]
-    fn visit_leaf(&mut self, first: u32, count: u32, br: &mut BoxRay) -> bool {
-        let Some(block) = self.blocks.get(first as usize / 4) else {
-            return (first..first + count).all(|slot| self.visit(slot, br));
-        };
-        self.hit = self.tr.intersect4(block).is_some();
+    fn visit_leaf(&mut self, first: u32, count: u32, _: &mut BoxRay) -> bool {
+        self.hit = any_in_leaf(self.tris, self.blocks, &self.tr, first, count);
         !self.hit
     }
 }

@@ -34,6 +34,7 @@
 
 use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
 use crate::wide::{FIRST_BITS, LEAF, Node, WIDTH, WideBvh, max_ps, min_ps};
+use prism_geometry::glam::Vec3A;
 
 /// Most rays in one packet (bits of its masks).
 pub const PACKET: usize = 64;
@@ -75,12 +76,9 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
     let mut groups = [0u64; 9];
     for k in bits(mask) {
         let Some(b) = br.get(k) else { continue };
-        let inv = b.inv.to_array();
-        let o = if inv.iter().all(|v| v.is_finite()) {
-            usize::from(inv[0] < 0.0) | usize::from(inv[1] < 0.0) << 1 | usize::from(inv[2] < 0.0) << 2
-        } else {
-            8
-        };
+        // Bit `a` set when axis `a` runs negative; no frustum for an
+        // infinite reciprocal.
+        let o = if b.inv.is_finite() { b.inv.cmplt(Vec3A::ZERO).bitmask() as usize & 7 } else { 8 };
         groups[o] |= 1 << k;
     }
     groups
@@ -127,26 +125,30 @@ impl Frustum {
             t_min: f32::INFINITY,
             same_origin: false,
         };
-        let first = br.get(mask.trailing_zeros() as usize)?.inv.to_array();
-        for (a, inv) in first.iter().enumerate() {
-            let neg = usize::from(*inv < 0.0) * 3;
+        let first = br.get(mask.trailing_zeros() as usize)?.inv;
+        let signs = first.cmplt(Vec3A::ZERO).bitmask();
+        for a in 0..3 {
+            let neg = (signs >> a & 1) as usize * 3;
             f.near_row[a] = a + neg;
             f.far_row[a] = a + 3 - neg;
         }
+        // Per-axis bounds as vectors: the same values as per-lane `min`
+        // and `max`, as nothing here is `NaN` (finite, checked below).
+        let (mut o_lo, mut o_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        let (mut inv_lo, mut inv_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for k in bits(mask) {
             let b = br.get(k)?;
-            let (o, inv) = (b.origin.to_array(), b.inv.to_array());
-            for a in 0..3 {
-                if !inv[a].is_finite() || (inv[a] < 0.0) != (first[a] < 0.0) {
-                    return None;
-                }
-                f.o_lo[a] = f.o_lo[a].min(o[a]);
-                f.o_hi[a] = f.o_hi[a].max(o[a]);
-                f.inv_lo[a] = f.inv_lo[a].min(inv[a]);
-                f.inv_hi[a] = f.inv_hi[a].max(inv[a]);
+            if !b.inv.is_finite() || b.inv.cmplt(Vec3A::ZERO).bitmask() != signs {
+                return None;
             }
+            o_lo = o_lo.min(b.origin);
+            o_hi = o_hi.max(b.origin);
+            inv_lo = inv_lo.min(b.inv);
+            inv_hi = inv_hi.max(b.inv);
             f.t_min = f.t_min.min(b.t_min);
         }
+        (f.o_lo, f.o_hi) = (o_lo.to_array(), o_hi.to_array());
+        (f.inv_lo, f.inv_hi) = (inv_lo.to_array(), inv_hi.to_array());
         f.same_origin = f.o_lo == f.o_hi;
         Some(f)
     }
