@@ -22,7 +22,7 @@
 //! and by the same operations as the single-ray node test, eight rays at a
 //! time (SoA); a child no ray enters is culled, and a stack entry carries
 //! the rays that enter it. At a leaf those rays test the leaf's primitives,
-//! each with its own single-ray visitor. A ray therefore tests every
+//! each with the single-ray leaf test. A ray therefore tests every
 //! primitive its single-ray walk would find nearest, with the same
 //! primitive test: packet and single queries return the same hits (the
 //! tests compare them), whatever the packet's spread. A spread-out packet
