@@ -231,25 +231,17 @@ impl Blas {
             return;
         };
         let mut br = packet_rays(rays, mask);
-        let mut v = Closest4 {
-            tris: &self.tris,
-            blocks: &self.blocks,
-            tr: triangle_rays(rays, mask),
-            found: [None; N],
-        };
+        let mut v =
+            Closest4 { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], found: [None; N] };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<false, N>(self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
-                        let mut c = ClosestTriangle {
-                            tris: v.tris,
-                            blocks: v.blocks,
-                            tr: v.tr[k],
-                            found: v.found[k],
-                        };
+                        let tr = v.tr[k].unwrap_or_else(|| TriangleRay::new(&rays[k]));
+                        let mut c = ClosestTriangle { tris: v.tris, blocks: v.blocks, tr, found: v.found[k] };
                         self.walk(&mut br[k], &mut c);
-                        (v.tr[k], v.found[k]) = (c.tr, c.found);
+                        (v.tr[k], v.found[k]) = (Some(c.tr), c.found);
                     }
                 }
             }
@@ -267,13 +259,14 @@ impl Blas {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
         let mut br = packet_rays(rays, mask);
-        let mut v = Any4 { tris: &self.tris, blocks: &self.blocks, tr: triangle_rays(rays, mask), hit: 0 };
+        let mut v = Any4 { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<true, N>(self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
-                        let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr: v.tr[k], hit: false };
+                        let tr = TriangleRay::new(&rays[k]);
+                        let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
                         self.walk(&mut br[k], &mut c);
                         v.hit |= u64::from(c.hit) << k;
                     }
@@ -320,20 +313,16 @@ fn packet_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [BoxRay; N] {
     std::array::from_fn(|k| if mask >> k & 1 == 1 { BoxRay::new(&rays[k]) } else { BoxRay::NONE })
 }
 
-/// The triangle rays of `mask` (placeholders elsewhere, never read).
-#[inline(always)]
-fn triangle_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [TriangleRay; N] {
-    let none = TriangleRay::new(&Ray::new(Vec3::ZERO, Vec3::X));
-    std::array::from_fn(|k| if mask >> k & 1 == 1 { TriangleRay::new(&rays[k]) } else { none })
-}
-
 /// A packet's closest-hit walk over one mesh's triangles: each ray that
 /// meets a leaf tests it as [`ClosestTriangle`] does (per-ray state in flat
-/// arrays, cheaper to set up than a visitor per ray).
+/// arrays, cheaper to set up than a visitor per ray). A ray's
+/// [`TriangleRay`] is made when it first reaches a leaf (many rays of a
+/// packet reach none).
 struct Closest4<'a, const N: usize> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
-    tr: [TriangleRay; N],
+    rays: &'a [Ray; N],
+    tr: [Option<TriangleRay>; N],
     found: [Option<(u32, f32, f32, f32)>; N],
 }
 
@@ -341,9 +330,10 @@ impl<const N: usize> Leaf for &mut Closest4<'_, N> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
         for k in bits(meet) {
-            if let (Some(tr), Some(found), Some(b)) =
-                (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k))
+            if let (Some(tr), Some(found), Some(b), Some(ray)) =
+                (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k), self.rays.get(k))
             {
+                let tr = tr.get_or_insert_with(|| TriangleRay::new(ray));
                 closest_in_leaf(self.tris, self.blocks, tr, found, first, count, b);
             }
         }
@@ -352,11 +342,13 @@ impl<const N: usize> Leaf for &mut Closest4<'_, N> {
 }
 
 /// A packet's occlusion walk over one mesh's triangles: collects the
-/// occluded rays in `hit` (and reports them done).
+/// occluded rays in `hit` (and reports them done). A ray's
+/// [`TriangleRay`] is made when it first reaches a leaf, as in [`Closest4`].
 struct Any4<'a, const N: usize> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
-    tr: [TriangleRay; N],
+    rays: &'a [Ray; N],
+    tr: [Option<TriangleRay>; N],
     hit: u64,
 }
 
@@ -365,7 +357,8 @@ impl<const N: usize> Leaf for &mut Any4<'_, N> {
     fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
         let mut done = 0u64;
         for k in bits(meet) {
-            if let Some(tr) = self.tr.get(k) {
+            if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
+                let tr = tr.get_or_insert_with(|| TriangleRay::new(ray));
                 done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
             }
         }
