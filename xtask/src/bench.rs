@@ -20,8 +20,10 @@
 //! The BVH part builds the `prism-bench` binary in release mode and runs it
 //! from the project root with `--data ../shared/data` unless `--data` is
 //! given. Arguments pass through: `--mesh PATH [--grid N]`, `--reps N`,
-//! `--threads 1,2`, `--quality NAME`, `--width W --height H`. JSON lines go
-//! to stdout, the table to stderr. See docs/benchmarks.md.
+//! `--threads 1,2`, `--quality NAME`, `--width W --height H`, `--queries
+//! primary,primary-packet,incoherent,shadow,shadow-packet` (a subset of the
+//! ray sets, e.g. to profile one). JSON lines go to stdout, the table to
+//! stderr. See docs/benchmarks.md.
 
 use crate::{cargo, project_root, run_checked};
 use anyhow::{Context, Result, bail};
