@@ -366,11 +366,7 @@ impl Visit for &mut ClosestObject<'_> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         let i = self.accel.tlas_objects[slot as usize];
-        let t_max = self.ray.t_max;
-        self.accel.closest_object(i, &mut self.ray, &mut self.best);
-        if self.ray.t_max != t_max {
-            br.set_t_max(self.ray.t_max);
-        }
+        self.accel.closest_object_walked(i, &mut self.ray, &mut self.best, br);
         true
     }
 }
@@ -432,11 +428,7 @@ impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
                 if let (Some(r), Some(best), Some(b)) =
                     (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
                 {
-                    let t_max = r.t_max;
-                    accel.closest_object(i, r, best);
-                    if r.t_max != t_max {
-                        b.set_t_max(r.t_max);
-                    }
+                    accel.closest_object_walked(i, r, best, b);
                 }
             }
         }
@@ -746,6 +738,17 @@ impl Accel {
                     *best = Best::Mesh { object: i, face, t, b1, b2, dir: local.dir };
                 }
             }
+        }
+    }
+
+    /// [`Accel::closest_object`] inside a walk: a closer hit also narrows
+    /// the walk's box ray `br`.
+    #[inline(always)]
+    fn closest_object_walked(&self, i: u32, ray: &mut Ray, best: &mut Best, br: &mut BoxRay) {
+        let t_max = ray.t_max;
+        self.closest_object(i, ray, best);
+        if ray.t_max != t_max {
+            br.set_t_max(ray.t_max);
         }
     }
 
