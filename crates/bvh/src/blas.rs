@@ -231,8 +231,13 @@ impl Blas {
             return;
         };
         let mut br = packet_rays(rays, mask);
-        let mut v =
-            Closest4 { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], found: [None; N] };
+        let mut v = ClosestTriangles {
+            tris: &self.tris,
+            blocks: &self.blocks,
+            rays,
+            tr: [None; N],
+            found: [None; N],
+        };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<false, N>(self.depth, &fr, &mut br, m, &mut v),
@@ -259,7 +264,7 @@ impl Blas {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
         let mut br = packet_rays(rays, mask);
-        let mut v = Any4 { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
+        let mut v = AnyTriangles { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<true, N>(self.depth, &fr, &mut br, m, &mut v),
@@ -318,7 +323,7 @@ fn packet_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [BoxRay; N] {
 /// arrays, cheaper to set up than a visitor per ray). A ray's
 /// [`TriangleRay`] is made when it first reaches a leaf (many rays of a
 /// packet reach none).
-struct Closest4<'a, const N: usize> {
+struct ClosestTriangles<'a, const N: usize> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
@@ -326,7 +331,7 @@ struct Closest4<'a, const N: usize> {
     found: [Option<(u32, f32, f32, f32)>; N],
 }
 
-impl<const N: usize> Leaf for &mut Closest4<'_, N> {
+impl<const N: usize> Leaf for &mut ClosestTriangles<'_, N> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
         for k in bits(meet) {
@@ -343,8 +348,8 @@ impl<const N: usize> Leaf for &mut Closest4<'_, N> {
 
 /// A packet's occlusion walk over one mesh's triangles: collects the
 /// occluded rays in `hit` (and reports them done). A ray's
-/// [`TriangleRay`] is made when it first reaches a leaf, as in [`Closest4`].
-struct Any4<'a, const N: usize> {
+/// [`TriangleRay`] is made when it first reaches a leaf, as in [`ClosestTriangles`].
+struct AnyTriangles<'a, const N: usize> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
@@ -352,7 +357,7 @@ struct Any4<'a, const N: usize> {
     hit: u64,
 }
 
-impl<const N: usize> Leaf for &mut Any4<'_, N> {
+impl<const N: usize> Leaf for &mut AnyTriangles<'_, N> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
         let mut done = 0u64;
