@@ -2,7 +2,7 @@
 
 use super::check_finite;
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec4};
 
 /// A single triangle `(v0, v1, v2)`; its outward normal follows the
 /// counter-clockwise winding, `(v1 − v0) × (v2 − v0)` (right-handed).
@@ -70,23 +70,20 @@ impl Intersect for Triangle {
 ///
 /// # Layout
 ///
-/// The paper indexes the vertex by the permuted axes `kx`, `ky`, `kz` of the
-/// ray's dominant direction and computes the sheared vertex as
-/// `(a[kx] − sx·a[kz], a[ky] − sy·a[kz], sz·a[kz])`. Here the shear is
-/// stored as three row vectors (`Vec3A`, SIMD-friendly) so that the same
-/// three values are dot products instead of dynamically indexed loads: the
-/// extra terms are products with exact zeros, so every value, and so every
-/// edge-function sign (the watertightness), is the paper's (up to the sign
-/// of an exactly zero coordinate, which no test below distinguishes).
+/// As in the paper, the ray keeps the permuted axes `kx`, `ky`, `kz` of its
+/// dominant direction and the shear `(sx, sy, sz)`; a corner `a` (relative
+/// to the origin) becomes `(a[kx] − sx·a[kz], a[ky] − sy·a[kz], sz·a[kz])`.
+/// The origin is stored permuted too. The scalar test and the four-lane
+/// [`TriangleRay::intersect4`] compute these the same way, so they agree
+/// bit for bit.
 #[derive(Clone, Copy, Debug)]
 pub struct TriangleRay {
-    origin: Vec3A,
-    /// Row giving the sheared `x`: `1` at `kx`, `−sx` at `kz`.
-    mx: Vec3A,
-    /// Row giving the sheared `y`: `1` at `ky`, `−sy` at `kz`.
-    my: Vec3A,
-    /// Row giving the scaled `z`: `sz` at `kz`.
-    mz: Vec3A,
+    /// The origin's coordinates on axes `kx`, `ky`, `kz`.
+    origin: [f32; 3],
+    /// The axes `kx`, `ky`, `kz` (each below 3).
+    k: [usize; 3],
+    /// The shear `sx`, `sy`, `sz`.
+    shear: [f32; 3],
     /// The ray's `t_min`, raised to `f32::MIN` (so `−∞` never passes).
     t_min: f32,
     /// The ray's `t_max`, lowered to `f32::MAX` (so `+∞` never passes).
@@ -120,15 +117,23 @@ impl TriangleRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = ray.dir[kz];
-        let (sx, sy, sz) = (ray.dir[kx] / dz, ray.dir[ky] / dz, 1.0 / dz);
-        let (mut mx, mut my, mut mz) = (Vec3A::ZERO, Vec3A::ZERO, Vec3A::ZERO);
-        mx[kx] = 1.0;
-        mx[kz] = -sx;
-        my[ky] = 1.0;
-        my[kz] = -sy;
-        mz[kz] = sz;
+        let shear = [ray.dir[kx] / dz, ray.dir[ky] / dz, 1.0 / dz];
+        let origin = [ray.origin[kx], ray.origin[ky], ray.origin[kz]];
         let (t_min, t_max) = finite_interval(ray.t_min, ray.t_max);
-        Self { origin: ray.origin.into(), mx, my, mz, t_min, t_max }
+        Self { origin, k: [kx, ky, kz], shear, t_min, t_max }
+    }
+
+    /// Corner `p` relative to the origin, sheared and scaled: the paper's
+    /// `(a[kx] − sx·a[kz], a[ky] − sy·a[kz], sz·a[kz])` for `a = p − origin`.
+    /// [`TriangleRay::intersect4`] computes the same per lane.
+    #[inline(always)]
+    fn shear(&self, p: Vec3) -> (f32, f32, f32) {
+        let p = p.to_array();
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.shear;
+        let [ox, oy, oz] = self.origin;
+        let (x, y, z) = (p[kx.min(2)] - ox, p[ky.min(2)] - oy, p[kz.min(2)] - oz);
+        (x - sx * z, y - sy * z, sz * z)
     }
 
     /// Narrows the accepted interval's upper end (after a closer hit).
@@ -146,12 +151,9 @@ impl TriangleRay {
     #[inline(always)]
     #[must_use]
     pub fn intersect(&self, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
-        let a = Vec3A::from(v[0]) - self.origin;
-        let b = Vec3A::from(v[1]) - self.origin;
-        let c = Vec3A::from(v[2]) - self.origin;
-        let (ax, ay) = (self.mx.dot(a), self.my.dot(a));
-        let (bx, by) = (self.mx.dot(b), self.my.dot(b));
-        let (cx, cy) = (self.mx.dot(c), self.my.dot(c));
+        let (ax, ay, az) = self.shear(v[0]);
+        let (bx, by, bz) = self.shear(v[1]);
+        let (cx, cy, cz) = self.shear(v[2]);
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -168,7 +170,7 @@ impl TriangleRay {
         if det == 0.0 || !det.is_finite() {
             return None;
         }
-        let t_scaled = u * self.mz.dot(a) + v * self.mz.dot(b) + w * self.mz.dot(c);
+        let t_scaled = u * az + v * bz + w * cz;
         let rcp = 1.0 / det;
         let t = t_scaled * rcp;
         // The bounds are finite, so this also rejects an infinite or NaN t.
@@ -215,53 +217,54 @@ impl Triangles4 {
 }
 
 impl TriangleRay {
+    /// [`TriangleRay::shear`] on the four lanes of corner `c` of a
+    /// [`Triangles4`].
+    #[inline(always)]
+    fn shear4(&self, c: &[[f32; 4]; 3]) -> (Vec4, Vec4, Vec4) {
+        let [kx, ky, kz] = self.k.map(|k| k.min(2));
+        let [ox, oy, oz] = self.origin.map(Vec4::splat);
+        let [sx, sy, sz] = self.shear.map(Vec4::splat);
+        let z = Vec4::from_array(c[kz]) - oz;
+        let x = (Vec4::from_array(c[kx]) - ox) - sx * z;
+        let y = (Vec4::from_array(c[ky]) - oy) - sy * z;
+        (x, y, sz * z)
+    }
+
     /// [`TriangleRay::intersect`] on the (up to) four triangles of `tris`
-    /// at once, lane by lane in plain code the compiler vectorises. Returns
+    /// at once, in four-lane vectors (glam's `Vec4`). Returns
     /// the hit a loop over the lanes in order would keep, narrowing `t_max`
     /// after each hit: `(lane, t, b1, b2)` of the nearest, the last lane
     /// among equal `t`. Every value is computed by the same operations in
-    /// the same order as [`TriangleRay::intersect`] (the dot products as
-    /// `(x + y) + z`, as glam's), so it is bit-identical; a lane with an
+    /// the same order as [`TriangleRay::intersect`], so it is
+    /// bit-identical; a lane with an
     /// exactly zero edge function takes the scalar test, whose `f64`
     /// fallback decides it.
     #[inline(always)]
     #[must_use]
     pub fn intersect4(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
-        let [ox, oy, oz] = self.origin.to_array();
-        let dot = |m: Vec3A, x: f32, y: f32, z: f32| m.x * x + m.y * y + m.z * z;
-        let (mut t, mut b1, mut b2) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
-        let (mut ok, mut exact) = ([false; 4], [false; 4]);
         let v = &tris.v;
-        for k in 0..4 {
-            let a = [v[0][0][k] - ox, v[0][1][k] - oy, v[0][2][k] - oz];
-            let b = [v[1][0][k] - ox, v[1][1][k] - oy, v[1][2][k] - oz];
-            let c = [v[2][0][k] - ox, v[2][1][k] - oy, v[2][2][k] - oz];
-            let (ax, ay) = (dot(self.mx, a[0], a[1], a[2]), dot(self.my, a[0], a[1], a[2]));
-            let (bx, by) = (dot(self.mx, b[0], b[1], b[2]), dot(self.my, b[0], b[1], b[2]));
-            let (cx, cy) = (dot(self.mx, c[0], c[1], c[2]), dot(self.my, c[0], c[1], c[2]));
-            let u = cx * by - cy * bx;
-            let vv = ax * cy - ay * cx;
-            let w = bx * ay - by * ax;
-            exact[k] = u == 0.0 || vv == 0.0 || w == 0.0;
-            let outside = (u < 0.0 || vv < 0.0 || w < 0.0) && (u > 0.0 || vv > 0.0 || w > 0.0);
-            let det = u + vv + w;
-            let t_scaled = u * dot(self.mz, a[0], a[1], a[2])
-                + vv * dot(self.mz, b[0], b[1], b[2])
-                + w * dot(self.mz, c[0], c[1], c[2]);
-            let rcp = 1.0 / det;
-            t[k] = t_scaled * rcp;
-            b1[k] = vv * rcp;
-            b2[k] = w * rcp;
-            ok[k] = !outside && det != 0.0 && det.is_finite();
-        }
+        let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) =
+            (self.shear4(&v[0]), self.shear4(&v[1]), self.shear4(&v[2]));
+        let u = cx * by - cy * bx;
+        let vv = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        let exact = (u.cmpeq(zero) | vv.cmpeq(zero) | w.cmpeq(zero)).bitmask();
+        let outside = (u.cmplt(zero) | vv.cmplt(zero) | w.cmplt(zero))
+            & (u.cmpgt(zero) | vv.cmpgt(zero) | w.cmpgt(zero));
+        let det = u + vv + w;
+        let t_scaled = u * az + vv * bz + w * cz;
+        let rcp = Vec4::ONE / det;
+        let (t, b1, b2) = ((t_scaled * rcp).to_array(), (vv * rcp).to_array(), (w * rcp).to_array());
+        let ok = (!outside & det.cmpne(zero) & det.is_finite_mask()).bitmask();
         let mut best: Option<(usize, f32, f32, f32)> = None;
         let mut t_max = self.t_max;
         for k in 0..(tris.len as usize).min(4) {
-            let hit = if exact[k] {
+            let hit = if exact >> k & 1 == 1 {
                 let mut r = *self;
                 r.t_max = t_max;
                 r.intersect(&tris.corners(k))
-            } else if ok[k] && t[k] >= self.t_min && t[k] <= t_max {
+            } else if ok >> k & 1 == 1 && t[k] >= self.t_min && t[k] <= t_max {
                 Some((t[k], b1[k], b2[k]))
             } else {
                 None
