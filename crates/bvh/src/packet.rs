@@ -70,8 +70,9 @@ pub(crate) fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
 
 /// The rays of `mask` by octant (entries 0–7, bit `a` of the index set when
 /// axis `a` runs negative), and in entry 8 those with a zero direction
-/// component (an infinite reciprocal), which fit no frustum.
-#[inline]
+/// component (an infinite reciprocal), which fit no frustum. The reference
+/// that [`plan`]'s one pass is tested against.
+#[cfg(test)]
 pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
     let mut groups = [0u64; 9];
     for k in bits(mask) {
@@ -86,17 +87,53 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
 
 /// How the rays of `mask` walk: per octant, the rays and, when there are
 /// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one).
+/// One pass over the rays sorts them into [`octants`] and bounds those in
+/// the first ray's octant; any other octant big enough for a packet is
+/// bounded by [`Frustum::new`] (the tests compare the two).
 pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
-    let groups = octants(br, mask);
+    let mut groups = [0u64; 9];
+    // The bounds of the rays in the first ray's octant, `first` (most
+    // packets hold one octant); other octants are bounded afterwards.
+    let first = br.get(mask.trailing_zeros() as usize).map_or(8, octant);
+    let (mut o_lo, mut o_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let (mut inv_lo, mut inv_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let mut t_min = f32::INFINITY;
+    let mut m = mask;
+    while m != 0 {
+        let k = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let Some(b) = br.get(k) else { continue };
+        let o = octant(b);
+        groups[o] |= 1 << k;
+        if o == first {
+            o_lo = o_lo.min(b.origin);
+            o_hi = o_hi.max(b.origin);
+            inv_lo = inv_lo.min(b.inv);
+            inv_hi = inv_hi.max(b.inv);
+            t_min = t_min.min(b.t_min);
+        }
+    }
     std::array::from_fn(|o| {
         let m = groups[o];
-        let packet = o < 8 && m.count_ones() >= MIN_PACKET;
-        (m, if packet { Frustum::new(br, m) } else { None })
+        if o == 8 || m.count_ones() < MIN_PACKET {
+            (m, None)
+        } else if o == first {
+            (m, Some(Frustum::from_bounds(o as u32, [o_lo, o_hi], [inv_lo, inv_hi], t_min)))
+        } else {
+            (m, Frustum::new(br, m))
+        }
     })
 }
 
+/// The octant of a ray (bit `a` set when axis `a` runs negative), 8 for a
+/// ray with a zero direction component (see [`octants`]).
+#[inline(always)]
+fn octant(b: &BoxRay) -> usize {
+    if b.inv.is_finite() { b.inv.cmplt(Vec3A::ZERO).bitmask() as usize & 7 } else { 8 }
+}
+
 /// Bounds of a packet's rays, all of one octant with finite reciprocals.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Frustum {
     o_lo: [f32; 3],
     o_hi: [f32; 3],
@@ -115,27 +152,13 @@ pub(crate) struct Frustum {
 impl Frustum {
     /// Over the rays of `mask`, which [`octants`] put in one octant.
     pub fn new(br: &[BoxRay], mask: u64) -> Option<Self> {
-        let mut f = Self {
-            o_lo: [f32::INFINITY; 3],
-            o_hi: [f32::NEG_INFINITY; 3],
-            inv_lo: [f32::INFINITY; 3],
-            inv_hi: [f32::NEG_INFINITY; 3],
-            near_row: [0, 1, 2],
-            far_row: [3, 4, 5],
-            t_min: f32::INFINITY,
-            same_origin: false,
-        };
         let first = br.get(mask.trailing_zeros() as usize)?.inv;
         let signs = first.cmplt(Vec3A::ZERO).bitmask();
-        for a in 0..3 {
-            let neg = (signs >> a & 1) as usize * 3;
-            f.near_row[a] = a + neg;
-            f.far_row[a] = a + 3 - neg;
-        }
         // Per-axis bounds as vectors: the same values as per-lane `min`
         // and `max`, as nothing here is `NaN` (finite, checked below).
         let (mut o_lo, mut o_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         let (mut inv_lo, mut inv_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        let mut t_min = f32::INFINITY;
         for k in bits(mask) {
             let b = br.get(k)?;
             if !b.inv.is_finite() || b.inv.cmplt(Vec3A::ZERO).bitmask() != signs {
@@ -145,12 +168,34 @@ impl Frustum {
             o_hi = o_hi.max(b.origin);
             inv_lo = inv_lo.min(b.inv);
             inv_hi = inv_hi.max(b.inv);
-            f.t_min = f.t_min.min(b.t_min);
+            t_min = t_min.min(b.t_min);
         }
-        (f.o_lo, f.o_hi) = (o_lo.to_array(), o_hi.to_array());
-        (f.inv_lo, f.inv_hi) = (inv_lo.to_array(), inv_hi.to_array());
-        f.same_origin = f.o_lo == f.o_hi;
-        Some(f)
+        Some(Self::from_bounds(signs, [o_lo, o_hi], [inv_lo, inv_hi], t_min))
+    }
+
+    /// From the bounds of rays of the octant `signs` (bit `a` set when
+    /// axis `a` runs negative): their origins, reciprocals and smallest
+    /// `t_min`.
+    #[inline(always)]
+    fn from_bounds(signs: u32, origin: [Vec3A; 2], inv: [Vec3A; 2], t_min: f32) -> Self {
+        let mut near_row = [0, 1, 2];
+        let mut far_row = [3, 4, 5];
+        for a in 0..3 {
+            let neg = (signs >> a & 1) as usize * 3;
+            near_row[a] = a + neg;
+            far_row[a] = a + 3 - neg;
+        }
+        let (o_lo, o_hi) = (origin[0].to_array(), origin[1].to_array());
+        Self {
+            o_lo,
+            o_hi,
+            inv_lo: inv[0].to_array(),
+            inv_hi: inv[1].to_array(),
+            near_row,
+            far_row,
+            t_min,
+            same_origin: o_lo == o_hi,
+        }
     }
 
     /// Writes the children the packet may enter before `reach` (entry
@@ -475,6 +520,41 @@ mod tests {
         assert!(Frustum::new(&br, g[0]).is_some());
         assert!(Frustum::new(&br, 0b00011).is_none(), "mixed octants fit no frustum");
         assert!(Frustum::new(&br, g[8]).is_none(), "zero components fit no frustum");
+    }
+
+    /// `plan`'s one pass gives the reference's groups and frustums: rays
+    /// of mixed octants, zero direction components, partial masks.
+    #[test]
+    fn plan_matches_octants_and_frustum_new() {
+        let mut r = prism_testkit::Rng::new(11);
+        let mut rng = move || r.f32();
+        for _ in 0..500 {
+            let rays: Vec<Ray> = (0..PACKET)
+                .map(|_| {
+                    let o = Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0;
+                    let mut d = Vec3::new(rng() - 0.5, rng() - 0.5, rng() - 0.5);
+                    if rng() < 0.05 {
+                        d.y = if rng() < 0.5 { 0.0 } else { -0.0 };
+                    }
+                    // Mostly one octant, as a real packet.
+                    if rng() < 0.8 {
+                        d = d.abs();
+                    }
+                    Ray::with_interval(o, d, rng(), 10.0)
+                })
+                .collect();
+            let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+            let mask = (u64::from(rng().to_bits()) << 32 | u64::from(rng().to_bits())) | 1;
+            let got = plan(&br, mask);
+            let groups = octants(&br, mask);
+            for o in 0..9 {
+                assert_eq!(got[o].0, groups[o], "octant {o}");
+                let want = (o < 8 && groups[o].count_ones() >= MIN_PACKET)
+                    .then(|| Frustum::new(&br, groups[o]))
+                    .flatten();
+                assert_eq!(got[o].1, want, "octant {o}");
+            }
+        }
     }
 
     /// The frustum's bounds contain every ray's own entry and exit
