@@ -419,7 +419,7 @@ fn closest_in_slot(
 #[inline(always)]
 fn any_in_leaf(tris: &[[Vec3; 3]], blocks: &[Triangles4], tr: &TriangleRay, first: u32, count: u32) -> bool {
     match blocks.get(first as usize / 4) {
-        Some(block) => tr.intersect4(block).is_some(),
+        Some(block) => tr.occludes4(block),
         None => (first..first + count).any(|slot| any_in_slot(tris, tr, slot)),
     }
 }

@@ -181,6 +181,17 @@ impl TriangleRay {
     }
 }
 
+/// [`TriangleRay::lanes4`]'s values: per lane `t`, `b1`, `b2`, and as
+/// lane masks whether the lane passes the edge and determinant tests
+/// (`ok`) and whether an edge function is exactly zero (`exact`).
+struct Lanes4 {
+    t: Vec4,
+    b1: Vec4,
+    b2: Vec4,
+    ok: u32,
+    exact: u32,
+}
+
 /// Up to four triangles in SoA form (`v[corner][axis][lane]`), for
 /// [`TriangleRay::intersect4`]: one leaf of a wide BVH, tested at once.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -230,18 +241,10 @@ impl TriangleRay {
         (x, y, sz * z)
     }
 
-    /// [`TriangleRay::intersect`] on the (up to) four triangles of `tris`
-    /// at once, in four-lane vectors (glam's `Vec4`). Returns
-    /// the hit a loop over the lanes in order would keep, narrowing `t_max`
-    /// after each hit: `(lane, t, b1, b2)` of the nearest, the last lane
-    /// among equal `t`. Every value is computed by the same operations in
-    /// the same order as [`TriangleRay::intersect`], so it is
-    /// bit-identical; a lane with an
-    /// exactly zero edge function takes the scalar test, whose `f64`
-    /// fallback decides it.
+    /// The test's per-lane values on the four lanes of `tris` (before the
+    /// interval test).
     #[inline(always)]
-    #[must_use]
-    pub fn intersect4(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
+    fn lanes4(&self, tris: &Triangles4) -> Lanes4 {
         let v = &tris.v;
         let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) =
             (self.shear4(&v[0]), self.shear4(&v[1]), self.shear4(&v[2]));
@@ -255,8 +258,49 @@ impl TriangleRay {
         let det = u + vv + w;
         let t_scaled = u * az + vv * bz + w * cz;
         let rcp = Vec4::ONE / det;
-        let (t, b1, b2) = ((t_scaled * rcp).to_array(), (vv * rcp).to_array(), (w * rcp).to_array());
         let ok = (!outside & det.cmpne(zero) & det.is_finite_mask()).bitmask();
+        Lanes4 { t: t_scaled * rcp, b1: vv * rcp, b2: w * rcp, ok, exact }
+    }
+
+    /// Whether the ray meets any of the (up to) four triangles of `tris`
+    /// within its interval: `intersect4(tris).is_some()`, with the interval
+    /// tested on all lanes at once and no nearest hit picked (an occlusion
+    /// query's leaf test). A lane with an exactly zero edge function takes
+    /// the scalar test, as there.
+    #[inline(always)]
+    #[must_use]
+    pub fn occludes4(&self, tris: &Triangles4) -> bool {
+        let Lanes4 { t, ok, exact, .. } = self.lanes4(tris);
+        let used = (1u32 << tris.len.min(4)) - 1;
+        let inside = (t.cmpge(Vec4::splat(self.t_min)) & t.cmple(Vec4::splat(self.t_max))).bitmask();
+        if ok & inside & !exact & used != 0 {
+            return true;
+        }
+        let mut exact = exact & used;
+        while exact != 0 {
+            let k = exact.trailing_zeros() as usize;
+            exact &= exact - 1;
+            if self.intersect(&tris.corners(k)).is_some() {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// [`TriangleRay::intersect`] on the (up to) four triangles of `tris`
+    /// at once, in four-lane vectors (glam's `Vec4`). Returns
+    /// the hit a loop over the lanes in order would keep, narrowing `t_max`
+    /// after each hit: `(lane, t, b1, b2)` of the nearest, the last lane
+    /// among equal `t`. Every value is computed by the same operations in
+    /// the same order as [`TriangleRay::intersect`], so it is
+    /// bit-identical; a lane with an
+    /// exactly zero edge function takes the scalar test, whose `f64`
+    /// fallback decides it.
+    #[inline(always)]
+    #[must_use]
+    pub fn intersect4(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
+        let Lanes4 { t, b1, b2, ok, exact } = self.lanes4(tris);
+        let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
         let mut best: Option<(usize, f32, f32, f32)> = None;
         let mut t_max = self.t_max;
         for k in 0..(tris.len as usize).min(4) {
@@ -404,6 +448,7 @@ mod tests {
                 .intersect4(&Triangles4::new(&tris))
                 .map(|(k, t, b1, b2)| (k, t.to_bits(), b1.to_bits(), b2.to_bits()));
             assert_eq!(got, want, "case {case}: {tris:?} {o} {d}");
+            assert_eq!(tr.occludes4(&Triangles4::new(&tris)), want.is_some(), "case {case}: occludes4");
             hits += usize::from(want.is_some());
             exact_lanes += usize::from(case % 3 == 0 && want.is_some());
         }
