@@ -11,6 +11,11 @@
 //!
 //! Without `--mesh`: the Stanford bunny, the kitchen, and a 6×6×6 grid of
 //! bunny instances, from `DIR` (default `../shared/data`).
+//!
+//! The closest-hit sets (`primary`, `primary-packet`, `incoherent`) ask
+//! for hit records (`Accel::closest_record`: object, triangle, `t`,
+//! barycentrics), as Embree's `rtcIntersect` answers, not for the shading
+//! hit the renderer then builds with `Accel::resolve`.
 
 use prism_bvh::PACKET_SIZE;
 use prism_bvh::{Accel, BuildOptions, BuildQuality, Object};
@@ -163,13 +168,16 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
         shadow.len(),
         t0.elapsed().as_secs_f64()
     );
-    let closest = |rays: &[Ray]| rays.iter().filter(|r| accel.closest_hit(r).is_some()).count();
+    // Closest hits as records (object, triangle, t, barycentrics), as
+    // Embree's bench reads them; `Accel::resolve` would build the shading
+    // hit from each.
+    let closest = |rays: &[Ray]| rays.iter().filter(|r| accel.closest_record(r).is_some()).count();
     let occluded = |rays: &[Ray]| rays.iter().filter(|r| accel.occluded(r)).count();
     let closest_packet = |rays: &[Ray]| {
         let mut out = [None; PACKET_SIZE];
         rays.chunks(PACKET_SIZE)
             .map(|p| {
-                accel.closest_hit_packet(p, &mut out);
+                accel.closest_record_packet(p, &mut out);
                 out[..p.len()].iter().filter(|h| h.is_some()).count()
             })
             .sum()

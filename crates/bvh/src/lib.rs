@@ -476,6 +476,67 @@ enum Best {
     Mesh { object: u32, face: u32, t: f32, b1: f32, b2: f32, dir: Vec3 },
 }
 
+/// What a closest-hit query finds before any hit record is built: the
+/// object, and for a mesh the triangle, `t` and barycentrics (for an
+/// analytic shape, whose test builds its hit anyway, that hit). As
+/// Embree's `RTCHit`, it is enough to count hits or read distances;
+/// [`Accel::resolve`] builds the full [`SceneHit`] (point, interpolated
+/// normal and uv, in world space) that shading needs.
+#[derive(Clone, Copy)]
+pub struct HitRecord(Best);
+
+impl HitRecord {
+    /// The hit object's index (as [`SceneHit::object`]).
+    #[must_use]
+    pub fn object(&self) -> u32 {
+        match self.0 {
+            Best::Shape { object, .. } | Best::Mesh { object, .. } => object,
+            Best::None => u32::MAX,
+        }
+    }
+
+    /// The ray parameter of the hit.
+    #[must_use]
+    pub fn t(&self) -> f32 {
+        match self.0 {
+            Best::Shape { hit, .. } => hit.t,
+            Best::Mesh { t, .. } => t,
+            Best::None => f32::INFINITY,
+        }
+    }
+
+    /// The hit triangle of a mesh (as [`SceneHit::triangle`]), `None` for
+    /// an analytic shape.
+    #[must_use]
+    pub fn triangle(&self) -> Option<u32> {
+        match self.0 {
+            Best::Mesh { face, .. } => Some(face),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Debug for HitRecord {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HitRecord")
+            .field("object", &self.object())
+            .field("triangle", &self.triangle())
+            .field("t", &self.t())
+            .finish()
+    }
+}
+
+impl Best {
+    /// The record of a hit, `None` for no hit.
+    #[inline(always)]
+    fn record(self) -> Option<HitRecord> {
+        match self {
+            Best::None => None,
+            b => Some(HitRecord(b)),
+        }
+    }
+}
+
 /// The acceleration structure over a whole scene.
 #[derive(Debug)]
 pub struct Accel {
@@ -504,7 +565,7 @@ pub struct Accel {
 /// The CPU features the queries may use, detected once per build.
 #[derive(Clone, Copy, Debug)]
 struct Simd {
-    /// AVX2, FMA, BMI1/2, LZCNT and POPCNT: `closest_hit_wide` (compiled
+    /// AVX2, FMA, BMI1/2, LZCNT and POPCNT: `closest_best_wide` (compiled
     /// with these features) may run.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     wide: bool,
@@ -752,6 +813,15 @@ impl Accel {
         }
     }
 
+    /// The full hit of a record that [`Accel::closest_record`] or
+    /// [`Accel::closest_record_packet`] of this structure returned
+    /// (`None` only for a record of another structure).
+    #[must_use]
+    pub fn resolve(&self, record: HitRecord) -> Option<SceneHit> {
+        self.finish(record.0)
+    }
+
+    #[inline(always)]
     fn finish(&self, best: Best) -> Option<SceneHit> {
         match best {
             Best::None => None,
@@ -771,26 +841,40 @@ impl Accel {
     /// Rays with a zero or non-finite direction or origin hit nothing.
     #[must_use]
     pub fn closest_hit(&self, ray: &Ray) -> Option<SceneHit> {
+        self.finish(self.closest_dispatch(ray))
+    }
+
+    /// What [`Accel::closest_hit`] finds, before its [`SceneHit`] is built
+    /// ([`Accel::resolve`] builds it): for queries that need only the
+    /// object and distance, as Embree's `rtcIntersect1` gives.
+    #[must_use]
+    pub fn closest_record(&self, ray: &Ray) -> Option<HitRecord> {
+        self.closest_dispatch(ray).record()
+    }
+
+    /// The closest-hit walk, compiled for AVX2 where the CPU has it.
+    #[inline(always)]
+    fn closest_dispatch(&self, ray: &Ray) -> Best {
         #[cfg(target_arch = "x86_64")]
         if self.simd.wide {
             // SAFETY: `wide` is set only when the running CPU reports
-            // every feature `closest_hit_wide` is compiled for.
-            return unsafe { self.closest_hit_wide(ray) };
+            // every feature `closest_best_wide` is compiled for.
+            return unsafe { self.closest_best_wide(ray) };
         }
-        self.closest_hit_impl(ray)
+        self.closest_best(ray)
     }
 
-    /// [`Accel::closest_hit`] compiled for AVX2 (8-wide node tests).
+    /// [`Accel::closest_best`] compiled for AVX2 (8-wide node tests).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn closest_hit_wide(&self, ray: &Ray) -> Option<SceneHit> {
-        self.closest_hit_impl(ray)
+    fn closest_best_wide(&self, ray: &Ray) -> Best {
+        self.closest_best(ray)
     }
 
     #[inline(always)]
-    fn closest_hit_impl(&self, ray: &Ray) -> Option<SceneHit> {
+    fn closest_best(&self, ray: &Ray) -> Best {
         if !usable(ray) {
-            return None;
+            return Best::None;
         }
         let mut v = ClosestObject { accel: self, ray: *ray, best: Best::None };
         for &i in &self.unbounded {
@@ -798,7 +882,7 @@ impl Accel {
         }
         let mut br = BoxRay::new(&v.ray);
         walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
-        self.finish(v.best)
+        v.best
     }
 
     #[inline(always)]
@@ -853,31 +937,42 @@ impl Accel {
     /// mesh instances is traced ray by ray: its analytic shapes are tested
     /// per ray anyway, and the packet's bookkeeping measured slower there.
     pub fn closest_hit_packet(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
+        self.closest_packets(rays, out, |best| self.finish(best));
+    }
+
+    /// [`Accel::closest_record`] for each of `rays`, traced together as
+    /// [`Accel::closest_hit_packet`] traces them.
+    pub fn closest_record_packet(&self, rays: &[Ray], out: &mut [Option<HitRecord>]) {
+        self.closest_packets(rays, out, Best::record);
+    }
+
+    /// The packet queries' common part: `done` makes each ray's answer.
+    #[inline(always)]
+    fn closest_packets<T>(&self, rays: &[Ray], out: &mut [Option<T>], done: impl Fn(Best) -> Option<T>) {
         if !self.packets {
             for (r, o) in rays.iter().zip(out) {
-                *o = self.closest_hit(r);
+                *o = done(self.closest_dispatch(r));
             }
             return;
         }
         // Baseline target only, as `occluded`: an AVX2 build measured slower.
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-            self.closest_packet_sized(rays, out);
-        }
-    }
-
-    /// One packet, with per-ray arrays of the size it needs.
-    #[inline(always)]
-    fn closest_packet_sized(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
-        if rays.len() <= SMALL_PACKET {
-            self.closest_packet_impl::<SMALL_PACKET>(rays, out);
-        } else {
-            self.closest_packet_impl::<PACKET_SIZE>(rays, out);
+            if rays.len() <= SMALL_PACKET {
+                self.closest_packet_impl::<SMALL_PACKET, T>(rays, out, &done);
+            } else {
+                self.closest_packet_impl::<PACKET_SIZE, T>(rays, out, &done);
+            }
         }
     }
 
     /// One packet of at most `N` rays (see [`crate::packet`]).
     #[inline(always)]
-    fn closest_packet_impl<const N: usize>(&self, rays: &[Ray], out: &mut [Option<SceneHit>]) {
+    fn closest_packet_impl<const N: usize, T>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<T>],
+        done: &impl Fn(Best) -> Option<T>,
+    ) {
         let mut mask = 0u64;
         let mut best = [Best::None; N];
         let mut live: [Ray; N] = std::array::from_fn(|k| match rays.get(k) {
@@ -914,7 +1009,7 @@ impl Accel {
             }
         }
         for (k, o) in out.iter_mut().enumerate().take(rays.len().min(N)) {
-            *o = if mask >> k & 1 == 1 { self.finish(best[k]) } else { None };
+            *o = if mask >> k & 1 == 1 { done(best[k]) } else { None };
         }
     }
 
@@ -1267,8 +1362,18 @@ mod tests {
             }
             let ray = Ray::with_interval(o, d, 0.0, if k % 3 == 0 { 1.5 } else { f32::INFINITY });
             // SAFETY: `accel.simd.wide` says this CPU has the features.
-            let wide = unsafe { accel.closest_hit_wide(&ray) };
-            let plain = accel.closest_hit_impl(&ray);
+            let wide = accel.finish(unsafe { accel.closest_best_wide(&ray) });
+            let plain = accel.finish(accel.closest_best(&ray));
+            let record = accel.closest_record(&ray);
+            assert_eq!(
+                record.map(|r| (r.object(), r.triangle().unwrap_or(SceneHit::NO_TRIANGLE), r.t().to_bits())),
+                plain.map(|h| (h.object, h.triangle, h.hit.t.to_bits())),
+                "the record is the hit's: {ray:?}"
+            );
+            assert_eq!(
+                record.and_then(|r| accel.resolve(r)).map(|h| h.hit.point),
+                plain.map(|h| h.hit.point)
+            );
             let bits = |h: Option<SceneHit>| h.map(|h| (h.object, h.triangle, h.hit.t.to_bits()));
             assert_eq!(bits(wide), bits(plain), "{ray:?}");
             assert_eq!(accel.occluded(&ray), plain.is_some(), "{ray:?}");

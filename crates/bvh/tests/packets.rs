@@ -1,5 +1,5 @@
-//! Packet queries (`closest_hit_packet`, `occluded_packet`) against the
-//! single-ray queries, ray by ray: the same object, triangle and hit bit
+//! Packet queries (`closest_hit_packet`, `closest_record_packet`,
+//! `occluded_packet`) against the single-ray queries, ray by ray: the same object, triangle and hit bit
 //! for bit, on random scenes of every shape kind, on the shared meshes,
 //! with every layout and node kernel, for coherent packets (a camera's
 //! pixel block, shadow rays toward one point and toward an area light's
@@ -20,11 +20,26 @@ fn compare(accel: &Accel, rays: &[Ray]) -> Result<usize, String> {
     accel.closest_hit_packet(rays, &mut hits);
     let mut occluded = vec![false; rays.len()];
     accel.occluded_packet(rays, &mut occluded);
+    let mut records = vec![None; rays.len()];
+    accel.closest_record_packet(rays, &mut records);
     let mut n = 0;
     for (k, ray) in rays.iter().enumerate() {
         let single = accel.closest_hit(ray);
         if !same(&hits[k], &single) {
             return Err(format!("ray {k}: packet {:?}\nsingle {single:?}\nray {ray:?}", hits[k]));
+        }
+        // The records, packed and single, resolve to the single hit (up
+        // to a tie, as `same` allows) and name what they resolve to.
+        for (what, r) in [("packet", records[k]), ("single", accel.closest_record(ray))] {
+            let resolved = r.and_then(|r| accel.resolve(r));
+            let names = r.zip(resolved).is_none_or(|(r, h)| {
+                r.object() == h.object
+                    && r.triangle().unwrap_or(SceneHit::NO_TRIANGLE) == h.triangle
+                    && r.t().to_bits() == h.hit.t.to_bits()
+            });
+            if !same(&resolved, &single) || !names || r.is_some() != resolved.is_some() {
+                return Err(format!("ray {k}: {what} record {r:?}\nsingle {single:?}\nray {ray:?}"));
+            }
         }
         if occluded[k] != accel.occluded(ray) {
             return Err(format!(
