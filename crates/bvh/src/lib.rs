@@ -400,6 +400,24 @@ struct ClosestObjects<'v, 'a, const N: usize> {
     best: &'v mut [Best; N],
 }
 
+impl<const N: usize> ClosestObjects<'_, '_, N> {
+    /// Walks object `i`'s mesh `blas` with the gathered rays `dense` and
+    /// keeps each hit (nearer than the ray's best, as the walk was bounded
+    /// by its `t_max`).
+    #[inline(always)]
+    fn mesh_hits<const M: usize>(&mut self, i: u32, blas: &Blas, dense: Dense<M>, br: &mut [BoxRay]) {
+        for (k, (face, t, b1, b2), dir) in dense.closest(blas) {
+            if let (Some(r), Some(best), Some(b)) =
+                (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
+            {
+                r.t_max = t;
+                *best = Best::Mesh { object: i, face, t, b1, b2, dir };
+                b.set_t_max(t);
+            }
+        }
+    }
+}
+
 impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
@@ -409,18 +427,15 @@ impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
             if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
                 && meet.count_ones() >= MIN_PACKET
             {
+                let blas = &accel.blas[*mesh as usize];
                 let rays = &*self.rays;
-                let local: [Ray; N] = Accel::local_rays(transform, meet, |k| rays.get(k).copied());
-                let mut found = [None; N];
-                accel.blas[*mesh as usize].closest_packet(&local, meet, &mut found);
-                for k in bits(meet) {
-                    if let (Some((face, t, b1, b2)), Some(r), Some(best), Some(b)) =
-                        (found[k], self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
-                    {
-                        r.t_max = t;
-                        *best = Best::Mesh { object: i, face, t, b1, b2, dir: local[k].dir };
-                        b.set_t_max(t);
-                    }
+                let ray = |k: usize| rays.get(k).copied();
+                if N > SMALL_PACKET && meet.count_ones() as usize <= SMALL_PACKET {
+                    let dense = Dense::<SMALL_PACKET>::new(transform, meet, ray);
+                    self.mesh_hits(i, blas, dense, br);
+                } else {
+                    let dense = Dense::<N>::new(transform, meet, ray);
+                    self.mesh_hits(i, blas, dense, br);
                 }
                 continue;
             }
@@ -433,6 +448,62 @@ impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
             }
         }
         0
+    }
+}
+
+/// The rays of a packet that meet a mesh instance, gathered to the front
+/// of a packet of capacity `M` (a small one when few rays meet it, which
+/// is cheaper to set up) in the instance's object space: `ids[j]` is the
+/// index in the whole packet of ray `j`. A mesh packet gives each ray the
+/// hit it gives alone, whichever rays share the packet (tests/packets.rs),
+/// so gathering changes no answer.
+struct Dense<const M: usize> {
+    local: [Ray; M],
+    ids: [u8; M],
+    len: usize,
+}
+
+impl<const M: usize> Dense<M> {
+    /// The rays of `meet` (`ray(k)` gives ray `k`), at most `M` of them.
+    #[inline(always)]
+    fn new(transform: &Transform, meet: u64, ray: impl Fn(usize) -> Option<Ray>) -> Self {
+        let mut ids = [0u8; M];
+        let mut len = 0;
+        for k in bits(meet) {
+            if let Some(id) = ids.get_mut(len) {
+                *id = k as u8;
+                len += 1;
+            }
+        }
+        let local = std::array::from_fn(|j| match (j < len).then(|| ray(usize::from(ids[j]))).flatten() {
+            Some(r) => transform.ray_to_object(&r),
+            // A placeholder no walk reads (not in `mask`).
+            None => Ray::new(Vec3::ZERO, Vec3::X),
+        });
+        Self { local, ids, len }
+    }
+
+    /// The mask of the gathered rays.
+    #[inline(always)]
+    fn mask(&self) -> u64 {
+        if self.len >= 64 { u64::MAX } else { (1u64 << self.len) - 1 }
+    }
+
+    /// The mesh hits: per hit ray, its index in the whole packet, the hit
+    /// `(face, t, b1, b2)` and its object-space direction.
+    #[inline(always)]
+    fn closest(self, blas: &Blas) -> impl Iterator<Item = (usize, (u32, f32, f32, f32), Vec3)> {
+        let mut found = [None; M];
+        blas.closest_packet(&self.local, self.mask(), &mut found);
+        (0..self.len.min(M))
+            .filter_map(move |j| found[j].map(|hit| (usize::from(self.ids[j]), hit, self.local[j].dir)))
+    }
+
+    /// The occluded rays, as a mask over the whole packet.
+    #[inline(always)]
+    fn occluded(self, blas: &Blas) -> u64 {
+        let hit = blas.occluded_packet(&self.local, self.mask());
+        bits(hit).fold(0, |m, j| m | self.ids.get(j).map_or(0, |&k| 1u64 << k))
     }
 }
 
@@ -454,8 +525,13 @@ impl<const N: usize> Leaf for &mut AnyObjects<'_, N> {
             let i = accel.tlas_objects[slot as usize];
             hit |= match &accel.objects[i as usize] {
                 Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
-                    let local: [Ray; N] = Accel::local_rays(transform, meet, |k| rays.get(k).copied());
-                    accel.blas[*mesh as usize].occluded_packet(&local, meet)
+                    let blas = &accel.blas[*mesh as usize];
+                    let ray = |k: usize| rays.get(k).copied();
+                    if N > SMALL_PACKET && meet.count_ones() as usize <= SMALL_PACKET {
+                        Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(blas)
+                    } else {
+                        Dense::<N>::new(transform, meet, ray).occluded(blas)
+                    }
                 }
                 _ => bits(meet)
                     .filter(|&k| rays.get(k).is_some_and(|r| accel.object_occludes(i, r)))
@@ -1011,20 +1087,6 @@ impl Accel {
         for (k, o) in out.iter_mut().enumerate().take(rays.len().min(N)) {
             *o = if mask >> k & 1 == 1 { done(best[k]) } else { None };
         }
-    }
-
-    /// The object-space rays of `mask` under `transform` (`ray(k)` gives
-    /// ray `k`; the others are placeholders no walk reads).
-    #[inline(always)]
-    fn local_rays<const N: usize>(
-        transform: &Transform,
-        mask: u64,
-        ray: impl Fn(usize) -> Option<Ray>,
-    ) -> [Ray; N] {
-        std::array::from_fn(|k| match ray(k) {
-            Some(r) if mask >> k & 1 == 1 => transform.ray_to_object(&r),
-            _ => Ray::new(Vec3::ZERO, Vec3::X),
-        })
     }
 
     /// [`Accel::occluded`] for each of `rays`, into the same index of
