@@ -430,7 +430,7 @@ impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
                 let blas = &accel.blas[*mesh as usize];
                 let rays = &*self.rays;
                 let ray = |k: usize| rays.get(k).copied();
-                if N > SMALL_PACKET && meet.count_ones() as usize <= SMALL_PACKET {
+                if fits_small::<N>(meet) {
                     let dense = Dense::<SMALL_PACKET>::new(transform, meet, ray);
                     self.mesh_hits(i, blas, dense, br);
                 } else {
@@ -449,6 +449,13 @@ impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
         }
         0
     }
+}
+
+/// Whether the rays of `meet` (of a packet of capacity `N`) go to a
+/// [`Dense`] packet of [`SMALL_PACKET`] slots rather than of `N`.
+#[inline(always)]
+fn fits_small<const N: usize>(meet: u64) -> bool {
+    N > SMALL_PACKET && meet.count_ones() as usize <= SMALL_PACKET
 }
 
 /// The rays of a packet that meet a mesh instance, gathered to the front
@@ -527,7 +534,7 @@ impl<const N: usize> Leaf for &mut AnyObjects<'_, N> {
                 Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
                     let blas = &accel.blas[*mesh as usize];
                     let ray = |k: usize| rays.get(k).copied();
-                    if N > SMALL_PACKET && meet.count_ones() as usize <= SMALL_PACKET {
+                    if fits_small::<N>(meet) {
                         Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(blas)
                     } else {
                         Dense::<N>::new(transform, meet, ray).occluded(blas)
@@ -890,10 +897,18 @@ impl Accel {
     }
 
     /// The full hit of a record that [`Accel::closest_record`] or
-    /// [`Accel::closest_record_packet`] of this structure returned
-    /// (`None` only for a record of another structure).
+    /// [`Accel::closest_record_packet`] of this structure returned. A
+    /// record of another structure gives `None` where its object or
+    /// triangle does not exist here (it never panics), and otherwise a
+    /// hit that means nothing.
     #[must_use]
     pub fn resolve(&self, record: HitRecord) -> Option<SceneHit> {
+        if let Best::Mesh { object, face, .. } = record.0 {
+            let Some(Object::Mesh { mesh, .. }) = self.objects.get(object as usize) else { return None };
+            if self.meshes.get(*mesh as usize).is_none_or(|m| face as usize >= m.len()) {
+                return None;
+            }
+        }
         self.finish(record.0)
     }
 
@@ -1393,6 +1408,31 @@ mod tests {
     /// The AVX2-compiled queries give bit-for-bit the answers of the
     /// plain ones (where this CPU has AVX2; otherwise there is nothing to
     /// compare).
+    /// A record resolves to its hit here, and to `None` (no panic) in a
+    /// structure without its object or triangle.
+    #[test]
+    fn records_of_another_structure_resolve_to_none() {
+        let (positions, indices) = wavy_grid(20, [4.0, 4.0, 0.2]);
+        let big = Arc::new(TriangleMesh::new(positions, None, None, indices).unwrap());
+        let small = Arc::new(
+            TriangleMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], None, None, vec![[0, 1, 2]]).unwrap(),
+        );
+        let mesh = |m| Object::Mesh { mesh: 0, transform: Transform::translate(m).unwrap() };
+        let two = Accel::build(vec![big], vec![mesh(Vec3::new(0.0, -5.0, 0.0)), mesh(Vec3::ZERO)]).unwrap();
+        let one = Accel::build(vec![small], vec![mesh(Vec3::ZERO)]).unwrap();
+        // The grids lie near y = 0 and y = -5, across x, z in [0, 1].
+        let ray = Ray::new(Vec3::new(0.37, 5.0, 0.41), Vec3::NEG_Y);
+        let record = two.closest_record(&ray).expect("the upper grid");
+        assert_eq!(record.object(), 1);
+        assert!(record.triangle().is_some_and(|f| f > 0), "{record:?}");
+        let hit = two.resolve(record).expect("its own record");
+        assert_eq!((hit.object, hit.hit.t.to_bits()), (1, record.t().to_bits()));
+        assert!(one.resolve(record).is_none(), "object 1 does not exist in `one`");
+        let front = two.closest_record(&Ray::new(Vec3::new(0.37, -1.0, 0.41), Vec3::NEG_Y)).unwrap();
+        assert_eq!(front.object(), 0);
+        assert!(one.resolve(front).is_none(), "no such triangle in `one`'s mesh");
+    }
+
     #[test]
     fn wide_queries_match_plain_ones() {
         let (positions, indices) = wavy_grid(40, [9.0, 7.0, 0.3]);
