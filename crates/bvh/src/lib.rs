@@ -643,13 +643,13 @@ pub struct Accel {
     /// Objects tested outside the hierarchy.
     unbounded: Vec<u32>,
     /// The top level's object when it holds exactly one (a single model,
-    /// perhaps over an unbounded floor): single-ray and occlusion-packet
-    /// queries test it directly, without walking the top level, whose one
-    /// box its own hierarchy's root repeats. Closest-hit packets still
-    /// walk it: camera packets often miss the object, and that one box
-    /// test culls them before they are gathered into object space (going
-    /// straight to the object measured 14-21 % slower on them,
-    /// docs/benchmarks.md).
+    /// perhaps over an unbounded floor): single-ray queries (crossings
+    /// too) and occlusion packets test it directly, without walking the
+    /// top level, whose one box its own hierarchy's root repeats.
+    /// Closest-hit packets still walk it: camera packets often miss the
+    /// object, and that one box test culls them before they are gathered
+    /// into object space (going straight to the object measured 14-21 %
+    /// slower on them, docs/benchmarks.md).
     sole: Option<u32>,
     /// Per object: an analytic shape whose transform is the identity (it
     /// is then tested in world space directly, see [`Accel::shape_hit`]).
@@ -1262,6 +1262,10 @@ impl Accel {
             if self.object_crossings(i, ray, &mut f).is_break() {
                 return;
             }
+        }
+        if let Some(i) = self.sole {
+            let _ = self.object_crossings(i, ray, &mut f);
+            return;
         }
         let mut br = BoxRay::new(ray);
         walk_any(

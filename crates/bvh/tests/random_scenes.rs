@@ -56,10 +56,11 @@ fn random_scenes_match_brute_force() {
 
 /// A scene whose top level holds one object (each shape kind, and a mesh
 /// instance, under a random transform, sometimes over a plane) is tested
-/// without walking the top level: its answers, single and in occlusion
-/// packets, match brute force, and match bit for bit those of the same
-/// scene with a far, tiny sphere added (which makes the queries walk the
-/// top level again).
+/// without walking the top level. Its closest hits, occlusion and
+/// crossings match brute force; its occlusion packets match its single
+/// rays; and its closest hits and occlusion, single and packed, match bit
+/// for bit those of the same scene with a far, tiny sphere added (which
+/// makes the queries walk the top level).
 #[test]
 fn single_object_scenes_match_brute_force_and_the_walked_top_level() {
     let mut compared = 0;
@@ -92,6 +93,9 @@ fn single_object_scenes_match_brute_force_and_the_walked_top_level() {
         for (k, &ray) in rays.iter().enumerate() {
             assert_eq!(packed[k], sole.occluded(&ray), "scene {seed}, ray {k}: {ray:?}");
             let hit = compare_closest(&sole, &ray).unwrap_or_else(|e| panic!("scene {seed}, ray {k}: {e}"));
+            if k % 10 == 0 {
+                compare_all(&sole, &ray).unwrap_or_else(|e| panic!("scene {seed}, ray {k}: {e}"));
+            }
             assert_eq!(hit, walked.closest_hit(&ray), "scene {seed}, ray {k}: {ray:?}");
             assert_eq!(sole.occluded(&ray), walked.occluded(&ray), "scene {seed}, ray {k}: {ray:?}");
             if let Some(h) = hit {
