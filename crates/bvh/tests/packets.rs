@@ -1,10 +1,11 @@
 //! Packet queries (`closest_hit_packet`, `closest_record_packet`,
-//! `occluded_packet`) against the single-ray queries, ray by ray: the same object, triangle and hit bit
-//! for bit, on random scenes of every shape kind, on the shared meshes,
-//! with every layout and node kernel, for coherent packets (a camera's
-//! pixel block, shadow rays toward one point and toward an area light's
-//! samples), spread ones, mixed octants, and packets with unusable rays,
-//! zero direction components and every kind of interval.
+//! `occluded_packet`) against the single-ray queries, ray by ray: the same
+//! object, triangle and hit bit for bit, on random scenes of every shape
+//! kind, on the shared meshes, with every layout and node kernel, for
+//! coherent packets (a camera's pixel block, shadow rays toward one point
+//! and toward an area light's samples), spread ones, mixed octants, and
+//! packets with unusable rays, zero direction components and every kind of
+//! interval.
 
 mod common;
 
