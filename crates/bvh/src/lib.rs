@@ -76,12 +76,14 @@
 //! ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects another). All give bit-for-bit the same answers (same operations in the
 //! same order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
-//! bit-identical to the scalar test. [`Accel::closest_hit`] is also
-//! compiled for AVX2 as a whole (the CWBVH and BVH2 walks, and the analytic
-//! shapes, then use 256-bit registers); the other queries are not, as their
-//! AVX2 builds measured slower. Setting the environment variable
+//! bit-identical to the scalar test. [`Accel::closest_hit`] and the packet
+//! queries ([`Accel::closest_hit_packet`], [`Accel::occluded_packet`]) are
+//! also compiled for AVX2 as a whole (the CWBVH and BVH2 walks, the
+//! analytic shapes and a packet's eight-ray box tests then use 256-bit
+//! registers); [`Accel::occluded`] and [`Accel::for_each_hit`] are not, as
+//! their AVX2 builds measured slower. Setting the environment variable
 //! `PRISM_BVH_NO_SIMD` when the structure is built selects the plain
-//! `closest_hit`, for comparison.
+//! builds, for comparison.
 //!
 //! [`Accel::closest_hit_brute_force`] and [`Accel::for_each_hit_brute_force`]
 //! answer the same questions by testing everything; the tests compare the
@@ -664,8 +666,9 @@ pub struct Accel {
 /// The CPU features the queries may use, detected once per build.
 #[derive(Clone, Copy, Debug)]
 struct Simd {
-    /// AVX2, FMA, BMI1/2, LZCNT and POPCNT: `closest_best_wide` (compiled
-    /// with these features) may run.
+    /// AVX2, FMA, BMI1/2, LZCNT and POPCNT: `closest_best_wide` and
+    /// `closest_packets_wide`/`occluded_packets_wide` (compiled with these
+    /// features) may run.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     wide: bool,
 }
@@ -1074,12 +1077,39 @@ impl Accel {
             }
             return;
         }
-        // Baseline target only, as `occluded`: an AVX2 build measured slower.
+        #[cfg(target_arch = "x86_64")]
+        if self.simd.wide {
+            // SAFETY: `wide` is set only when the running CPU reports
+            // every feature `closest_packets_wide` is compiled for.
+            return unsafe { self.closest_packets_wide(rays, out, &done) };
+        }
+        self.closest_packet_chunks(rays, out, &done);
+    }
+
+    /// [`Accel::closest_packet_chunks`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn closest_packets_wide<T>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<T>],
+        done: &impl Fn(Best) -> Option<T>,
+    ) {
+        self.closest_packet_chunks(rays, out, done);
+    }
+
+    #[inline(always)]
+    fn closest_packet_chunks<T>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<T>],
+        done: &impl Fn(Best) -> Option<T>,
+    ) {
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
             if rays.len() <= SMALL_PACKET {
-                self.closest_packet_impl::<SMALL_PACKET, T>(rays, out, &done);
+                self.closest_packet_impl::<SMALL_PACKET, T>(rays, out, done);
             } else {
-                self.closest_packet_impl::<PACKET_SIZE, T>(rays, out, &done);
+                self.closest_packet_impl::<PACKET_SIZE, T>(rays, out, done);
             }
         }
     }
@@ -1145,7 +1175,24 @@ impl Accel {
             }
             return;
         }
-        // Baseline target only, as `occluded`: an AVX2 build measured slower.
+        #[cfg(target_arch = "x86_64")]
+        if self.simd.wide {
+            // SAFETY: `wide` is set only when the running CPU reports
+            // every feature `occluded_packets_wide` is compiled for.
+            return unsafe { self.occluded_packets_wide(rays, out) };
+        }
+        self.occluded_packet_chunks(rays, out);
+    }
+
+    /// [`Accel::occluded_packet_chunks`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn occluded_packets_wide(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_packet_chunks(rays, out);
+    }
+
+    #[inline(always)]
+    fn occluded_packet_chunks(&self, rays: &[Ray], out: &mut [bool]) {
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
             self.occluded_packet_sized(rays, out);
         }
@@ -1450,9 +1497,9 @@ mod tests {
         }
     }
 
-    /// The AVX2-compiled queries give bit-for-bit the answers of the
-    /// plain ones (where this CPU has AVX2; otherwise there is nothing to
-    /// compare).
+    /// The AVX2-compiled queries, single and packed, give bit-for-bit the
+    /// answers of the plain ones (where this CPU has AVX2; otherwise there
+    /// is nothing to compare).
     /// A record resolves to its hit here, and to `None` (no panic) in a
     /// structure without its object or triangle.
     #[test]
@@ -1498,6 +1545,7 @@ mod tests {
         let mut rng = prism_testkit::Rng::new(0x9e37_79b9);
         let mut f = move || rng.range(-1.0, 1.0);
         let mut hits = 0;
+        let mut rays = Vec::new();
         for k in 0..20_000 {
             let o = Vec3::new(f() * 3.0 + 1.0, f() * 2.0, f() * 3.0 + 0.5);
             let mut d = Vec3::new(f(), f(), f());
@@ -1525,7 +1573,42 @@ mod tests {
             assert_eq!(bits(wide), bits(plain), "{ray:?}");
             assert_eq!(accel.occluded(&ray), plain.is_some(), "{ray:?}");
             hits += usize::from(plain.is_some());
+            rays.push(ray);
         }
         assert!(hits > 500, "{hits}");
+        // The packet queries' AVX2 build against their plain one: on a
+        // pinhole camera's rows of rays (coherent packets) and on the
+        // random rays above, in full packets and in small ones.
+        for row in 0..48 {
+            for col in 0..64 {
+                let d = Vec3::new(col as f32 / 32.0 - 1.0, row as f32 / 24.0 - 1.0, -1.5);
+                rays.push(Ray::new(Vec3::new(1.0, 0.3, 5.0), d));
+            }
+        }
+        let finish = |best| accel.finish(best);
+        let key = |h: Option<SceneHit>| h.map(|h| (h.object, h.triangle, h.hit.t.to_bits()));
+        let mut packets_hit = 0;
+        for size in [PACKET_SIZE, 13] {
+            for chunk in rays.chunks(size) {
+                let (mut wide, mut plain) = (vec![None; chunk.len()], vec![None; chunk.len()]);
+                // SAFETY: `accel.simd.wide` says this CPU has the features.
+                unsafe { accel.closest_packets_wide(chunk, &mut wide, &finish) };
+                accel.closest_packet_chunks(chunk, &mut plain, &finish);
+                for (k, ray) in chunk.iter().enumerate() {
+                    assert_eq!(key(wide[k]), key(plain[k]), "packet of {size}: {ray:?}");
+                    assert_eq!(key(plain[k]), key(accel.closest_hit(ray)), "packet of {size}: {ray:?}");
+                    packets_hit += usize::from(plain[k].is_some());
+                }
+                let (mut wide, mut plain) = (vec![false; chunk.len()], vec![false; chunk.len()]);
+                // SAFETY: as above.
+                unsafe { accel.occluded_packets_wide(chunk, &mut wide) };
+                accel.occluded_packet_chunks(chunk, &mut plain);
+                assert_eq!(wide, plain, "occlusion packets of {size}");
+                for (k, ray) in chunk.iter().enumerate() {
+                    assert_eq!(plain[k], accel.occluded(ray), "occlusion packet of {size}: {ray:?}");
+                }
+            }
+        }
+        assert!(packets_hit > 2_000, "{packets_hit}");
     }
 }

@@ -10,7 +10,7 @@ pub const COMMIT: &str = env!("PRISM_GIT_COMMIT");
 /// The SIMD paths of prism and whether this CPU (and environment) enables
 /// each: `(path, enabled)`. Two today, both chosen when the structure is
 /// built and both off with `PRISM_BVH_NO_SIMD`: the AVX2 compilation of
-/// the closest-hit query's walks (`bvh-avx2`), and an intrinsics kernel for the node test
+/// the closest-hit and packet queries' walks (`bvh-avx2`), and an intrinsics kernel for the node test
 /// of the wide (8-child) hierarchies (`bvh8-avx512` or `bvh8-avx2`, only
 /// when `PRISM_BVH_KERNEL` asks for it: the default portable kernel,
 /// [`prism_bvh::Kernel::detect`], measured faster and is vectorised by the
