@@ -1577,14 +1577,18 @@ mod tests {
         }
         assert!(hits > 500, "{hits}");
         // The packet queries' AVX2 build against their plain one: on a
-        // pinhole camera's rows of rays (coherent packets) and on the
-        // random rays above, in full packets and in small ones.
+        // pinhole camera's rows of rays (coherent packets, looking down on
+        // the instances, most of them hitting) and on the random rays
+        // above, in full packets and in small ones.
+        let camera = rays.len();
         for row in 0..48 {
             for col in 0..64 {
-                let d = Vec3::new(col as f32 / 32.0 - 1.0, row as f32 / 24.0 - 1.0, -1.5);
-                rays.push(Ray::new(Vec3::new(1.0, 0.3, 5.0), d));
+                let d = Vec3::new(col as f32 / 32.0 - 1.0, -1.5, row as f32 / 48.0 - 0.5);
+                rays.push(Ray::new(Vec3::new(1.6, 2.5, 0.7), d));
             }
         }
+        let camera_hits = rays[camera..].iter().filter(|r| accel.closest_hit(r).is_some()).count();
+        assert!(camera_hits > 2_000, "the camera rows should mostly hit: {camera_hits}");
         let finish = |best| accel.finish(best);
         let key = |h: Option<SceneHit>| h.map(|h| (h.object, h.triangle, h.hit.t.to_bits()));
         let mut packets_hit = 0;
@@ -1609,6 +1613,6 @@ mod tests {
                 }
             }
         }
-        assert!(packets_hit > 2_000, "{packets_hit}");
+        assert_eq!(packets_hit, 2 * (hits + camera_hits));
     }
 }
