@@ -122,24 +122,25 @@ impl Kernel {
         }
     }
 
-    /// The kernel new hierarchies use: [`Kernel::Portable`], unless the
-    /// environment variable `PRISM_BVH_KERNEL` (`portable`, `avx2`,
-    /// `avx512`) names another that the CPU runs (and `PRISM_BVH_NO_SIMD`
-    /// is not set). The portable kernel is the default because it measured
-    /// fastest: inside the AVX2 build of the queries the compiler
-    /// vectorises it, and on the machine of docs/benchmarks.md ("Which
-    /// wide kernel") it beat the AVX2 and AVX-512 intrinsics by 5–25 % on
-    /// every ray set and on the seed scene.
+    /// The kernel new hierarchies use: [`Kernel::Avx2`] where the CPU has
+    /// it, else [`Kernel::Portable`]; `PRISM_BVH_NO_SIMD` forces the
+    /// portable one, and the environment variable `PRISM_BVH_KERNEL`
+    /// (`portable`, `avx2`, `avx512`) names another that the CPU runs.
+    /// AVX2 is the default because it measured fastest: 10–25 % ahead of
+    /// the portable kernel (vectorised by the compiler inside the AVX2
+    /// build) and 5–15 % ahead of AVX-512 on every ray set of the machine
+    /// of docs/benchmarks.md ("The intrinsics node tests inlined").
     #[must_use]
     pub fn detect() -> Self {
         if std::env::var_os("PRISM_BVH_NO_SIMD").is_some() {
             return Self::Portable;
         }
         let named = std::env::var("PRISM_BVH_KERNEL").ok();
+        let fallback = if Self::Avx2.supported() { Self::Avx2 } else { Self::Portable };
         Self::ALL
             .into_iter()
             .find(|k| named.as_deref() == Some(k.name()) && k.supported())
-            .unwrap_or(Self::Portable)
+            .unwrap_or(fallback)
     }
 
     /// A short lower-case name (`"portable"`, `"avx2"`, `"avx512"`).
@@ -439,90 +440,87 @@ mod x86 {
 
     /// Entry and exit distances of the eight children, the lane-wise
     /// operations of [`super::Portable`] in the same order.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    fn distances(node: &Node, r: &WideRay, reach: f32) -> (__m256, __m256) {
+    ///
+    /// Not a `#[target_feature]` function: those are not inlined into
+    /// their callers, and returning two `__m256` from an outlined call
+    /// (through memory, with the rows re-checked and the ray re-broadcast
+    /// per node) made these kernels slower than the portable one. As a
+    /// plain `#[inline(always)]` function it is compiled into
+    /// `walk_avx2`/`walk_avx512`, whose features the intrinsics inherit.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    unsafe fn distances(node: &Node, r: &WideRay, reach: f32) -> (__m256, __m256) {
         let p = &node.planes;
         let row = |i: usize| -> __m256 {
             // SAFETY: a row is eight `f32`s, 32-byte aligned (the node is
             // 64-byte aligned and each row 32 bytes long); `i < 6` is
-            // checked by the indexing.
+            // checked by the indexing; the caller guarantees AVX.
             unsafe { _mm256_load_ps(p[i].as_ptr()) }
         };
-        let o = |a: usize| _mm256_set1_ps(r.origin[a]);
-        let inv = |a: usize| _mm256_set1_ps(r.inv[a]);
-        let d = |rows: &[usize; 3], a: usize| _mm256_mul_ps(_mm256_sub_ps(row(rows[a]), o(a)), inv(a));
-        let near = _mm256_max_ps(
-            d(&r.near_row, 0),
-            _mm256_max_ps(d(&r.near_row, 1), _mm256_max_ps(d(&r.near_row, 2), _mm256_set1_ps(r.t_min))),
-        );
-        let far = _mm256_min_ps(
-            d(&r.far_row, 0),
-            _mm256_min_ps(d(&r.far_row, 1), _mm256_min_ps(d(&r.far_row, 2), _mm256_set1_ps(reach))),
-        );
-        (near, far)
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    fn test_avx2(node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
-        let (n, f) = distances(node, r, reach);
-        // SAFETY: `t_near` holds eight `f32`s (unaligned store).
-        unsafe { _mm256_storeu_ps(t_near.as_mut_ptr(), n) };
-        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(n, f)) as u32
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn test_avx512(node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
-        let (n, f) = distances(node, r, reach);
-        // SAFETY: `t_near` holds eight `f32`s (unaligned store).
-        unsafe { _mm256_storeu_ps(t_near.as_mut_ptr(), n) };
-        u32::from(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(n, f))
-    }
-
-    /// The lanes of `mask` compress-stored to the front of `out`.
-    #[inline]
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn compact_avx512(mask: u32, t_near: &[f32; WIDTH], node: &Node, out: &mut Hits) -> usize {
-        let m = (mask & 0xff) as u8;
-        // SAFETY: `t_near`, `node.child`, `out.near` and `out.child` hold
-        // eight lanes each (unaligned loads); a compress-store writes at
-        // most the lanes set in `m`, contiguously from the start.
+        // SAFETY (this block): the caller guarantees AVX2; the rest are
+        // register operations.
         unsafe {
-            let n = _mm256_loadu_ps(t_near.as_ptr());
-            _mm256_mask_compressstoreu_ps(out.near.as_mut_ptr().cast(), m, n);
-            let c = _mm256_loadu_si256(node.child.as_ptr().cast());
-            _mm256_mask_compressstoreu_epi32(out.child.as_mut_ptr().cast(), m, c);
+            let o = |a: usize| _mm256_set1_ps(r.origin[a]);
+            let inv = |a: usize| _mm256_set1_ps(r.inv[a]);
+            let d = |rows: &[usize; 3], a: usize| _mm256_mul_ps(_mm256_sub_ps(row(rows[a]), o(a)), inv(a));
+            let near = _mm256_max_ps(
+                d(&r.near_row, 0),
+                _mm256_max_ps(d(&r.near_row, 1), _mm256_max_ps(d(&r.near_row, 2), _mm256_set1_ps(r.t_min))),
+            );
+            let far = _mm256_min_ps(
+                d(&r.far_row, 0),
+                _mm256_min_ps(d(&r.far_row, 1), _mm256_min_ps(d(&r.far_row, 2), _mm256_set1_ps(reach))),
+            );
+            (near, far)
         }
-        m.count_ones() as usize
     }
 
-    /// `impl NodeTest for $token`, calling the `#[target_feature]`
-    /// function `$test` (and `$compact`, if given).
-    macro_rules! node_test {
-        ($token:ty, $test:ident $(, $compact:ident)?) => {
-            impl NodeTest for $token {
-                #[inline(always)]
-                fn test(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
-                    // SAFETY: a value of this token type exists only where
-                    // the CPU has the features `$test` is compiled for
-                    // (its `new` is unsafe with that contract).
-                    unsafe { $test(node, r, reach, t_near) }
-                }
-                $(
-                    #[inline(always)]
-                    fn compact(self, mask: u32, t_near: &[f32; WIDTH], node: &Node, out: &mut Hits) -> usize {
-                        // SAFETY: as for `test`.
-                        unsafe { $compact(mask, t_near, node, out) }
-                    }
-                )?
+    impl NodeTest for Avx2 {
+        #[inline(always)]
+        fn test(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+            // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
+            // `new` is unsafe with that contract); `t_near` holds eight
+            // `f32`s (unaligned store).
+            unsafe {
+                let (n, f) = distances(node, r, reach);
+                _mm256_storeu_ps(t_near.as_mut_ptr(), n);
+                _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(n, f)) as u32
             }
-        };
+        }
     }
 
-    node_test!(Avx2, test_avx2);
-    node_test!(Avx512, test_avx512, compact_avx512);
+    impl NodeTest for Avx512 {
+        #[inline(always)]
+        fn test(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+            // SAFETY: an `Avx512` exists only where the CPU has AVX-512 F
+            // and VL and AVX2 (its `new` is unsafe with that contract);
+            // `t_near` holds eight `f32`s (unaligned store).
+            unsafe {
+                let (n, f) = distances(node, r, reach);
+                _mm256_storeu_ps(t_near.as_mut_ptr(), n);
+                u32::from(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(n, f))
+            }
+        }
+
+        /// The lanes of `mask` compress-stored to the front of `out`.
+        #[inline(always)]
+        fn compact(self, mask: u32, t_near: &[f32; WIDTH], node: &Node, out: &mut Hits) -> usize {
+            let m = (mask & 0xff) as u8;
+            // SAFETY: as for `test`, the token guarantees AVX-512 F and
+            // VL; `t_near`, `node.child`, `out.near` and `out.child` hold
+            // eight lanes each (unaligned loads); a compress-store writes
+            // at most the lanes set in `m`, contiguously from the start.
+            unsafe {
+                let n = _mm256_loadu_ps(t_near.as_ptr());
+                _mm256_mask_compressstoreu_ps(out.near.as_mut_ptr().cast(), m, n);
+                let c = _mm256_loadu_si256(node.child.as_ptr().cast());
+                _mm256_mask_compressstoreu_epi32(out.child.as_mut_ptr().cast(), m, c);
+            }
+            m.count_ones() as usize
+        }
+    }
 }
 
 impl WideBvh {

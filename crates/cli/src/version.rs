@@ -11,10 +11,9 @@ pub const COMMIT: &str = env!("PRISM_GIT_COMMIT");
 /// each: `(path, enabled)`. Two today, both chosen when the structure is
 /// built and both off with `PRISM_BVH_NO_SIMD`: the AVX2 compilation of
 /// the closest-hit and packet queries' walks (`bvh-avx2`), and an intrinsics kernel for the node test
-/// of the wide (8-child) hierarchies (`bvh8-avx512` or `bvh8-avx2`, only
-/// when `PRISM_BVH_KERNEL` asks for it: the default portable kernel,
-/// [`prism_bvh::Kernel::detect`], measured faster and is vectorised by the
-/// compiler inside `bvh-avx2`). A new run-time path adds a line here.
+/// of the wide (8-child) hierarchies (`bvh8-avx2`, the default where the
+/// CPU has AVX2, or `bvh8-avx512` when `PRISM_BVH_KERNEL` asks for it; see
+/// [`prism_bvh::Kernel::detect`]). A new run-time path adds a line here.
 #[must_use]
 pub fn simd_paths() -> Vec<(&'static str, bool)> {
     let forced_off = std::env::var_os("PRISM_BVH_NO_SIMD").is_some();
@@ -39,7 +38,7 @@ pub fn enabled_simd() -> String {
 /// ```text
 /// 0.1.0
 /// commit: 4645439abcde
-/// simd:   bvh-avx2 (detected at run time; scalar fallback always present)
+/// simd:   bvh-avx2 bvh8-avx2 (detected at run time; scalar fallback always present)
 /// ```
 pub fn long() -> &'static str {
     static TEXT: OnceLock<String> = OnceLock::new();
