@@ -459,7 +459,7 @@ mod x86 {
             // checked by the indexing; the caller guarantees AVX.
             unsafe { _mm256_load_ps(p[i].as_ptr()) }
         };
-        // SAFETY (this block): the caller guarantees AVX2; the rest are
+        // SAFETY: the caller guarantees AVX2; the rest are
         // register operations.
         unsafe {
             let o = |a: usize| _mm256_set1_ps(r.origin[a]);
