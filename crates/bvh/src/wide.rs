@@ -126,10 +126,10 @@ impl Kernel {
     /// it, else [`Kernel::Portable`]; `PRISM_BVH_NO_SIMD` forces the
     /// portable one, and the environment variable `PRISM_BVH_KERNEL`
     /// (`portable`, `avx2`, `avx512`) names another that the CPU runs.
-    /// AVX2 is the default because it measured fastest: 10–25 % ahead of
-    /// the portable kernel (vectorised by the compiler inside the AVX2
-    /// build) and 5–15 % ahead of AVX-512 on every ray set of the machine
-    /// of docs/benchmarks.md ("The intrinsics node tests inlined").
+    /// AVX2 is the default because it measured fastest on every single-ray
+    /// set of the machine of docs/benchmarks.md ("The intrinsics node
+    /// tests inlined"): 12–26 % ahead of the portable kernel (vectorised
+    /// by the compiler inside the AVX2 build) and 5–30 % ahead of AVX-512.
     #[must_use]
     pub fn detect() -> Self {
         if std::env::var_os("PRISM_BVH_NO_SIMD").is_some() {
