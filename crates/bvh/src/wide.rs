@@ -441,10 +441,11 @@ mod x86 {
     /// Entry and exit distances of the eight children, the lane-wise
     /// operations of [`super::Portable`] in the same order.
     ///
-    /// Not a `#[target_feature]` function: those are not inlined into
-    /// their callers, and returning two `__m256` from an outlined call
-    /// (through memory, with the rows re-checked and the ray re-broadcast
-    /// per node) made these kernels slower than the portable one. As a
+    /// Not a `#[target_feature]` function: such a function cannot be
+    /// `#[inline(always)]`, and as a plain `#[inline]` one it was left out
+    /// of line, so each node test was a call returning two `__m256`
+    /// through memory, with the rows re-checked and the ray re-broadcast
+    /// (perf, docs/benchmarks.md): slower than the portable kernel. As a
     /// plain `#[inline(always)]` function it is compiled into
     /// `walk_avx2`/`walk_avx512`, whose features the intrinsics inherit.
     ///
