@@ -5,7 +5,7 @@
 //! Every triangle is tested by prism-geometry's [`TriangleRay`], the one
 //! watertight ray/triangle test.
 
-use crate::packet::{self, Leaf, bits};
+use crate::packet::{self, Lanes, Leaf, bits};
 use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
 use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
@@ -220,6 +220,7 @@ impl Blas {
     #[inline(always)]
     pub fn closest_packet<const N: usize>(
         &self,
+        lanes: impl Lanes,
         rays: &[Ray; N],
         mask: u64,
         found: &mut [Option<(u32, f32, f32, f32)>; N],
@@ -240,7 +241,7 @@ impl Blas {
         };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<false, N>(self.depth, &fr, &mut br, m, &mut v),
+                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
                         let tr = v.tr[k].unwrap_or_else(|| TriangleRay::new(&rays[k]));
@@ -259,7 +260,7 @@ impl Blas {
     /// [`Blas::occluded`] for each object-space ray `rays[k]` of `mask`,
     /// walked together where the layout is wide; returns the occluded rays.
     #[inline(always)]
-    pub fn occluded_packet<const N: usize>(&self, rays: &[Ray; N], mask: u64) -> u64 {
+    pub fn occluded_packet<const N: usize>(&self, lanes: impl Lanes, rays: &[Ray; N], mask: u64) -> u64 {
         let Nodes::Wide(tree) = &self.nodes else {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
@@ -267,7 +268,7 @@ impl Blas {
         let mut v = AnyTriangles { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<true, N>(self.depth, &fr, &mut br, m, &mut v),
+                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
                         let tr = TriangleRay::new(&rays[k]);
@@ -338,7 +339,12 @@ impl<const N: usize> Leaf for &mut ClosestTriangles<'_, N> {
             if let (Some(tr), Some(found), Some(b), Some(ray)) =
                 (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k), self.rays.get(k))
             {
-                let tr = tr.get_or_insert_with(|| TriangleRay::new(ray));
+                // Not `get_or_insert_with`: its closure stayed a call, compiled
+                // without the caller's AVX2 (perf).
+                let tr = match tr {
+                    Some(tr) => tr,
+                    None => tr.insert(TriangleRay::new(ray)),
+                };
                 closest_in_leaf(self.tris, self.blocks, tr, found, first, count, b);
             }
         }
@@ -363,7 +369,12 @@ impl<const N: usize> Leaf for &mut AnyTriangles<'_, N> {
         let mut done = 0u64;
         for k in bits(meet) {
             if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
-                let tr = tr.get_or_insert_with(|| TriangleRay::new(ray));
+                // Not `get_or_insert_with`: its closure stayed a call, compiled
+                // without the caller's AVX2 (perf).
+                let tr = match tr {
+                    Some(tr) => tr,
+                    None => tr.insert(TriangleRay::new(ray)),
+                };
                 done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
             }
         }

@@ -101,7 +101,7 @@ mod wide;
 
 use blas::Blas;
 use obvhs::BvhBuildParams;
-use packet::{Leaf, MIN_PACKET, SMALL_PACKET, bits};
+use packet::{Lanes, Leaf, MIN_PACKET, SMALL_PACKET, bits};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
@@ -397,19 +397,20 @@ impl Visit for &mut AnyObject<'_> {
 /// `k`: its interval so far in `rays[k]` and its best hit in `best[k]`
 /// (flat arrays rather than a [`ClosestObject`] each: filling and moving
 /// those measured as a fifth of a packet's time).
-struct ClosestObjects<'v, 'a, const N: usize> {
+struct ClosestObjects<'v, 'a, const N: usize, L: Lanes> {
     accel: &'a Accel,
+    lanes: L,
     rays: &'v mut [Ray; N],
     best: &'v mut [Best; N],
 }
 
-impl<const N: usize> ClosestObjects<'_, '_, N> {
+impl<const N: usize, L: Lanes> ClosestObjects<'_, '_, N, L> {
     /// Walks object `i`'s mesh `blas` with the gathered rays `dense` and
     /// keeps each hit (nearer than the ray's best, as the walk was bounded
     /// by its `t_max`).
     #[inline(always)]
     fn mesh_hits<const M: usize>(&mut self, i: u32, blas: &Blas, dense: Dense<M>, br: &mut [BoxRay]) {
-        for (k, (face, t, b1, b2), dir) in dense.closest(blas) {
+        for (k, (face, t, b1, b2), dir) in dense.closest(self.lanes, blas) {
             if let (Some(r), Some(best), Some(b)) =
                 (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
             {
@@ -421,7 +422,7 @@ impl<const N: usize> ClosestObjects<'_, '_, N> {
     }
 }
 
-impl<const N: usize> Leaf for ClosestObjects<'_, '_, N> {
+impl<const N: usize, L: Lanes> Leaf for ClosestObjects<'_, '_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
         let accel = self.accel;
@@ -502,30 +503,35 @@ impl<const M: usize> Dense<M> {
     /// The mesh hits: per hit ray, its index in the whole packet, the hit
     /// `(face, t, b1, b2)` and its object-space direction.
     #[inline(always)]
-    fn closest(self, blas: &Blas) -> impl Iterator<Item = (usize, (u32, f32, f32, f32), Vec3)> {
+    fn closest(
+        self,
+        lanes: impl Lanes,
+        blas: &Blas,
+    ) -> impl Iterator<Item = (usize, (u32, f32, f32, f32), Vec3)> {
         let mut found = [None; M];
-        blas.closest_packet(&self.local, self.mask(), &mut found);
+        blas.closest_packet(lanes, &self.local, self.mask(), &mut found);
         (0..self.len.min(M))
             .filter_map(move |j| found[j].map(|hit| (usize::from(self.ids[j]), hit, self.local[j].dir)))
     }
 
     /// The occluded rays, as a mask over the whole packet.
     #[inline(always)]
-    fn occluded(self, blas: &Blas) -> u64 {
-        let hit = blas.occluded_packet(&self.local, self.mask());
+    fn occluded(self, lanes: impl Lanes, blas: &Blas) -> u64 {
+        let hit = blas.occluded_packet(lanes, &self.local, self.mask());
         bits(hit).fold(0, |m, j| m | self.ids.get(j).map_or(0, |&k| 1u64 << k))
     }
 }
 
 /// A packet's occlusion walk over the top level's objects (a mesh instance
 /// met by several rays is walked as a packet); collects the occluded rays.
-struct AnyObjects<'a, const N: usize> {
+struct AnyObjects<'a, const N: usize, L: Lanes> {
     accel: &'a Accel,
+    lanes: L,
     rays: &'a [Ray],
     done: u64,
 }
 
-impl<const N: usize> AnyObjects<'_, N> {
+impl<const N: usize, L: Lanes> AnyObjects<'_, N, L> {
     /// The rays of `meet` that object `i` occludes: a mesh instance met by
     /// several rays tests them as a packet, anything else ray by ray.
     #[inline(always)]
@@ -536,9 +542,9 @@ impl<const N: usize> AnyObjects<'_, N> {
                 let blas = &accel.blas[*mesh as usize];
                 let ray = |k: usize| rays.get(k).copied();
                 if fits_small::<N>(meet) {
-                    Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(blas)
+                    Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(self.lanes, blas)
                 } else {
-                    Dense::<N>::new(transform, meet, ray).occluded(blas)
+                    Dense::<N>::new(transform, meet, ray).occluded(self.lanes, blas)
                 }
             }
             _ => bits(meet)
@@ -548,7 +554,7 @@ impl<const N: usize> AnyObjects<'_, N> {
     }
 }
 
-impl<const N: usize> Leaf for &mut AnyObjects<'_, N> {
+impl<const N: usize, L: Lanes> Leaf for &mut AnyObjects<'_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
         let mut hit = 0u64;
@@ -1096,9 +1102,13 @@ impl Accel {
         out: &mut [Option<T>],
         done: &impl Fn(Best) -> Option<T>,
     ) {
-        self.closest_packet_chunks(rays, out, done);
+        // SAFETY: this function is compiled for AVX2 and, by its callers'
+        // contract, runs only where the CPU has it.
+        let lanes = unsafe { packet::x86::Avx2::new() };
+        self.closest_packet_chunks_in(lanes, rays, out, done);
     }
 
+    /// The packet queries' plain build.
     #[inline(always)]
     fn closest_packet_chunks<T>(
         &self,
@@ -1106,11 +1116,22 @@ impl Accel {
         out: &mut [Option<T>],
         done: &impl Fn(Best) -> Option<T>,
     ) {
+        self.closest_packet_chunks_in(packet::Portable, rays, out, done);
+    }
+
+    #[inline(always)]
+    fn closest_packet_chunks_in<T>(
+        &self,
+        lanes: impl Lanes,
+        rays: &[Ray],
+        out: &mut [Option<T>],
+        done: &impl Fn(Best) -> Option<T>,
+    ) {
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
             if rays.len() <= SMALL_PACKET {
-                self.closest_packet_impl::<SMALL_PACKET, T>(rays, out, done);
+                self.closest_packet_impl::<SMALL_PACKET, T>(lanes, rays, out, done);
             } else {
-                self.closest_packet_impl::<PACKET_SIZE, T>(rays, out, done);
+                self.closest_packet_impl::<PACKET_SIZE, T>(lanes, rays, out, done);
             }
         }
     }
@@ -1119,6 +1140,7 @@ impl Accel {
     #[inline(always)]
     fn closest_packet_impl<const N: usize, T>(
         &self,
+        lanes: impl Lanes,
         rays: &[Ray],
         out: &mut [Option<T>],
         done: &impl Fn(Best) -> Option<T>,
@@ -1143,11 +1165,12 @@ impl Accel {
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => self.tlas.walk_packet::<false, N>(
+                    lanes,
                     self.tlas_depth,
                     &fr,
                     &mut br,
                     m,
-                    ClosestObjects { accel: self, rays: &mut live, best: &mut best },
+                    ClosestObjects { accel: self, lanes, rays: &mut live, best: &mut best },
                 ),
                 None => {
                     for k in bits(m) {
@@ -1189,29 +1212,33 @@ impl Accel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     fn occluded_packets_wide(&self, rays: &[Ray], out: &mut [bool]) {
-        self.occluded_packet_chunks(rays, out);
+        // SAFETY: this function is compiled for AVX2 and, by its callers'
+        // contract, runs only where the CPU has it.
+        let lanes = unsafe { packet::x86::Avx2::new() };
+        self.occluded_packet_chunks_in(lanes, rays, out);
     }
 
+    /// The occlusion packets' plain build.
     #[inline(always)]
     fn occluded_packet_chunks(&self, rays: &[Ray], out: &mut [bool]) {
-        for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-            self.occluded_packet_sized(rays, out);
-        }
+        self.occluded_packet_chunks_in(packet::Portable, rays, out);
     }
 
-    /// One packet, with per-ray arrays of the size it needs.
     #[inline(always)]
-    fn occluded_packet_sized(&self, rays: &[Ray], out: &mut [bool]) {
-        if rays.len() <= SMALL_PACKET {
-            self.occluded_packet_impl::<SMALL_PACKET>(rays, out);
-        } else {
-            self.occluded_packet_impl::<PACKET_SIZE>(rays, out);
+    fn occluded_packet_chunks_in(&self, lanes: impl Lanes, rays: &[Ray], out: &mut [bool]) {
+        for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+            // One packet, with per-ray arrays of the size it needs.
+            if rays.len() <= SMALL_PACKET {
+                self.occluded_packet_impl::<SMALL_PACKET>(lanes, rays, out);
+            } else {
+                self.occluded_packet_impl::<PACKET_SIZE>(lanes, rays, out);
+            }
         }
     }
 
     /// One packet of at most `N` rays.
     #[inline(always)]
-    fn occluded_packet_impl<const N: usize>(&self, rays: &[Ray], out: &mut [bool]) {
+    fn occluded_packet_impl<const N: usize>(&self, lanes: impl Lanes, rays: &[Ray], out: &mut [bool]) {
         let mut live = 0u64;
         let mut done = 0u64;
         for (k, ray) in rays.iter().enumerate().take(N) {
@@ -1224,9 +1251,9 @@ impl Accel {
             }
         }
         if let Some(i) = self.sole {
-            done |= AnyObjects::<N> { accel: self, rays, done: 0 }.object(i, live);
+            done |= AnyObjects::<N, _> { accel: self, lanes, rays, done: 0 }.object(i, live);
         } else {
-            done |= self.occluded_packet_walk::<N>(rays, live);
+            done |= self.occluded_packet_walk::<N>(lanes, rays, live);
         }
         for (k, o) in out.iter_mut().enumerate().take(rays.len()) {
             *o = done >> k & 1 == 1;
@@ -1236,7 +1263,7 @@ impl Accel {
     /// The top-level walk of [`Accel::occluded_packet_impl`]'s rays of
     /// `live`: returns those occluded.
     #[inline(always)]
-    fn occluded_packet_walk<const N: usize>(&self, rays: &[Ray], live: u64) -> u64 {
+    fn occluded_packet_walk<const N: usize>(&self, lanes: impl Lanes, rays: &[Ray], live: u64) -> u64 {
         let mut done = 0u64;
         let mut br: [BoxRay; N] = std::array::from_fn(|k| match rays.get(k) {
             Some(r) if live >> k & 1 == 1 => BoxRay::new(r),
@@ -1245,8 +1272,8 @@ impl Accel {
         for (m, fr) in packet::plan(&br, live) {
             match fr {
                 Some(fr) => {
-                    let mut leaf = AnyObjects::<N> { accel: self, rays, done: 0 };
-                    self.tlas.walk_packet::<true, N>(self.tlas_depth, &fr, &mut br, m, &mut leaf);
+                    let mut leaf = AnyObjects::<N, _> { accel: self, lanes, rays, done: 0 };
+                    self.tlas.walk_packet::<true, N>(lanes, self.tlas_depth, &fr, &mut br, m, &mut leaf);
                     done |= leaf.done;
                 }
                 None => {
