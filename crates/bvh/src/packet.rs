@@ -428,11 +428,18 @@ impl<const N: usize> Soa<N> {
             x.get(c * 8..)?.first_chunk()
         }
         let mut mask = 0u64;
-        for c in 0..(self.len / 8).min(N / 8) {
-            if want >> (c * 8) & 0xFF == 0 {
-                // No ray of these eight is asked about.
-                continue;
+        let groups = (self.len / 8).min(N / 8);
+        // Only the eights holding a ray of `want`, found from its set
+        // bits: a loop over every eight that skipped the empty ones spent
+        // a fifth of a grid shadow packet's instructions on the loop and
+        // the test (callgrind).
+        let mut w = want;
+        while w != 0 {
+            let c = w.trailing_zeros() as usize / 8;
+            if c >= groups {
+                break;
             }
+            w &= !(0xFFu64 << (c * 8));
             let [ox, oy, oz] = &self.origin;
             let [ix, iy, iz] = &self.inv;
             let (Some(ox), Some(oy), Some(oz), Some(ix), Some(iy), Some(iz), Some(t_min), Some(reach)) = (
