@@ -182,8 +182,9 @@ impl TriangleRay {
 }
 
 /// [`TriangleRay::lanes4`]'s values: per lane `t`, `b1`, `b2`, and as
-/// lane masks whether the lane passes the edge and determinant tests
-/// (`ok`) and whether an edge function is exactly zero (`exact`).
+/// lane masks of the lanes in use, whether the lane passes the edge and
+/// determinant tests (`ok`) and whether an edge function is exactly zero
+/// (`exact`).
 struct Lanes4 {
     t: Vec4,
     b1: Vec4,
@@ -242,9 +243,12 @@ impl TriangleRay {
     }
 
     /// The test's per-lane values on the four lanes of `tris` (before the
-    /// interval test).
+    /// interval test); `None` when the edge test already rules out every
+    /// lane in use. That skips the division and the interval test for a
+    /// ray that passes beside all four triangles, as most of a leaf's do;
+    /// the lanes that remain are computed as before.
     #[inline(always)]
-    fn lanes4(&self, tris: &Triangles4) -> Lanes4 {
+    fn lanes4(&self, tris: &Triangles4) -> Option<Lanes4> {
         let v = &tris.v;
         let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) =
             (self.shear4(&v[0]), self.shear4(&v[1]), self.shear4(&v[2]));
@@ -255,11 +259,17 @@ impl TriangleRay {
         let exact = (u.cmpeq(zero) | vv.cmpeq(zero) | w.cmpeq(zero)).bitmask();
         let outside = (u.cmplt(zero) | vv.cmplt(zero) | w.cmplt(zero))
             & (u.cmpgt(zero) | vv.cmpgt(zero) | w.cmpgt(zero));
+        let used = (1u32 << tris.len.min(4)) - 1;
+        // An exact lane is decided by the scalar test, whatever its `f32`
+        // edge functions say.
+        if (!outside.bitmask() | exact) & used == 0 {
+            return None;
+        }
         let det = u + vv + w;
         let t_scaled = u * az + vv * bz + w * cz;
         let rcp = Vec4::ONE / det;
-        let ok = (!outside & det.cmpne(zero) & det.is_finite_mask()).bitmask();
-        Lanes4 { t: t_scaled * rcp, b1: vv * rcp, b2: w * rcp, ok, exact }
+        let ok = (!outside & det.cmpne(zero) & det.is_finite_mask()).bitmask() & used;
+        Some(Lanes4 { t: t_scaled * rcp, b1: vv * rcp, b2: w * rcp, ok, exact: exact & used })
     }
 
     /// Whether the ray meets any of the (up to) four triangles of `tris`
@@ -270,13 +280,11 @@ impl TriangleRay {
     #[inline(always)]
     #[must_use]
     pub fn occludes4(&self, tris: &Triangles4) -> bool {
-        let Lanes4 { t, ok, exact, .. } = self.lanes4(tris);
-        let used = (1u32 << tris.len.min(4)) - 1;
+        let Some(Lanes4 { t, ok, mut exact, .. }) = self.lanes4(tris) else { return false };
         let inside = (t.cmpge(Vec4::splat(self.t_min)) & t.cmple(Vec4::splat(self.t_max))).bitmask();
-        if ok & inside & !exact & used != 0 {
+        if ok & inside & !exact != 0 {
             return true;
         }
-        let mut exact = exact & used;
         while exact != 0 {
             let k = exact.trailing_zeros() as usize;
             exact &= exact - 1;
@@ -299,7 +307,7 @@ impl TriangleRay {
     #[inline(always)]
     #[must_use]
     pub fn intersect4(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
-        let Lanes4 { t, b1, b2, ok, exact } = self.lanes4(tris);
+        let Lanes4 { t, b1, b2, ok, exact } = self.lanes4(tris)?;
         let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
         let mut best: Option<(usize, f32, f32, f32)> = None;
         let mut t_max = self.t_max;
