@@ -339,12 +339,7 @@ impl<const N: usize> Leaf for &mut ClosestTriangles<'_, N> {
             if let (Some(tr), Some(found), Some(b), Some(ray)) =
                 (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k), self.rays.get(k))
             {
-                // Not `get_or_insert_with`: its closure stayed a call, compiled
-                // without the caller's AVX2 (perf).
-                let tr = match tr {
-                    Some(tr) => tr,
-                    None => tr.insert(TriangleRay::new(ray)),
-                };
+                let tr = first_leaf_ray(tr, ray);
                 closest_in_leaf(self.tris, self.blocks, tr, found, first, count, b);
             }
         }
@@ -369,17 +364,23 @@ impl<const N: usize> Leaf for &mut AnyTriangles<'_, N> {
         let mut done = 0u64;
         for k in bits(meet) {
             if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
-                // Not `get_or_insert_with`: its closure stayed a call, compiled
-                // without the caller's AVX2 (perf).
-                let tr = match tr {
-                    Some(tr) => tr,
-                    None => tr.insert(TriangleRay::new(ray)),
-                };
+                let tr = first_leaf_ray(tr, ray);
                 done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
             }
         }
         self.hit |= done;
         done
+    }
+}
+
+/// A packet ray's [`TriangleRay`], prepared at the first leaf it reaches.
+/// Not `Option::get_or_insert_with`: its closure stayed a call, compiled
+/// without the caller's AVX2 (perf).
+#[inline(always)]
+fn first_leaf_ray<'a>(tr: &'a mut Option<TriangleRay>, ray: &Ray) -> &'a mut TriangleRay {
+    match tr {
+        Some(tr) => tr,
+        None => tr.insert(TriangleRay::new(ray)),
     }
 }
 
