@@ -102,7 +102,7 @@ mod wide;
 use blas::Blas;
 use obvhs::BvhBuildParams;
 use packet::{Lanes, Leaf, MIN_PACKET, SMALL_PACKET, bits};
-use prism_geometry::glam::Vec3;
+use prism_geometry::glam::{Vec3, Vec3A};
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
 use std::ops::ControlFlow;
@@ -697,9 +697,13 @@ impl Simd {
 }
 
 /// Whether a query ray can hit anything at all (finite, non-zero direction).
-#[inline]
+/// The six components are tested as two vectors without branches: a
+/// component-by-component `is_finite` chain took 8 % of a kitchen
+/// shadow-packet run (perf), as a packet tests all its rays first.
+#[inline(always)]
 fn usable(ray: &Ray) -> bool {
-    ray.origin.is_finite() && ray.dir.is_finite() && ray.dir != Vec3::ZERO && ray.t_min <= ray.t_max
+    let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+    (o.is_finite_mask() & d.is_finite_mask()).all() & d.cmpne(Vec3A::ZERO).any() & (ray.t_min <= ray.t_max)
 }
 
 impl Accel {
