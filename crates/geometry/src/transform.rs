@@ -18,6 +18,11 @@ pub struct Transform {
     to_world: Affine3A,
     to_object: Affine3A,
     normal: Mat3A,
+    /// `to_object` is exactly the identity: [`Transform::ray_to_object`]
+    /// returns the ray as it is (its products would only turn a `-0.0`
+    /// component into `+0.0`). A scene of one mesh placed as it is (the
+    /// common case) then prepares its rays without a matrix product each.
+    identity: bool,
 }
 
 impl Default for Transform {
@@ -28,8 +33,12 @@ impl Default for Transform {
 
 impl Transform {
     /// The identity.
-    pub const IDENTITY: Self =
-        Self { to_world: Affine3A::IDENTITY, to_object: Affine3A::IDENTITY, normal: Mat3A::IDENTITY };
+    pub const IDENTITY: Self = Self {
+        to_world: Affine3A::IDENTITY,
+        to_object: Affine3A::IDENTITY,
+        normal: Mat3A::IDENTITY,
+        identity: true,
+    };
 
     /// Checks and wraps an affine map.
     ///
@@ -55,7 +64,7 @@ impl Transform {
         if !inv.is_finite() {
             return Err(GeometryError::SingularTransform { det });
         }
-        Ok(Self { to_world: m, to_object: inv, normal: inv.matrix3.transpose() })
+        Ok(Self::from_parts(m, inv, inv.matrix3.transpose()))
     }
 
     /// From a 4×4 matrix whose last row is `(0, 0, 0, 1)` (column vectors:
@@ -111,11 +120,12 @@ impl Transform {
     fn rotation(m: Mat3) -> Self {
         let m = Mat3A::from(m);
         // A rotation's inverse is its transpose, and its normal matrix is itself.
-        Self {
-            to_world: Affine3A::from_mat3(m.into()),
-            to_object: Affine3A::from_mat3(m.transpose().into()),
-            normal: m,
-        }
+        Self::from_parts(Affine3A::from_mat3(m.into()), Affine3A::from_mat3(m.transpose().into()), m)
+    }
+
+    /// From the map, its inverse and its normal matrix.
+    fn from_parts(to_world: Affine3A, to_object: Affine3A, normal: Mat3A) -> Self {
+        Self { to_world, to_object, normal, identity: to_object == Affine3A::IDENTITY }
     }
 
     /// Non-uniform scale by `s`.
@@ -146,13 +156,13 @@ impl Transform {
     #[must_use]
     pub fn then(&self, next: &Self) -> Self {
         let to_object = self.to_object * next.to_object;
-        Self { to_world: next.to_world * self.to_world, to_object, normal: to_object.matrix3.transpose() }
+        Self::from_parts(next.to_world * self.to_world, to_object, to_object.matrix3.transpose())
     }
 
     /// The inverse transform.
     #[must_use]
     pub fn inverse(&self) -> Self {
-        Self { to_world: self.to_object, to_object: self.to_world, normal: self.to_world.matrix3.transpose() }
+        Self::from_parts(self.to_object, self.to_world, self.to_world.matrix3.transpose())
     }
 
     /// The object-to-world affine map.
@@ -195,6 +205,9 @@ impl Transform {
     #[inline]
     #[must_use]
     pub fn ray_to_object(&self, ray: &Ray) -> Ray {
+        if self.identity {
+            return *ray;
+        }
         Ray {
             origin: self.to_object.transform_point3(ray.origin),
             dir: self.to_object.transform_vector3(ray.dir),
@@ -399,5 +412,45 @@ mod tests {
         close3(r.min, -Vec3::new(s, 1.0, s), 1e-5);
         assert_eq!(Transform::IDENTITY.aabb(&Aabb::INFINITE), Aabb::INFINITE);
         assert!(Transform::IDENTITY.aabb(&Aabb::EMPTY).is_empty());
+    }
+
+    /// Every way of making the identity maps a ray to itself, as the matrix
+    /// product would (equal values: the product may only turn `-0.0` into
+    /// `+0.0`), and a transform that is not the identity still moves it.
+    #[test]
+    fn identity_transforms_keep_rays_as_they_are() {
+        let mut seed = 0x9e37_79b9_u64;
+        let mut f = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 200.0 - 100.0
+        };
+        let shifted = t(Vec3::new(1.0, -2.0, 3.0));
+        let identities = [
+            Transform::IDENTITY,
+            Transform::default(),
+            t(Vec3::ZERO),
+            Transform::rotate_x(0.0),
+            Transform::scale(Vec3::ONE).unwrap(),
+            Transform::shear(Shear::NONE).unwrap(),
+            t(Vec3::ZERO).then(&Transform::IDENTITY).inverse(),
+        ];
+        for m in identities {
+            assert!(m.identity, "{m:?}");
+            for k in 0..100 {
+                let mut dir = Vec3::new(f(), f(), f());
+                dir[k % 3] = if k % 2 == 0 { 0.0 } else { -0.0 };
+                let ray = Ray::with_interval(Vec3::new(f(), f(), f()), dir, 0.5, 1e3);
+                let got = m.ray_to_object(&ray);
+                assert_eq!(got.origin.to_array().map(f32::to_bits), ray.origin.to_array().map(f32::to_bits));
+                assert_eq!(got.dir.to_array().map(f32::to_bits), ray.dir.to_array().map(f32::to_bits));
+                assert_eq!((got.t_min, got.t_max), (ray.t_min, ray.t_max));
+                assert_eq!(got.origin, m.to_object.transform_point3(ray.origin));
+                assert_eq!(got.dir, m.to_object.transform_vector3(ray.dir));
+            }
+        }
+        assert!(!shifted.identity && !shifted.inverse().identity);
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        assert_eq!(shifted.ray_to_object(&ray).origin, Vec3::new(-1.0, 2.0, -3.0));
+        assert!(!Transform::rotate_x(1e-3).identity);
     }
 }

@@ -462,4 +462,43 @@ mod tests {
         }
         assert!(hits > 1500 && exact_lanes > 500, "{hits} {exact_lanes}");
     }
+
+    /// The prepared ray runs along +z in its sheared frame, whichever axis
+    /// dominates its direction and whatever the signs: its origin maps to
+    /// exactly `(0, 0, 0)`, and a point `t` along it to `(≈0, ≈0, ≈t)`.
+    #[test]
+    fn prepared_ray_runs_along_z() {
+        let mut seed = 0x5851_f42d_u64;
+        let mut f = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        };
+        let mut seen = [[false; 2]; 3];
+        for case in 0..3000 {
+            let mut d = Vec3::new(f(), f(), f());
+            if case % 7 == 0 {
+                d[case % 3] = 0.0;
+            }
+            if d == Vec3::ZERO {
+                continue;
+            }
+            let o = Vec3::new(f(), f(), f()) * 10.0;
+            let tr = TriangleRay::new(&Ray::new(o, d));
+            let [kx, ky, kz] = tr.k;
+            let mut axes = [kx, ky, kz];
+            axes.sort_unstable();
+            assert_eq!(axes, [0, 1, 2], "{d}");
+            assert!(d.abs().max_element() == d.abs()[kz], "{d}: kz {kz}");
+            seen[kz][usize::from(d[kz] < 0.0)] = true;
+            // (kx, ky, kz) is right-handed for +z, swapped for -z.
+            assert_eq!((kx + 1) % 3 == ky, d[kz] >= 0.0, "{d}");
+            assert_eq!(tr.shear(o), (0.0, 0.0, 0.0));
+            for t in [0.5f32, 2.0, 7.0] {
+                let (x, y, z) = tr.shear(o + t * d);
+                let tol = 1e-4 * (1.0 + o.abs().max_element());
+                assert!(x.abs() < tol && y.abs() < tol && (z - t).abs() < tol * t, "{d} {t}: {x} {y} {z}");
+            }
+        }
+        assert_eq!(seen, [[true; 2]; 3]);
+    }
 }
