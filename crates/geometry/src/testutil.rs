@@ -31,3 +31,12 @@ pub(crate) fn check_hit(h: &Hit, t: f32, point: Vec3, normal: Vec3, uv: Vec2, fr
     close2(h.uv, uv, 1e-5);
     assert_eq!(h.front_face, front, "front_face of {h:?}");
 }
+
+/// A reproducible stream of `f32` in `[-1, 1)` from `seed` (an LCG), for
+/// tests over many random cases.
+pub(crate) fn uniform(mut seed: u64) -> impl FnMut() -> f32 {
+    move || {
+        seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    }
+}

@@ -271,7 +271,7 @@ impl Shear {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testutil::{close, close3};
+    use crate::testutil::{close, close3, uniform};
     use crate::{Cuboid, Instance, Intersect, Sphere};
     use std::f32::consts::FRAC_PI_2;
 
@@ -419,11 +419,8 @@ mod tests {
     /// `+0.0`), and a transform that is not the identity still moves it.
     #[test]
     fn identity_transforms_keep_rays_as_they_are() {
-        let mut seed = 0x9e37_79b9_u64;
-        let mut f = move || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 200.0 - 100.0
-        };
+        let mut rand = uniform(0x9e37_79b9_u64);
+        let mut f = move || rand() * 100.0;
         let shifted = t(Vec3::new(1.0, -2.0, 3.0));
         let identities = [
             Transform::IDENTITY,

@@ -333,7 +333,7 @@ impl TriangleRay {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testutil::{check_hit, close};
+    use crate::testutil::{check_hit, close, uniform};
 
     fn tri() -> Triangle {
         Triangle::new([Vec3::ZERO, Vec3::X, Vec3::Y]).unwrap()
@@ -401,11 +401,7 @@ mod tests {
     /// components, and every interval kind.
     #[test]
     fn intersect4_is_the_scalar_loop_bit_for_bit() {
-        let mut seed = 0x2545_f491_u64;
-        let mut f = move || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-        };
+        let mut f = uniform(0x2545_f491_u64);
         let mut hits = 0;
         let mut exact_lanes = 0;
         for case in 0..40_000 {
@@ -468,11 +464,7 @@ mod tests {
     /// exactly `(0, 0, 0)`, and a point `t` along it to `(≈0, ≈0, ≈t)`.
     #[test]
     fn prepared_ray_runs_along_z() {
-        let mut seed = 0x5851_f42d_u64;
-        let mut f = move || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-        };
+        let mut f = uniform(0x5851_f42d_u64);
         let mut seen = [[false; 2]; 3];
         for case in 0..3000 {
             let mut d = Vec3::new(f(), f(), f());
