@@ -19,9 +19,11 @@ pub struct Transform {
     to_object: Affine3A,
     normal: Mat3A,
     /// `to_object` is exactly the identity: [`Transform::ray_to_object`]
-    /// returns the ray as it is (its products would only turn a `-0.0`
-    /// component into `+0.0`). A scene of one mesh placed as it is (the
-    /// common case) then prepares its rays without a matrix product each.
+    /// returns the ray as it is. For a finite ray its products would only
+    /// turn a `-0.0` component into `+0.0`; for a non-finite one they
+    /// could turn an infinity into `NaN` (`0 · ∞`), which the copy keeps.
+    /// A scene of one mesh placed as it is (the common case) then prepares
+    /// its rays without a matrix product each.
     identity: bool,
 }
 
