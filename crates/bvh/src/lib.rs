@@ -697,9 +697,12 @@ impl Simd {
 }
 
 /// Whether a query ray can hit anything at all (finite, non-zero direction).
-/// The six components are tested as two vectors without branches: a
-/// component-by-component `is_finite` chain took 8 % of a kitchen
-/// shadow-packet run (perf), as a packet tests all its rays first.
+/// The six components are tested as two vectors without branches. A
+/// packet tests all its rays first, and the component-by-component
+/// `is_finite` chain had 8 % of a kitchen shadow-packet run's samples
+/// (perf); this form cut the packet queries' instructions by 3 %
+/// (callgrind). Much of what perf still charges here is the rays' memory
+/// arriving: this is the first pass to read them.
 #[inline(always)]
 fn usable(ray: &Ray) -> bool {
     let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
