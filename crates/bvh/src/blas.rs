@@ -69,6 +69,28 @@ impl Default for Blas {
     }
 }
 
+/// The wide BVH's leaves as blocks of four: each run of
+/// [`wide::MAX_LEAF`] slots takes its triangles from `tris` (one per slot,
+/// in slot order, as [`Blas::finish`] copies them), padding left out.
+fn leaf_blocks(slots: &[u32], tris: &[[Vec3; 3]]) -> Vec<Triangles4> {
+    const LANES: usize = wide::MAX_LEAF as usize;
+    slots
+        .chunks(LANES)
+        .zip(tris.chunks(LANES))
+        .map(|(slots, tris)| {
+            let mut lanes = [[Vec3::ZERO; 3]; LANES];
+            let mut n = 0;
+            for (&s, t) in slots.iter().zip(tris) {
+                if s != wide::PAD {
+                    lanes[n] = *t;
+                    n += 1;
+                }
+            }
+            Triangles4::new(&lanes[..n])
+        })
+        .collect()
+}
+
 impl Blas {
     /// The hierarchy over `mesh`'s faces of non-zero area (the others can
     /// never be hit).
@@ -108,21 +130,11 @@ impl Blas {
                     // Too many triangles for the wide layout's references.
                     return Self::build(mesh, quality, BlasKind::Cwbvh, kernel);
                 };
-                let blocks = w
-                    .slots
-                    .chunks(wide::MAX_LEAF as usize)
-                    .map(|c| {
-                        let tris: Vec<_> = c
-                            .iter()
-                            .filter(|&&s| s != wide::PAD)
-                            .map(|&s| mesh.triangle(kept[s as usize] as usize))
-                            .collect();
-                        Triangles4::new(&tris)
-                    })
-                    .collect();
                 let (need, order) = (w.stack_need(), w.order());
                 let mut blas = Self::finish(mesh, Nodes::Wide(w), need, split, &kept, &order);
-                blas.blocks = blocks;
+                if let Nodes::Wide(w) = &blas.nodes {
+                    blas.blocks = leaf_blocks(&w.slots, &blas.tris);
+                }
                 return blas;
             }
         };

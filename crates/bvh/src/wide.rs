@@ -262,28 +262,41 @@ fn convert(bvh: &Bvh2, src: usize, nodes: &mut Vec<Node>, slots: &mut Vec<u32>) 
     let at = nodes.len();
     nodes.push(Node::EMPTY);
     let root = bvh.nodes.get(src)?;
-    let mut kids: Vec<usize> = if root.is_leaf() {
-        vec![src]
+    // The children so far, and the surface of each that can be opened (an
+    // inner node); `None` for a leaf.
+    let inner_area = |k: usize| bvh.nodes.get(k).filter(|n| !n.is_leaf()).map(|n| n.aabb().half_area());
+    let mut kids = [0usize; WIDTH];
+    let mut area = [None; WIDTH];
+    let mut len = if root.is_leaf() {
+        kids[0] = src;
+        1
     } else {
-        vec![root.first_index as usize, root.first_index as usize + 1]
+        kids[..2].copy_from_slice(&[root.first_index as usize, root.first_index as usize + 1]);
+        2
     };
-    while kids.len() < WIDTH {
-        let widest = kids
-            .iter()
-            .enumerate()
-            .filter(|&(_, &k)| bvh.nodes.get(k).is_some_and(|n| !n.is_leaf()))
-            .max_by(|a, b| {
-                let area = |k: usize| bvh.nodes[k].aabb().half_area();
-                area(*a.1).total_cmp(&area(*b.1))
-            })
-            .map(|(i, _)| i);
-        let Some(i) = widest else { break };
+    for (a, &k) in area.iter_mut().zip(&kids[..len]) {
+        *a = inner_area(k);
+    }
+    while len < WIDTH {
+        // The widest inner child; the last of equals, as `Iterator::max_by`.
+        let mut widest: Option<(usize, f32)> = None;
+        for (i, a) in area[..len].iter().enumerate() {
+            if let Some(a) = *a
+                && widest.is_none_or(|(_, w)| a.total_cmp(&w).is_ge())
+            {
+                widest = Some((i, a));
+            }
+        }
+        let Some((i, _)) = widest else { break };
         let first = bvh.nodes[kids[i]].first_index as usize;
-        kids[i] = first;
-        kids.insert(i + 1, first + 1);
+        kids.copy_within(i + 1..len, i + 2);
+        area.copy_within(i + 1..len, i + 2);
+        (kids[i], kids[i + 1]) = (first, first + 1);
+        (area[i], area[i + 1]) = (inner_area(first), inner_area(first + 1));
+        len += 1;
     }
     let mut node = Node::EMPTY;
-    for (lane, &k) in kids.iter().enumerate() {
+    for (lane, &k) in kids[..len].iter().enumerate() {
         let n = bvh.nodes.get(k)?;
         let b = n.aabb();
         for axis in 0..3 {
