@@ -432,6 +432,20 @@ impl<const N: usize, L: Lanes> Leaf for ClosestObjects<'_, '_, N, L> {
                 && meet.count_ones() >= MIN_PACKET
             {
                 let blas = &accel.blas[*mesh as usize];
+                if whole::<N>(transform, meet) {
+                    let mut found = [None; N];
+                    blas.closest_packet(self.lanes, self.rays, meet, &mut found);
+                    for (k, hit) in found.into_iter().enumerate() {
+                        if let (Some((face, t, b1, b2)), Some(r), Some(best), Some(b)) =
+                            (hit, self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
+                        {
+                            r.t_max = t;
+                            *best = Best::Mesh { object: i, face, t, b1, b2, dir: r.dir };
+                            b.set_t_max(t);
+                        }
+                    }
+                    continue;
+                }
                 let rays = &*self.rays;
                 let ray = |k: usize| rays.get(k).copied();
                 if fits_small::<N>(meet) {
@@ -460,6 +474,16 @@ impl<const N: usize, L: Lanes> Leaf for ClosestObjects<'_, '_, N, L> {
 #[inline(always)]
 fn fits_small<const N: usize>(meet: u64) -> bool {
     N > SMALL_PACKET && meet.count_ones() as usize <= SMALL_PACKET
+}
+
+/// Whether a mesh instance met by the rays of `meet` takes the packet's
+/// rays as they are: every one of its `N` rays meets it and its transform
+/// is the identity, so the rays are already dense and in object space. A
+/// gather ([`Dense`]) would copy them unchanged (a scene of one mesh
+/// placed as it is: every full camera and shadow packet).
+#[inline(always)]
+fn whole<const N: usize>(transform: &Transform, meet: u64) -> bool {
+    meet.count_ones() as usize == N && transform.is_identity()
 }
 
 /// The rays of a packet that meet a mesh instance, gathered to the front
@@ -540,6 +564,9 @@ impl<const N: usize, L: Lanes> AnyObjects<'_, N, L> {
         match &accel.objects[i as usize] {
             Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
                 let blas = &accel.blas[*mesh as usize];
+                if let (true, Ok(rays)) = (whole::<N>(transform, meet), <&[Ray; N]>::try_from(rays)) {
+                    return blas.occluded_packet(self.lanes, rays, meet);
+                }
                 let ray = |k: usize| rays.get(k).copied();
                 if fits_small::<N>(meet) {
                     Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(self.lanes, blas)

@@ -203,6 +203,14 @@ impl Transform {
         Vec3::from(self.normal * Vec3A::from(n)).normalize_or(n)
     }
 
+    /// Whether the map to object space is exactly the identity, so that
+    /// [`Transform::ray_to_object`] returns a ray as it is.
+    #[inline]
+    #[must_use]
+    pub fn is_identity(&self) -> bool {
+        self.identity
+    }
+
     /// Maps a world-space ray into object space; `t` values are preserved.
     #[inline]
     #[must_use]
@@ -435,6 +443,7 @@ mod tests {
         ];
         for m in identities {
             assert!(m.identity, "{m:?}");
+            assert!(m.is_identity());
             for k in 0..100 {
                 let mut dir = Vec3::new(f(), f(), f());
                 dir[k % 3] = if k % 2 == 0 { 0.0 } else { -0.0 };
@@ -451,5 +460,6 @@ mod tests {
         let ray = Ray::new(Vec3::ZERO, Vec3::X);
         assert_eq!(shifted.ray_to_object(&ray).origin, Vec3::new(-1.0, 2.0, -3.0));
         assert!(!Transform::rotate_x(1e-3).identity);
+        assert!(!Transform::rotate_x(1e-3).is_identity());
     }
 }
