@@ -325,6 +325,100 @@ impl Blas {
     }
 }
 
+/// A mesh's packet walks ([`Blas::closest_packet`],
+/// [`Blas::occluded_packet`]) as functions of their own, one per packet
+/// size and [`Lanes`] kind, which the top level calls at each mesh
+/// instance it reaches.
+///
+/// Not inlined: a top-level packet query reaches a mesh through several
+/// paths (one object alone, a whole packet, a gathered small or full
+/// packet), and inlining a mesh walk into each of them, per packet size
+/// and per ray type, made one function of prism-bvh so large that
+/// compiling it took most of CI's time. One call per mesh instance a
+/// packet reaches costs nothing next to the walk behind it.
+pub(crate) trait MeshPackets: Lanes {
+    /// [`Blas::closest_packet`] with these lanes.
+    fn closest<const N: usize>(
+        self,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        found: &mut [Option<(u32, f32, f32, f32)>; N],
+    );
+
+    /// [`Blas::occluded_packet`] with these lanes.
+    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64;
+}
+
+impl MeshPackets for packet::Portable {
+    #[inline(never)]
+    fn closest<const N: usize>(
+        self,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        found: &mut [Option<(u32, f32, f32, f32)>; N],
+    ) {
+        blas.closest_packet(self, rays, mask, found);
+    }
+
+    #[inline(never)]
+    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
+        blas.occluded_packet(self, rays, mask)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    //! The mesh packet walks compiled for AVX2.
+    use super::{Blas, MeshPackets};
+    use crate::packet::x86::Avx2;
+    use prism_geometry::Ray;
+
+    impl MeshPackets for Avx2 {
+        #[inline(always)]
+        fn closest<const N: usize>(
+            self,
+            blas: &Blas,
+            rays: &[Ray; N],
+            mask: u64,
+            found: &mut [Option<(u32, f32, f32, f32)>; N],
+        ) {
+            // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
+            // `new` is unsafe with that contract), which is every feature
+            // `closest` is compiled for.
+            unsafe { closest(self, blas, rays, mask, found) }
+        }
+
+        #[inline(always)]
+        fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
+            // SAFETY: as in `closest` above.
+            unsafe { occluded(self, blas, rays, mask) }
+        }
+    }
+
+    /// [`Blas::closest_packet`] compiled for AVX2. `inline(never)`: an
+    /// AVX2 caller would otherwise take it in whole at each call.
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    #[inline(never)]
+    fn closest<const N: usize>(
+        lanes: Avx2,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        found: &mut [Option<(u32, f32, f32, f32)>; N],
+    ) {
+        blas.closest_packet(lanes, rays, mask, found);
+    }
+
+    /// [`Blas::occluded_packet`] compiled for AVX2.
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    #[inline(never)]
+    fn occluded<const N: usize>(lanes: Avx2, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
+        blas.occluded_packet(lanes, rays, mask)
+    }
+}
+
 /// The box rays of `mask` (the others meet nothing).
 #[inline(always)]
 fn packet_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [BoxRay; N] {

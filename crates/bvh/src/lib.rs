@@ -100,8 +100,9 @@ mod traverse;
 mod wide;
 
 use blas::Blas;
+use blas::MeshPackets;
 use obvhs::BvhBuildParams;
-use packet::{Lanes, Leaf, MIN_PACKET, SMALL_PACKET, bits};
+use packet::{Leaf, MIN_PACKET, SMALL_PACKET, bits};
 use prism_geometry::glam::{Vec3, Vec3A};
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
@@ -397,14 +398,14 @@ impl Visit for &mut AnyObject<'_> {
 /// `k`: its interval so far in `rays[k]` and its best hit in `best[k]`
 /// (flat arrays rather than a [`ClosestObject`] each: filling and moving
 /// those measured as a fifth of a packet's time).
-struct ClosestObjects<'v, 'a, const N: usize, L: Lanes> {
+struct ClosestObjects<'v, 'a, const N: usize, L: MeshPackets> {
     accel: &'a Accel,
     lanes: L,
     rays: &'v mut [Ray; N],
     best: &'v mut [Best; N],
 }
 
-impl<const N: usize, L: Lanes> ClosestObjects<'_, '_, N, L> {
+impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     /// Walks object `i`'s mesh `blas` with the gathered rays `dense` and
     /// keeps each hit (nearer than the ray's best, as the walk was bounded
     /// by its `t_max`).
@@ -422,7 +423,7 @@ impl<const N: usize, L: Lanes> ClosestObjects<'_, '_, N, L> {
     }
 }
 
-impl<const N: usize, L: Lanes> Leaf for ClosestObjects<'_, '_, N, L> {
+impl<const N: usize, L: MeshPackets> Leaf for ClosestObjects<'_, '_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
         let accel = self.accel;
@@ -434,7 +435,7 @@ impl<const N: usize, L: Lanes> Leaf for ClosestObjects<'_, '_, N, L> {
                 let blas = &accel.blas[*mesh as usize];
                 if whole::<N>(transform, meet) {
                     let mut found = [None; N];
-                    blas.closest_packet(self.lanes, self.rays, meet, &mut found);
+                    self.lanes.closest(blas, self.rays, meet, &mut found);
                     for (k, hit) in found.into_iter().enumerate() {
                         if let (Some((face, t, b1, b2)), Some(r), Some(best), Some(b)) =
                             (hit, self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
@@ -529,33 +530,33 @@ impl<const M: usize> Dense<M> {
     #[inline(always)]
     fn closest(
         self,
-        lanes: impl Lanes,
+        lanes: impl MeshPackets,
         blas: &Blas,
     ) -> impl Iterator<Item = (usize, (u32, f32, f32, f32), Vec3)> {
         let mut found = [None; M];
-        blas.closest_packet(lanes, &self.local, self.mask(), &mut found);
+        lanes.closest(blas, &self.local, self.mask(), &mut found);
         (0..self.len.min(M))
             .filter_map(move |j| found[j].map(|hit| (usize::from(self.ids[j]), hit, self.local[j].dir)))
     }
 
     /// The occluded rays, as a mask over the whole packet.
     #[inline(always)]
-    fn occluded(self, lanes: impl Lanes, blas: &Blas) -> u64 {
-        let hit = blas.occluded_packet(lanes, &self.local, self.mask());
+    fn occluded(self, lanes: impl MeshPackets, blas: &Blas) -> u64 {
+        let hit = lanes.occluded(blas, &self.local, self.mask());
         bits(hit).fold(0, |m, j| m | self.ids.get(j).map_or(0, |&k| 1u64 << k))
     }
 }
 
 /// A packet's occlusion walk over the top level's objects (a mesh instance
 /// met by several rays is walked as a packet); collects the occluded rays.
-struct AnyObjects<'a, const N: usize, L: Lanes> {
+struct AnyObjects<'a, const N: usize, L: MeshPackets> {
     accel: &'a Accel,
     lanes: L,
     rays: &'a [Ray],
     done: u64,
 }
 
-impl<const N: usize, L: Lanes> AnyObjects<'_, N, L> {
+impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
     /// The rays of `meet` that object `i` occludes: a mesh instance met by
     /// several rays tests them as a packet, anything else ray by ray.
     #[inline(always)]
@@ -565,7 +566,7 @@ impl<const N: usize, L: Lanes> AnyObjects<'_, N, L> {
             Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
                 let blas = &accel.blas[*mesh as usize];
                 if let (true, Ok(rays)) = (whole::<N>(transform, meet), <&[Ray; N]>::try_from(rays)) {
-                    return blas.occluded_packet(self.lanes, rays, meet);
+                    return self.lanes.occluded(blas, rays, meet);
                 }
                 let ray = |k: usize| rays.get(k).copied();
                 if fits_small::<N>(meet) {
@@ -581,7 +582,7 @@ impl<const N: usize, L: Lanes> AnyObjects<'_, N, L> {
     }
 }
 
-impl<const N: usize, L: Lanes> Leaf for &mut AnyObjects<'_, N, L> {
+impl<const N: usize, L: MeshPackets> Leaf for &mut AnyObjects<'_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
         let mut hit = 0u64;
@@ -1156,7 +1157,7 @@ impl Accel {
     #[inline(always)]
     fn closest_packet_chunks_in<T>(
         &self,
-        lanes: impl Lanes,
+        lanes: impl MeshPackets,
         rays: &[Ray],
         out: &mut [Option<T>],
         done: &impl Fn(Best) -> Option<T>,
@@ -1174,7 +1175,7 @@ impl Accel {
     #[inline(always)]
     fn closest_packet_impl<const N: usize, T>(
         &self,
-        lanes: impl Lanes,
+        lanes: impl MeshPackets,
         rays: &[Ray],
         out: &mut [Option<T>],
         done: &impl Fn(Best) -> Option<T>,
@@ -1259,7 +1260,7 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn occluded_packet_chunks_in(&self, lanes: impl Lanes, rays: &[Ray], out: &mut [bool]) {
+    fn occluded_packet_chunks_in(&self, lanes: impl MeshPackets, rays: &[Ray], out: &mut [bool]) {
         for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
             // One packet, with per-ray arrays of the size it needs.
             if rays.len() <= SMALL_PACKET {
@@ -1272,7 +1273,7 @@ impl Accel {
 
     /// One packet of at most `N` rays.
     #[inline(always)]
-    fn occluded_packet_impl<const N: usize>(&self, lanes: impl Lanes, rays: &[Ray], out: &mut [bool]) {
+    fn occluded_packet_impl<const N: usize>(&self, lanes: impl MeshPackets, rays: &[Ray], out: &mut [bool]) {
         let mut live = 0u64;
         let mut done = 0u64;
         for (k, ray) in rays.iter().enumerate().take(N) {
@@ -1297,7 +1298,7 @@ impl Accel {
     /// The top-level walk of [`Accel::occluded_packet_impl`]'s rays of
     /// `live`: returns those occluded.
     #[inline(always)]
-    fn occluded_packet_walk<const N: usize>(&self, lanes: impl Lanes, rays: &[Ray], live: u64) -> u64 {
+    fn occluded_packet_walk<const N: usize>(&self, lanes: impl MeshPackets, rays: &[Ray], live: u64) -> u64 {
         let mut done = 0u64;
         let mut br: [BoxRay; N] = std::array::from_fn(|k| match rays.get(k) {
             Some(r) if live >> k & 1 == 1 => BoxRay::new(r),
