@@ -37,6 +37,10 @@ impl std::fmt::Debug for Nodes {
     }
 }
 
+/// A mesh packet's answers: per ray, its hit `(face, t, b1, b2)` as
+/// [`Blas::closest`] gives it.
+pub(crate) type Found<const N: usize> = [Option<(u32, f32, f32, f32)>; N];
+
 /// One mesh's own hierarchy, with its triangles copied in leaf order.
 #[derive(Debug)]
 pub(crate) struct Blas {
@@ -235,7 +239,7 @@ impl Blas {
         lanes: impl Lanes,
         rays: &[Ray; N],
         mask: u64,
-        found: &mut [Option<(u32, f32, f32, f32)>; N],
+        found: &mut Found<N>,
     ) {
         let Nodes::Wide(tree) = &self.nodes else {
             for k in bits(mask) {
@@ -338,13 +342,7 @@ impl Blas {
 /// packet reaches costs nothing next to the walk behind it.
 pub(crate) trait MeshPackets: Lanes {
     /// [`Blas::closest_packet`] with these lanes.
-    fn closest<const N: usize>(
-        self,
-        blas: &Blas,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut [Option<(u32, f32, f32, f32)>; N],
-    );
+    fn closest<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>);
 
     /// [`Blas::occluded_packet`] with these lanes.
     fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64;
@@ -352,13 +350,7 @@ pub(crate) trait MeshPackets: Lanes {
 
 impl MeshPackets for packet::Portable {
     #[inline(never)]
-    fn closest<const N: usize>(
-        self,
-        blas: &Blas,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut [Option<(u32, f32, f32, f32)>; N],
-    ) {
+    fn closest<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>) {
         blas.closest_packet(self, rays, mask, found);
     }
 
@@ -371,19 +363,13 @@ impl MeshPackets for packet::Portable {
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     //! The mesh packet walks compiled for AVX2.
-    use super::{Blas, MeshPackets};
+    use super::{Blas, Found, MeshPackets};
     use crate::packet::x86::Avx2;
     use prism_geometry::Ray;
 
     impl MeshPackets for Avx2 {
         #[inline(always)]
-        fn closest<const N: usize>(
-            self,
-            blas: &Blas,
-            rays: &[Ray; N],
-            mask: u64,
-            found: &mut [Option<(u32, f32, f32, f32)>; N],
-        ) {
+        fn closest<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>) {
             // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
             // `new` is unsafe with that contract), which is every feature
             // `closest` is compiled for.
@@ -401,13 +387,7 @@ mod x86 {
     /// AVX2 caller would otherwise take it in whole at each call.
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     #[inline(never)]
-    fn closest<const N: usize>(
-        lanes: Avx2,
-        blas: &Blas,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut [Option<(u32, f32, f32, f32)>; N],
-    ) {
+    fn closest<const N: usize>(lanes: Avx2, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>) {
         blas.closest_packet(lanes, rays, mask, found);
     }
 
