@@ -411,14 +411,26 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     /// by its `t_max`).
     #[inline(always)]
     fn mesh_hits<const M: usize>(&mut self, i: u32, blas: &Blas, dense: Dense<M>, br: &mut [BoxRay]) {
-        for (k, (face, t, b1, b2), dir) in dense.closest(self.lanes, blas) {
-            if let (Some(r), Some(best), Some(b)) =
-                (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
-            {
-                r.t_max = t;
-                *best = Best::Mesh { object: i, face, t, b1, b2, dir };
-                b.set_t_max(t);
-            }
+        for (k, hit, dir) in dense.closest(self.lanes, blas) {
+            self.keep(i, k, hit, dir, br);
+        }
+    }
+
+    /// Makes ray `k`'s mesh hit `(face, t, b1, b2)` on object `i` (its
+    /// object-space direction `dir`) its best, and shortens its reach.
+    #[inline(always)]
+    fn keep(
+        &mut self,
+        i: u32,
+        k: usize,
+        (face, t, b1, b2): (u32, f32, f32, f32),
+        dir: Vec3,
+        br: &mut [BoxRay],
+    ) {
+        if let (Some(r), Some(best), Some(b)) = (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k)) {
+            r.t_max = t;
+            *best = Best::Mesh { object: i, face, t, b1, b2, dir };
+            b.set_t_max(t);
         }
     }
 }
@@ -437,12 +449,8 @@ impl<const N: usize, L: MeshPackets> Leaf for ClosestObjects<'_, '_, N, L> {
                     let mut found = [None; N];
                     self.lanes.closest(blas, self.rays, meet, &mut found);
                     for (k, hit) in found.into_iter().enumerate() {
-                        if let (Some((face, t, b1, b2)), Some(r), Some(best), Some(b)) =
-                            (hit, self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
-                        {
-                            r.t_max = t;
-                            *best = Best::Mesh { object: i, face, t, b1, b2, dir: r.dir };
-                            b.set_t_max(t);
+                        if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
+                            self.keep(i, k, hit, dir, br);
                         }
                     }
                     continue;
