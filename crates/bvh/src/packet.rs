@@ -197,7 +197,7 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
 
 /// How the rays of `mask` walk: per octant, the rays and, when there are
 /// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one).
-/// One pass over the rays sorts them into [`octants`] and bounds those in
+/// One pass over the rays sorts them into `octants` (a test-only reference) and bounds those in
 /// the first ray's octant; any other octant big enough for a packet is
 /// bounded by [`Frustum::new`] (the tests compare the two).
 ///
@@ -241,7 +241,7 @@ pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
 }
 
 /// The octant of a ray (bit `a` set when axis `a` runs negative), 8 for a
-/// ray with a zero direction component (see [`octants`]).
+/// ray with a zero direction component (see `octants`).
 #[inline(always)]
 fn octant(b: &BoxRay) -> usize {
     if b.inv.is_finite() { b.inv.cmplt(Vec3A::ZERO).bitmask() as usize & 7 } else { 8 }
@@ -265,7 +265,7 @@ pub(crate) struct Frustum {
 }
 
 impl Frustum {
-    /// Over the rays of `mask`, which [`octants`] put in one octant.
+    /// Over the rays of `mask`, which `octants` puts in one octant.
     pub fn new(br: &[BoxRay], mask: u64) -> Option<Self> {
         let first = br.get(mask.trailing_zeros() as usize)?.inv;
         let signs = first.cmplt(Vec3A::ZERO).bitmask();

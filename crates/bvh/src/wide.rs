@@ -22,7 +22,7 @@
 //! Every kernel performs the same operations in the same order on each
 //! lane (no fused multiply-add), so they compute bit-identical distances,
 //! visit the same children in the same order and return the same hits
-//! (tested in [`crate::tests`] and `tests/kernels.rs`).
+//! (tested in the unit tests of `lib.rs` and in `tests/blas_kinds.rs`).
 //!
 //! # The walk
 //!
