@@ -608,8 +608,14 @@ mod tests {
                         assert_eq!(layout, BlasKind::Bvh2);
                         b.validate(&tris, false, blas.split);
                     }
-                    // Its boxes and slots are checked by the queries' tests.
-                    Nodes::Wide(_) => assert_eq!(layout, BlasKind::Wide),
+                    Nodes::Wide(w) => {
+                        assert_eq!(layout, BlasKind::Wide);
+                        // A pre-split leaf bounds only its part of a triangle.
+                        w.validate(|s| {
+                            let t = blas.tris.get(s).filter(|_| !blas.split)?;
+                            Some((t[0].min(t[1]).min(t[2]).to_array(), t[0].max(t[1]).max(t[2]).to_array()))
+                        });
+                    }
                 }
                 assert!(blas.depth >= 1 && blas.depth <= traverse::INLINE_STACK);
                 assert_eq!(blas.tris.len(), blas.faces.len());

@@ -679,6 +679,91 @@ impl Tree for WideBvh {
     }
 }
 
+/// What the walks assume of a converted tree, checked by the tests
+/// (obvhs's own `validate` checks only its binary tree).
+#[cfg(test)]
+impl WideBvh {
+    /// Panics unless: every node but the root is the child of exactly one
+    /// lane, after its parent; a node's used lanes come first, with boxes
+    /// `min <= max`, and the rest are [`Node::EMPTY`]'s; an inner node has
+    /// at least two children (the root at least one); an inner lane's box
+    /// holds its child's boxes; a leaf lane holds 1 to [`MAX_LEAF`]
+    /// primitives in its own block of four slots, the rest of the block
+    /// [`PAD`], and every block belongs to one leaf; and, where
+    /// `slot_box(s)` gives slot `s`'s primitive's box, the leaf's box
+    /// holds it.
+    pub(crate) fn validate(&self, slot_box: impl Fn(usize) -> Option<([f32; 3], [f32; 3])>) {
+        let block = MAX_LEAF as usize;
+        if self.nodes.is_empty() {
+            assert!(self.slots.is_empty(), "slots without nodes");
+            return;
+        }
+        assert_eq!(self.slots.len() % block, 0, "slots in whole blocks");
+        let within = |lo: [f32; 3], hi: [f32; 3], outer: ([f32; 3], [f32; 3])| {
+            (0..3).all(|a| outer.0[a] <= lo[a] && hi[a] <= outer.1[a])
+        };
+        let lane_box = |node: &Node, lane: usize| {
+            let p = &node.planes;
+            ([p[0][lane], p[1][lane], p[2][lane]], [p[3][lane], p[4][lane], p[5][lane]])
+        };
+        let mut node_seen = vec![false; self.nodes.len()];
+        let mut block_seen = vec![false; self.slots.len() / block];
+        node_seen[0] = true;
+        let mut stack = vec![0usize];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n];
+            let used = (0..WIDTH).take_while(|&lane| lane_box(node, lane).0[0] != f32::INFINITY).count();
+            assert!(used >= if n == 0 { 1 } else { 2 }, "node {n}: {used} children");
+            for lane in used..WIDTH {
+                let (e, empty) = (lane_box(node, lane), lane_box(&Node::EMPTY, 0));
+                assert!(
+                    e == empty && node.child[lane] == 0,
+                    "node {n} lane {lane}: a used lane after an unused one"
+                );
+            }
+            for lane in 0..used {
+                let (lo, hi) = lane_box(node, lane);
+                assert!((0..3).all(|a| lo[a] <= hi[a]), "node {n} lane {lane}: box {lo:?}..{hi:?}");
+                let c = node.child[lane];
+                if c & LEAF != 0 {
+                    let first = (c & ((1 << FIRST_BITS) - 1)) as usize;
+                    let count = (((c & !LEAF) >> FIRST_BITS) + 1) as usize;
+                    assert!(
+                        first.is_multiple_of(block) && count <= block,
+                        "node {n} lane {lane}: leaf {first}+{count}"
+                    );
+                    assert!(!std::mem::replace(&mut block_seen[first / block], true), "block {first} twice");
+                    for s in first..first + block {
+                        assert_eq!(
+                            self.slots[s] == PAD,
+                            s >= first + count,
+                            "slot {s} of leaf {first}+{count}"
+                        );
+                        if let (true, Some(b)) = (s < first + count, slot_box(s)) {
+                            assert!(
+                                within(b.0, b.1, (lo, hi)),
+                                "slot {s}'s box {b:?} outside {lo:?}..{hi:?}"
+                            );
+                        }
+                    }
+                } else {
+                    let k = c as usize;
+                    assert!(k > n && k < self.nodes.len(), "node {n} lane {lane}: child {k}");
+                    assert!(!std::mem::replace(&mut node_seen[k], true), "node {k} has two parents");
+                    let child = &self.nodes[k];
+                    for l in (0..WIDTH).take_while(|&l| lane_box(child, l).0[0] != f32::INFINITY) {
+                        let (clo, chi) = lane_box(child, l);
+                        assert!(within(clo, chi, (lo, hi)), "node {k} lane {l} outside its parent's box");
+                    }
+                    stack.push(k);
+                }
+            }
+        }
+        assert!(node_seen.iter().all(|&s| s), "a node no lane reaches");
+        assert!(block_seen.iter().all(|&s| s), "a block no leaf holds");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
