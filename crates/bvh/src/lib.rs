@@ -99,8 +99,7 @@ mod packet;
 mod traverse;
 mod wide;
 
-use blas::Blas;
-use blas::MeshPackets;
+use blas::{Blas, MeshPackets};
 use obvhs::BvhBuildParams;
 use packet::{Leaf, MIN_PACKET, SMALL_PACKET, bits};
 use prism_geometry::glam::{Vec3, Vec3A};
