@@ -1613,6 +1613,8 @@ mod tests {
         let sphere = prism_geometry::Sphere::new(Vec3::new(1.0, 0.2, 0.5), 0.3).unwrap();
         objects.push(Object::Shape(Instance::new(Shape::from(sphere), Transform::IDENTITY)));
         let accel = Accel::build(vec![mesh], objects).unwrap();
+        // The top level's tree (leaves of one object), structure only.
+        accel.tlas.validate(|_| None);
         if !accel.simd.wide {
             eprintln!("skipped: this CPU lacks the wide variant's features");
             return;

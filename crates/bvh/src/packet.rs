@@ -197,9 +197,10 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
 
 /// How the rays of `mask` walk: per octant, the rays and, when there are
 /// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one).
-/// One pass over the rays sorts them into `octants` (a test-only reference) and bounds those in
-/// the first ray's octant; any other octant big enough for a packet is
-/// bounded by [`Frustum::new`] (the tests compare the two).
+/// One pass over the rays sorts them into `octants` (a test-only
+/// reference) and bounds those in the first ray's octant; any other octant
+/// big enough for a packet is bounded by [`Frustum::new`] (the tests
+/// compare the two).
 ///
 /// Compiled into each caller (`inline(always)`): as a function of its own
 /// it was built without the packet queries' AVX2, and its one pass took
