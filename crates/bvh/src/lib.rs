@@ -500,6 +500,13 @@ fn whole<const N: usize>(transform: &Transform, meet: u64) -> bool {
 /// index in the whole packet of ray `j`. A mesh packet gives each ray the
 /// hit it gives alone, whichever rays share the packet (tests/packets.rs),
 /// so gathering changes no answer.
+/// A packet slot's ray where it holds none: no walk reads it (it is
+/// not in the packet's mask). Filled in first and then overwritten, not
+/// chosen per slot in `std::array::from_fn`: that compiled into copies
+/// whose loads straddled earlier stores and stalled (docs/benchmarks.md,
+/// "A ray's halves").
+const PLACEHOLDER: Ray = Ray { origin: Vec3::ZERO, t_min: 0.0, dir: Vec3::X, t_max: f32::INFINITY };
+
 struct Dense<const M: usize> {
     local: [Ray; M],
     ids: [u8; M],
@@ -518,11 +525,12 @@ impl<const M: usize> Dense<M> {
                 len += 1;
             }
         }
-        let local = std::array::from_fn(|j| match (j < len).then(|| ray(usize::from(ids[j]))).flatten() {
-            Some(r) => transform.ray_to_object(&r),
-            // A placeholder no walk reads (not in `mask`).
-            None => Ray::new(Vec3::ZERO, Vec3::X),
-        });
+        let mut local = [PLACEHOLDER; M];
+        for (l, &id) in local.iter_mut().zip(&ids[..len.min(M)]) {
+            if let Some(r) = ray(usize::from(id)) {
+                *l = transform.ray_to_object(&r);
+            }
+        }
         Self { local, ids, len }
     }
 
@@ -1189,14 +1197,12 @@ impl Accel {
     ) {
         let mut mask = 0u64;
         let mut best = [Best::None; N];
-        let mut live: [Ray; N] = std::array::from_fn(|k| match rays.get(k) {
-            Some(r) if usable(r) => {
-                mask |= 1 << k;
-                *r
-            }
-            // A placeholder no walk reads (not in `mask`).
-            _ => Ray::new(Vec3::ZERO, Vec3::X),
-        });
+        let mut live = [PLACEHOLDER; N];
+        for (k, (l, r)) in live.iter_mut().zip(rays).enumerate() {
+            // Copied whether usable or not: only the rays of `mask` are read.
+            *l = *r;
+            mask |= u64::from(usable(r)) << k;
+        }
         for k in bits(mask) {
             for &i in &self.unbounded {
                 self.closest_object(i, &mut live[k], &mut best[k]);

@@ -24,12 +24,6 @@ pub(crate) struct BoxRay {
 /// Traversal" (JCGT 2013), which bounds the rounding of a slab distance.
 pub(crate) const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
-/// `1/d`, with `+inf` for both zeros (slab order uses `d < 0`).
-#[inline(always)]
-fn inv(d: f32) -> f32 {
-    if d == 0.0 { f32::INFINITY } else { 1.0 / d }
-}
-
 impl BoxRay {
     /// A ray that meets nothing (an unused packet slot).
     pub const NONE: Self = Self {
@@ -40,16 +34,19 @@ impl BoxRay {
         reach: f32::NEG_INFINITY,
     };
 
+    /// `inv` is `1/d` per axis with `+inf` for both zeros (slab order uses
+    /// `d < 0`): one vector division, whose quotients are those of three
+    /// scalar ones bit for bit, with the zeros' then replaced.
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        let d = ray.dir;
-        let neg = [d.x < 0.0, d.y < 0.0, d.z < 0.0];
-        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
-            | (if neg[1] { 0 } else { 0x0202_0202 })
-            | (if neg[2] { 0 } else { 0x0101_0101 });
+        let d = Vec3A::from(ray.dir);
+        let inv = Vec3A::select(d.cmpeq(Vec3A::ZERO), Vec3A::INFINITY, Vec3A::ONE / d);
+        // Bit `a` set where axis `a` points the positive way.
+        let pos = !d.cmplt(Vec3A::ZERO).bitmask() & 7;
+        let oct_inv4 = ((pos & 1) << 2 | (pos & 2) | pos >> 2) * 0x0101_0101;
         Self {
             origin: Vec3A::from(ray.origin),
-            inv: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+            inv,
             oct_inv4,
             t_min: ray.t_min,
             reach: ray.t_max * FAR_SCALE,
@@ -225,6 +222,33 @@ pub(crate) fn walk_any<T: Tree>(tree: &T, depth: usize, ray: &mut BoxRay, prim: 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use prism_geometry::glam::Vec3;
+
+    #[test]
+    fn box_ray_reciprocals_and_octant_match_the_scalar_rules() {
+        // `1/d` per axis, `+inf` for both zeros; the octant bits set where
+        // an axis points the positive way (`-0.0` and `+0.0` alike).
+        let inv = |d: f32| if d == 0.0 { f32::INFINITY } else { 1.0 / d };
+        let dirs = [
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-1.0, 0.0, -0.0),
+            Vec3::new(-0.0, -3.0, 0.0),
+            Vec3::new(1e-38, -1e38, 7.0),
+            Vec3::new(-1e-45, 0.5, -0.25),
+            Vec3::new(3.0, -7.0, 11.0) / 13.0,
+        ];
+        for d in dirs {
+            let br = BoxRay::new(&Ray::with_interval(Vec3::new(1.0, -2.0, 3.0), d, 0.5, 4.0));
+            for a in 0..3 {
+                assert_eq!(br.inv[a].to_bits(), inv(d[a]).to_bits(), "{d} axis {a}");
+            }
+            let oct = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
+                | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
+                | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
+            assert_eq!(br.oct_inv4, oct, "{d}");
+            assert_eq!((br.origin, br.t_min, br.reach()), (Vec3A::new(1.0, -2.0, 3.0), 0.5, 4.0 * FAR_SCALE));
+        }
+    }
 
     #[test]
     fn inline_stack_is_last_in_first_out_and_drops_beyond_capacity() {

@@ -42,6 +42,7 @@
 
 use crate::traverse::{BoxRay, Stack, Tree, Visit};
 use obvhs::bvh2::Bvh2;
+use prism_geometry::glam::Vec3A;
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 8;
@@ -336,11 +337,12 @@ struct WideRay {
 impl WideRay {
     #[inline(always)]
     fn new(br: &BoxRay) -> Self {
-        let inv = br.inv.to_array();
-        let neg = |a: usize| usize::from(inv[a] < 0.0) * 3;
+        // Bit `a` set where `inv[a] < 0`: the max plane is then the near one.
+        let neg = br.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let neg = |a: usize| (neg >> a & 1) * 3;
         Self {
             origin: br.origin.to_array(),
-            inv,
+            inv: br.inv.to_array(),
             near_row: [neg(0), 1 + neg(1), 2 + neg(2)],
             far_row: [3 - neg(0), 4 - neg(1), 5 - neg(2)],
             t_min: br.t_min,

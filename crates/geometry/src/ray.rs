@@ -7,14 +7,21 @@ use glam::Vec3;
 /// `dir` need not be unit length: an affine transform maps a world ray to an
 /// object-space ray whose `t` values are the same, so shapes accept any
 /// non-zero direction and report `t` in units of `dir`.
+///
+/// The fields are laid out as two 16-byte halves, `origin, t_min` and
+/// `dir, t_max` (`repr(C)`), so that loading `origin` or `dir` from a ray
+/// just copied (in 16-byte moves) reads within one half: a load across the
+/// halves cannot be forwarded from the copy's stores and stalls the CPU
+/// (docs/benchmarks.md, "A ray's halves").
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     /// Where the ray starts.
     pub origin: Vec3,
-    /// Direction of travel; non-zero, not necessarily normalized.
-    pub dir: Vec3,
     /// Smallest accepted parameter (inclusive).
     pub t_min: f32,
+    /// Direction of travel; non-zero, not necessarily normalized.
+    pub dir: Vec3,
     /// Largest accepted parameter (inclusive).
     pub t_max: f32,
 }
