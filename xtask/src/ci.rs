@@ -1,8 +1,9 @@
 //! `cargo xtask ci`: everything a commit must pass, and exactly what CI
 //! (`.ci/run`) runs: rustfmt (the workspace and `fuzz/`), clippy with
 //! warnings denied, every test (including the tidy tests of
-//! `xtask/src/tidy.rs`), the docs with warnings denied, a build of the
-//! fuzz targets, and `cargo publish --dry-run -p prism-geometry`.
+//! `xtask/src/tidy.rs`), the docs (public, then with private items) with
+//! warnings denied, a build of the fuzz targets, and `cargo publish
+//! --dry-run -p prism-geometry`.
 
 use crate::{cargo, fuzz, run_checked};
 use anyhow::Result;
@@ -29,6 +30,13 @@ pub fn run(_args: &[String]) -> Result<()> {
 
     let t = Instant::now();
     run_checked(cargo().args(["doc", "--workspace", "--no-deps"]).env("RUSTDOCFLAGS", "-D warnings"))?;
+    // The private items' docs too: their links break as easily, and a
+    // public-only build does not read them.
+    run_checked(
+        cargo()
+            .args(["doc", "--workspace", "--no-deps", "--document-private-items"])
+            .env("RUSTDOCFLAGS", "-D warnings"),
+    )?;
     step("docs", t);
 
     let t = Instant::now();

@@ -231,7 +231,7 @@ pub fn render_aovs(
 
 /// The beauty image and the AOV passes `aovs` in one pass over the pixels.
 ///
-/// The image is the same, bit for bit, as [`crate::render`]'s with the same
+/// The image is the same, bit for bit, as [`crate::render()`]'s with the same
 /// settings (it is the same sample loop; adaptive supersampling, which
 /// needs a pixel's samples to stop early, is off here), and the passes as
 /// [`render_aovs`]'s; `stats.rays` counts the rays of both (the passes
@@ -265,7 +265,7 @@ pub struct AlphaImage {
 /// `+UA`; Blender's "transparent film").
 ///
 /// Where every sample of a pixel hits a surface, its colour is bit for bit
-/// that of [`crate::render`] (without adaptive supersampling, which is off
+/// that of [`crate::render()`] (without adaptive supersampling, which is off
 /// here) and its alpha 1. An area light seen directly covers its samples as
 /// a surface does. Each camera ray is tested
 /// once more for a hit by the pass sink (counted in `stats.aov_rays`).

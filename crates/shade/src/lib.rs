@@ -2,9 +2,9 @@
 //! lights, fog, and the parallel, deterministic renderer.
 //!
 //! A [`Scene`] is plain, immutable data over a [`prism_bvh::Accel`];
-//! [`render`] turns it into a linear-radiance [`Image`] as the per-render
+//! [`render()`] turns it into a linear-radiance [`Image`] as the per-render
 //! [`RenderSettings`] say (camera, fog on/off, samples, depth, threads). The shading model is documented on
-//! [`Material`], fog on [`Fog`], sampling on [`render`] (a 1-spp
+//! [`Material`], fog on [`Fog`], sampling on [`render()`] (a 1-spp
 //! render samples pixel centres exactly; more samples are stratified and
 //! the same for any number of threads).
 //!

@@ -549,7 +549,7 @@ pub(crate) struct SamplePattern {
     strata: u32,
     /// Step through the strata, coprime with `strata`.
     stride: u32,
-    /// The bit mask of [`permute`] for `m` items.
+    /// The bit mask of the permutation ([`permute_keyed`]) for `m` items.
     mask: u32,
     /// The stratum `(column, row)` of sample `s`, for `s` below its length
     /// (at most [`STRATUM_TABLE`]); later samples compute theirs.
@@ -689,8 +689,8 @@ fn permute_mask(len: u32) -> u32 {
     w
 }
 
-/// Kensler's permutation ([`permute`]) with its per-key parts given:
-/// `w = permute_mask(len)` and `rem = key % len`; `i < len`.
+/// Kensler's permutation (the test-only `permute`) with its per-key parts
+/// given: `w = permute_mask(len)` and `rem = key % len`; `i < len`.
 #[inline]
 fn permute_keyed(mut i: u32, len: u32, w: u32, key: u32, rem: u32) -> u32 {
     if len <= 1 {

@@ -227,7 +227,7 @@ pub(crate) static MISSING_MATERIAL: Material = Material {
 impl Scene {
     /// Checks that every object has a material, every material, light and
     /// the fog are valid, and the ambient and background colours are
-    /// finite and non-negative. [`crate::render`] does not need this to
+    /// finite and non-negative. [`crate::render()`] does not need this to
     /// be safe (a missing material is drawn magenta), but a loader should
     /// call it.
     ///
