@@ -494,19 +494,19 @@ fn whole<const N: usize>(transform: &Transform, meet: u64) -> bool {
     meet.count_ones() as usize == N && transform.is_identity()
 }
 
+/// A packet slot's ray where it holds none: no walk reads it (it is
+/// not in the packet's mask). Filled in first and then overwritten, not
+/// chosen per slot in `std::array::from_fn`: that compiled into copies
+/// whose loads straddled earlier stores and stalled (docs/benchmarks.md,
+/// "Issue 11: a ray's halves").
+const PLACEHOLDER: Ray = Ray { origin: Vec3::ZERO, t_min: 0.0, dir: Vec3::X, t_max: f32::INFINITY };
+
 /// The rays of a packet that meet a mesh instance, gathered to the front
 /// of a packet of capacity `M` (a small one when few rays meet it, which
 /// is cheaper to set up) in the instance's object space: `ids[j]` is the
 /// index in the whole packet of ray `j`. A mesh packet gives each ray the
 /// hit it gives alone, whichever rays share the packet (tests/packets.rs),
 /// so gathering changes no answer.
-/// A packet slot's ray where it holds none: no walk reads it (it is
-/// not in the packet's mask). Filled in first and then overwritten, not
-/// chosen per slot in `std::array::from_fn`: that compiled into copies
-/// whose loads straddled earlier stores and stalled (docs/benchmarks.md,
-/// "A ray's halves").
-const PLACEHOLDER: Ray = Ray { origin: Vec3::ZERO, t_min: 0.0, dir: Vec3::X, t_max: f32::INFINITY };
-
 struct Dense<const M: usize> {
     local: [Ray; M],
     ids: [u8; M],

@@ -12,7 +12,7 @@ use glam::Vec3;
 /// `dir, t_max` (`repr(C)`), so that loading `origin` or `dir` from a ray
 /// just copied (in 16-byte moves) reads within one half: a load across the
 /// halves cannot be forwarded from the copy's stores and stalls the CPU
-/// (docs/benchmarks.md, "A ray's halves").
+/// (docs/benchmarks.md, "Issue 11: a ray's halves").
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct Ray {
