@@ -708,13 +708,16 @@ impl WideBvh {
             let p = &node.planes;
             ([p[0][lane], p[1][lane], p[2][lane]], [p[3][lane], p[4][lane], p[5][lane]])
         };
+        // Lanes in use: those before the first unused (inverted) box.
+        let used_lanes =
+            |node: &Node| (0..WIDTH).take_while(|&lane| lane_box(node, lane).0[0] != f32::INFINITY).count();
         let mut node_seen = vec![false; self.nodes.len()];
         let mut block_seen = vec![false; self.slots.len() / block];
         node_seen[0] = true;
         let mut stack = vec![0usize];
         while let Some(n) = stack.pop() {
             let node = &self.nodes[n];
-            let used = (0..WIDTH).take_while(|&lane| lane_box(node, lane).0[0] != f32::INFINITY).count();
+            let used = used_lanes(node);
             assert!(used >= if n == 0 { 1 } else { 2 }, "node {n}: {used} children");
             for lane in used..WIDTH {
                 let (e, empty) = (lane_box(node, lane), lane_box(&Node::EMPTY, 0));
@@ -753,7 +756,7 @@ impl WideBvh {
                     assert!(k > n && k < self.nodes.len(), "node {n} lane {lane}: child {k}");
                     assert!(!std::mem::replace(&mut node_seen[k], true), "node {k} has two parents");
                     let child = &self.nodes[k];
-                    for l in (0..WIDTH).take_while(|&l| lane_box(child, l).0[0] != f32::INFINITY) {
+                    for l in 0..used_lanes(child) {
                         let (clo, chi) = lane_box(child, l);
                         assert!(within(clo, chi, (lo, hi)), "node {k} lane {l} outside its parent's box");
                     }
