@@ -1,6 +1,7 @@
 //! A CPU-native wide BVH: eight children per node with uncompressed
 //! single-precision boxes in SoA form (one 256-byte block a node),
-//! converted from obvhs's binary tree, and its walk with node tests in
+//! converted from obvhs's binary tree by a surface-area-optimal plan
+//! ([`WideBvh::from_bvh2`]), and its walk with node tests in
 //! portable Rust, AVX2 or AVX-512, chosen at run time ([`Kernel`]).
 //!
 //! obvhs's CWBVH is a GPU layout: each node visit decodes eight quantised
@@ -180,17 +181,20 @@ impl Default for WideBvh {
 }
 
 impl WideBvh {
-    /// Converts obvhs's binary tree: each wide node takes its binary
-    /// node's two children and repeatedly opens the inner child with the
-    /// largest surface until it has eight (or only leaves). Leaves keep
-    /// their primitives, each leaf in a block of four slots ([`WideBvh::slots`]).
-    /// `None` if a leaf holds more than [`MAX_LEAF`] primitives or the slots
-    /// do not fit the reference's 27 bits.
-    pub fn from_bvh2(bvh: &Bvh2, kernel: Kernel) -> Option<Self> {
+    /// Converts obvhs's binary tree with leaves of at most `max_leaf`
+    /// primitives (clamped to `1..=`[`MAX_LEAF`]), laying each wide node's
+    /// lanes as the surface-area plan of [`plan`] says: which descendants
+    /// of a binary node fill the lanes, and which subtrees of few enough
+    /// primitives become one leaf. Each leaf takes a block of four slots
+    /// ([`WideBvh::slots`]). `None` if a binary leaf holds more than
+    /// `max_leaf` primitives or the slots do not fit the reference's 27
+    /// bits.
+    pub fn from_bvh2(bvh: &Bvh2, max_leaf: u32, kernel: Kernel) -> Option<Self> {
         let mut nodes = Vec::with_capacity(bvh.nodes.len() / 4 + 1);
         let mut slots = Vec::with_capacity(bvh.primitive_indices.len() * 2);
         if !bvh.nodes.is_empty() {
-            convert(bvh, 0, &mut nodes, &mut slots)?;
+            let plan = plan(bvh, max_leaf.clamp(1, MAX_LEAF))?;
+            convert(bvh, &plan, 0, &mut nodes, &mut slots)?;
         }
         let mut w = Self { nodes, slots, kernel: Kernel::Portable };
         w.set_kernel(kernel);
@@ -228,7 +232,7 @@ impl WideBvh {
         let mut p = quality.params();
         p.max_prims_per_leaf = max_leaf.clamp(1, MAX_LEAF);
         let b = crate::bvh2::build(aabbs, tris, p);
-        Some((Self::from_bvh2(&b, kernel)?, b.uses_spatial_splits))
+        Some((Self::from_bvh2(&b, p.max_prims_per_leaf, kernel)?, b.uses_spatial_splits))
     }
 
     /// Selects the kernel its walks use; refused (`false`) when the CPU
@@ -257,70 +261,198 @@ impl WideBvh {
     }
 }
 
-/// Appends the wide node for binary node `src` (and its subtree); returns
-/// its index.
-fn convert(bvh: &Bvh2, src: usize, nodes: &mut Vec<Node>, slots: &mut Vec<u32>) -> Option<u32> {
+/// The conversion's surface-area cost model: the cost of a node test and
+/// of a leaf test, per unit of half area of the box that leads to them. A
+/// leaf costs the same whatever its count, its block of four triangles
+/// being tested at once. The plan hardly depends on the ratio (leaves at
+/// 0.5 to 4 node tests gave the same leaves, and node counts within
+/// 1.2 %: docs/benchmarks.md).
+const NODE_COST: f32 = 1.0;
+const LEAF_COST: f32 = 1.0;
+
+/// How the subtree of one binary node is best laid into lanes: one entry
+/// of the conversion's plan ([`plan`]).
+#[derive(Clone, Copy, Debug)]
+struct Choice {
+    /// At `i - 1`: the least cost of the subtree as at most `i` lanes.
+    cost: [f32; WIDTH],
+    /// At `i - 1` for `i >= 2`: the lanes of those `i` that the left child
+    /// takes (the right one takes the rest), or 0 when `i - 1` lanes cost
+    /// as little. At 0: the left child's lanes in the wide node made for
+    /// this node (the best split of all [`WIDTH`]).
+    split: [u8; WIDTH],
+    /// Whether the subtree as one lane is a leaf (else a wide node).
+    leaf: bool,
+    /// Primitive references in the subtree (saturating).
+    prims: u32,
+    /// The most lanes that lower its cost: `cost[i - 1]` is the same for
+    /// every `i >= used`.
+    used: u8,
+}
+
+/// Plans the conversion of `bvh` into wide nodes with leaves of at most
+/// `max_leaf` primitives: for every binary node and lane budget `i` in
+/// `1..=WIDTH`, the cheapest way to lay its subtree into at most `i`
+/// lanes of a wide node, by the dynamic programme of Ylitie, Karras and
+/// Laine ("Efficient Incoherent Ray Traversal on GPUs Through Compressed
+/// Wide BVHs", HPG 2017, section 3.1) under [`NODE_COST`] and
+/// [`LEAF_COST`]. A subtree of few enough primitives may become one leaf,
+/// and a node's lanes take whichever descendants cost least, not only the
+/// widest. `None` if a binary leaf holds more than `max_leaf` primitives
+/// or a child index is out of range.
+fn plan(bvh: &Bvh2, max_leaf: u32) -> Option<Vec<Choice>> {
+    let n = bvh.nodes.len();
+    // Parents before children: breadth first from the root.
+    let mut order = Vec::with_capacity(n);
+    order.push(0usize);
+    let mut at = 0;
+    while let Some(&k) = order.get(at) {
+        at += 1;
+        let node = bvh.nodes.get(k)?;
+        if !node.is_leaf() {
+            let first = node.first_index as usize;
+            if first + 1 >= n || order.len() + 2 > n {
+                return None;
+            }
+            order.extend([first, first + 1]);
+        }
+    }
+    let blank = Choice { cost: [0.0; WIDTH], split: [0; WIDTH], leaf: true, prims: 0, used: 1 };
+    let mut plan = vec![blank; n];
+    for &k in order.iter().rev() {
+        let node = &bvh.nodes[k];
+        let area = node.aabb().half_area();
+        if node.is_leaf() {
+            if node.prim_count > max_leaf {
+                return None;
+            }
+            plan[k] = Choice { cost: [area * LEAF_COST; WIDTH], prims: node.prim_count, ..blank };
+            continue;
+        }
+        let (l, r) = (plan[node.first_index as usize], plan[node.first_index as usize + 1]);
+        // `best[j - 1]`: the cheapest split of `j >= 2` lanes between the
+        // children, and the left child's share (1 if none is finite). A
+        // child given more lanes than it can use (`used`) costs no less
+        // than with `used`, so only shares within both children's use
+        // are tried: at the bottom of the tree, where most nodes are,
+        // that is one split instead of thirty-five.
+        let top = (usize::from(l.used) + usize::from(r.used)).min(WIDTH);
+        let mut best = [(f32::INFINITY, 1u8); WIDTH];
+        for j in 2..=top {
+            let b = &mut best[j - 1];
+            for kl in j.saturating_sub(usize::from(r.used)).max(1)..=(j - 1).min(usize::from(l.used)) {
+                let c = l.cost[kl - 1] + r.cost[j - kl - 1];
+                if c < b.0 {
+                    *b = (c, kl as u8);
+                }
+            }
+        }
+        let prims = l.prims.saturating_add(r.prims);
+        let as_node = area * NODE_COST + best[top - 1].0;
+        let as_leaf = if prims <= max_leaf { area * LEAF_COST } else { f32::INFINITY };
+        let mut c = Choice { leaf: as_leaf <= as_node, prims, ..blank };
+        c.cost[0] = as_leaf.min(as_node);
+        c.split[0] = best[top - 1].1;
+        for (i, &b) in best.iter().enumerate().skip(1) {
+            (c.cost[i], c.split[i]) = if b.0 < c.cost[i - 1] {
+                c.used = i as u8 + 1;
+                b
+            } else {
+                (c.cost[i - 1], 0)
+            };
+        }
+        plan[k] = c;
+    }
+    Some(plan)
+}
+
+/// The lanes of one wide node: binary node indices, and how many.
+type Lanes = ([usize; WIDTH], usize);
+
+/// Appends the subtrees that `plan` lays into at most `lanes` lanes for
+/// binary node `k`.
+fn lay(bvh: &Bvh2, plan: &[Choice], k: usize, mut lanes: usize, out: &mut Lanes) {
+    let split = |lanes: usize| plan.get(k).map_or(0, |c| c.split[lanes - 1]);
+    while lanes > 1 && split(lanes) == 0 {
+        lanes -= 1;
+    }
+    let first = bvh.nodes.get(k).map_or(0, |n| n.first_index as usize);
+    if lanes > 1 {
+        let kl = usize::from(split(lanes));
+        lay(bvh, plan, first, kl, out);
+        lay(bvh, plan, first + 1, lanes - kl, out);
+    } else if let Some(slot) = out.0.get_mut(out.1) {
+        *slot = k;
+        out.1 += 1;
+    }
+}
+
+/// Appends the wide node for binary node `src` (and its subtree), laid
+/// out as `plan` says; returns its index.
+fn convert(
+    bvh: &Bvh2,
+    plan: &[Choice],
+    src: usize,
+    nodes: &mut Vec<Node>,
+    slots: &mut Vec<u32>,
+) -> Option<u32> {
     let at = nodes.len();
     nodes.push(Node::EMPTY);
     let root = bvh.nodes.get(src)?;
-    // The children so far, and the surface of each that can be opened (an
-    // inner node); `None` for a leaf.
-    let inner_area = |k: usize| bvh.nodes.get(k).filter(|n| !n.is_leaf()).map(|n| n.aabb().half_area());
-    let mut kids = [0usize; WIDTH];
-    let mut area = [None; WIDTH];
-    let mut len = if root.is_leaf() {
-        kids[0] = src;
-        1
+    let mut lanes: Lanes = ([0; WIDTH], 0);
+    if root.is_leaf() {
+        lay(bvh, plan, src, 1, &mut lanes);
     } else {
-        kids[..2].copy_from_slice(&[root.first_index as usize, root.first_index as usize + 1]);
-        2
-    };
-    for (a, &k) in area.iter_mut().zip(&kids[..len]) {
-        *a = inner_area(k);
-    }
-    while len < WIDTH {
-        // The widest inner child; the last of equals, as `Iterator::max_by`.
-        let mut widest: Option<(usize, f32)> = None;
-        for (i, a) in area[..len].iter().enumerate() {
-            if let Some(a) = *a
-                && widest.is_none_or(|(_, w)| a.total_cmp(&w).is_ge())
-            {
-                widest = Some((i, a));
-            }
-        }
-        let Some((i, _)) = widest else { break };
-        let first = bvh.nodes[kids[i]].first_index as usize;
-        kids.copy_within(i + 1..len, i + 2);
-        area.copy_within(i + 1..len, i + 2);
-        (kids[i], kids[i + 1]) = (first, first + 1);
-        (area[i], area[i + 1]) = (inner_area(first), inner_area(first + 1));
-        len += 1;
+        let kl = usize::from(plan.get(src)?.split[0]);
+        lay(bvh, plan, root.first_index as usize, kl, &mut lanes);
+        lay(bvh, plan, root.first_index as usize + 1, WIDTH - kl, &mut lanes);
     }
     let mut node = Node::EMPTY;
-    for (lane, &k) in kids[..len].iter().enumerate() {
-        let n = bvh.nodes.get(k)?;
-        let b = n.aabb();
+    for (lane, &k) in lanes.0[..lanes.1].iter().enumerate() {
+        let b = bvh.nodes.get(k)?.aabb();
         for axis in 0..3 {
             node.planes[axis][lane] = b.min[axis];
             node.planes[axis + 3][lane] = b.max[axis];
         }
-        node.child[lane] = if n.is_leaf() {
-            let count = n.prim_count;
-            let first = u32::try_from(slots.len()).ok()?;
-            if count > MAX_LEAF || u64::from(first) + u64::from(MAX_LEAF) > 1 << FIRST_BITS {
-                return None;
-            }
-            let prims =
-                bvh.primitive_indices.get(n.first_index as usize..(n.first_index + count) as usize)?;
-            slots.extend_from_slice(prims);
-            slots.resize(slots.len() + (MAX_LEAF - count) as usize, PAD);
-            LEAF | (count - 1) << FIRST_BITS | first
-        } else {
-            convert(bvh, k, nodes, slots)?
-        };
+        node.child[lane] =
+            if plan.get(k)?.leaf { leaf(bvh, k, slots)? } else { convert(bvh, plan, k, nodes, slots)? };
     }
     nodes[at] = node;
     u32::try_from(at).ok()
+}
+
+/// Appends one leaf's block of slots for the primitives of the subtree of
+/// binary node `k` (at most [`MAX_LEAF`]), left to right and each once (a
+/// pre-split build may hold one primitive in two of its leaves); returns
+/// the leaf's reference.
+fn leaf(bvh: &Bvh2, k: usize, slots: &mut Vec<u32>) -> Option<u32> {
+    let first = slots.len();
+    let reference =
+        u32::try_from(first).ok().filter(|&f| u64::from(f) + u64::from(MAX_LEAF) <= 1 << FIRST_BITS)?;
+    // A subtree of at most four primitives has at most four leaves, so
+    // its walk holds at most four nodes at a time.
+    let mut todo = [0usize; 2 * MAX_LEAF as usize];
+    let mut len = 1;
+    todo[0] = k;
+    while len > 0 {
+        len -= 1;
+        let n = bvh.nodes.get(todo[len])?;
+        if n.is_leaf() {
+            let range = n.first_index as usize..(n.first_index + n.prim_count) as usize;
+            for &p in bvh.primitive_indices.get(range)? {
+                if !slots[first..].contains(&p) {
+                    slots.push(p);
+                }
+            }
+        } else {
+            *todo.get_mut(len + 1)? = n.first_index as usize;
+            todo[len] = n.first_index as usize + 1;
+            len += 2;
+        }
+    }
+    let count = u32::try_from(slots.len() - first).ok().filter(|c| (1..=MAX_LEAF).contains(c))?;
+    slots.resize(first + MAX_LEAF as usize, PAD);
+    Some(LEAF | (count - 1) << FIRST_BITS | reference)
 }
 
 /// The ray as the node tests want it (from a [`BoxRay`]).
@@ -772,6 +904,137 @@ impl WideBvh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Half area as obvhs computes it ([`obvhs::aabb::Aabb::half_area`]).
+    fn half_area(lo: [f32; 3], hi: [f32; 3]) -> f32 {
+        let d = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+        (d[0] + d[1]) * d[2] + d[0] * d[1]
+    }
+
+    /// The cost of a converted tree under the conversion's model, read
+    /// from its nodes alone: the root's box (its lanes' union) for a node
+    /// test, then per lane its box for a node or leaf test.
+    fn wide_cost(w: &WideBvh) -> f32 {
+        fn lanes(n: &Node) -> impl Iterator<Item = usize> + '_ {
+            (0..WIDTH).filter(move |&l| n.planes[0][l] != f32::INFINITY)
+        }
+        let lane_box =
+            |n: &Node, l: usize| ([0, 1, 2].map(|a| n.planes[a][l]), [3, 4, 5].map(|a| n.planes[a][l]));
+        let root = &w.nodes()[0];
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for l in lanes(root) {
+            let (a, b) = lane_box(root, l);
+            lo = [0, 1, 2].map(|i| lo[i].min(a[i]));
+            hi = [0, 1, 2].map(|i| hi[i].max(b[i]));
+        }
+        let mut cost = half_area(lo, hi) * NODE_COST;
+        for n in w.nodes() {
+            for l in lanes(n) {
+                let (a, b) = lane_box(n, l);
+                cost += half_area(a, b) * if n.child[l] & LEAF != 0 { LEAF_COST } else { NODE_COST };
+            }
+        }
+        cost
+    }
+
+    /// The least cost of any wide layout of `bvh`, by trying every cut of
+    /// every subtree into at most eight lanes (no dynamic programme).
+    fn cheapest(bvh: &Bvh2, max_leaf: u32) -> f32 {
+        let node = |k: usize| &bvh.nodes[k];
+        let prims = |k: usize| {
+            let mut todo = vec![k];
+            let mut count = 0;
+            while let Some(m) = todo.pop() {
+                let n = node(m);
+                if n.is_leaf() {
+                    count += n.prim_count;
+                } else {
+                    todo.extend([n.first_index as usize, n.first_index as usize + 1]);
+                }
+            }
+            count
+        };
+        // Every set of disjoint subtrees covering `k`'s, of at most eight.
+        fn cuts(bvh: &Bvh2, k: usize) -> Vec<Vec<usize>> {
+            let mut all = vec![vec![k]];
+            let n = &bvh.nodes[k];
+            if !n.is_leaf() {
+                let (l, r) = (cuts(bvh, n.first_index as usize), cuts(bvh, n.first_index as usize + 1));
+                for a in &l {
+                    for b in r.iter().filter(|b| a.len() + b.len() <= WIDTH) {
+                        all.push([a.as_slice(), b.as_slice()].concat());
+                    }
+                }
+            }
+            all
+        }
+        // A subtree as one lane: a leaf if it may be one, else a node.
+        fn lane(bvh: &Bvh2, k: usize, max_leaf: u32, prims: &dyn Fn(usize) -> u32) -> f32 {
+            let n = &bvh.nodes[k];
+            let area = n.aabb().half_area();
+            let as_leaf = if prims(k) <= max_leaf { area * LEAF_COST } else { f32::INFINITY };
+            if n.is_leaf() { as_leaf } else { as_leaf.min(as_node(bvh, k, max_leaf, prims)) }
+        }
+        fn as_node(bvh: &Bvh2, k: usize, max_leaf: u32, prims: &dyn Fn(usize) -> u32) -> f32 {
+            let n = &bvh.nodes[k];
+            let (l, r) = (cuts(bvh, n.first_index as usize), cuts(bvh, n.first_index as usize + 1));
+            let mut best = f32::INFINITY;
+            for a in &l {
+                for b in r.iter().filter(|b| a.len() + b.len() <= WIDTH) {
+                    let c: f32 = a.iter().chain(b).map(|&m| lane(bvh, m, max_leaf, prims)).sum();
+                    best = best.min(c);
+                }
+            }
+            n.aabb().half_area() * NODE_COST + best
+        }
+        let root = node(0);
+        if root.is_leaf() {
+            root.aabb().half_area() * (NODE_COST + LEAF_COST)
+        } else {
+            as_node(bvh, 0, max_leaf, &prims)
+        }
+    }
+
+    /// On random small trees (up to 13 boxes, leaves of 1 to 4), the
+    /// converted tree holds every primitive once, passes `validate`, and
+    /// costs what the cheapest of all layouts costs (found by
+    /// enumeration): the plan is optimal and `convert` follows it.
+    #[test]
+    fn the_conversion_is_the_cheapest_layout() {
+        let mut rng = prism_testkit::Rng::new(0x5eed_cafe);
+        let mut leaves_merged = 0;
+        for case in 0..150 {
+            let count = 2 + rng.below(12);
+            let max_leaf = 1 + (case % 4) as u32;
+            let boxes: Vec<([f32; 3], [f32; 3])> = (0..count)
+                .map(|_| {
+                    let c = [0; 3].map(|_| rng.range(-10.0, 10.0));
+                    let h = [0; 3].map(|_| rng.range(0.0, 2.0));
+                    ([0, 1, 2].map(|a| c[a] - h[a]), [0, 1, 2].map(|a| c[a] + h[a]))
+                })
+                .collect();
+            let aabbs = boxes
+                .iter()
+                .map(|(lo, hi)| obvhs::aabb::Aabb::new(Vec3A::from_array(*lo), Vec3A::from_array(*hi)))
+                .collect();
+            let mut p = crate::BuildQuality::Medium.params();
+            p.max_prims_per_leaf = max_leaf;
+            let bvh = crate::bvh2::build(aabbs, None, p);
+            let Some(w) = WideBvh::from_bvh2(&bvh, max_leaf, Kernel::Portable) else {
+                panic!("case {case}: not converted")
+            };
+            w.validate(|s| boxes.get(*w.slots.get(s)? as usize).copied());
+            let mut held: Vec<u32> = w.slots.iter().copied().filter(|&s| s != PAD).collect();
+            held.sort_unstable();
+            assert_eq!(held, (0..count as u32).collect::<Vec<_>>(), "case {case}: every primitive once");
+            let binary_leaves = bvh.nodes.iter().filter(|n| n.is_leaf()).count();
+            leaves_merged +=
+                binary_leaves - w.nodes().iter().flat_map(|n| n.child).filter(|c| c & LEAF != 0).count();
+            let (got, want) = (wide_cost(&w), cheapest(&bvh, max_leaf));
+            assert!((got - want).abs() <= 1e-4 * want, "case {case}: {got} against the cheapest {want}");
+        }
+        assert!(leaves_merged > 0, "some plan merged binary leaves into one");
+    }
 
     #[test]
     fn node_is_one_256_byte_block() {
