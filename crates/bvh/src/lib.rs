@@ -1619,8 +1619,16 @@ mod tests {
         let sphere = prism_geometry::Sphere::new(Vec3::new(1.0, 0.2, 0.5), 0.3).unwrap();
         objects.push(Object::Shape(Instance::new(Shape::from(sphere), Transform::IDENTITY)));
         let accel = Accel::build(vec![mesh], objects).unwrap();
-        // The top level's tree (leaves of one object), structure only.
-        accel.tlas.validate(|_| None);
+        // The top level's tree (leaves of one object): each leaf's box
+        // holds its object's world box.
+        let world_box = |i: u32| {
+            let b = match &accel.objects[i as usize] {
+                Object::Shape(s) => s.bounds(),
+                Object::Mesh { mesh, transform } => transform.aabb(&accel.meshes[*mesh as usize].bounds()),
+            };
+            Some((b.min.to_array(), b.max.to_array()))
+        };
+        accel.tlas.validate(|s| world_box(*accel.tlas_objects.get(s)?));
         if !accel.simd.wide {
             eprintln!("skipped: this CPU lacks the wide variant's features");
             return;
