@@ -370,20 +370,22 @@ fn plan(bvh: &Bvh2, max_leaf: u32) -> Option<Vec<Choice>> {
 type Lanes = ([usize; WIDTH], usize);
 
 /// Appends the subtrees that `plan` lays into at most `lanes` lanes for
-/// binary node `k`.
-fn lay(bvh: &Bvh2, plan: &[Choice], k: usize, mut lanes: usize, out: &mut Lanes) {
+/// binary node `k`; `None` (never, for a plan made by [`plan`]) if they
+/// would not fit the node's lanes.
+fn lay(bvh: &Bvh2, plan: &[Choice], k: usize, mut lanes: usize, out: &mut Lanes) -> Option<()> {
     let split = |lanes: usize| plan.get(k).map_or(0, |c| c.split[lanes - 1]);
     while lanes > 1 && split(lanes) == 0 {
         lanes -= 1;
     }
-    let first = bvh.nodes.get(k).map_or(0, |n| n.first_index as usize);
     if lanes > 1 {
+        let first = bvh.nodes.get(k)?.first_index as usize;
         let kl = usize::from(split(lanes));
-        lay(bvh, plan, first, kl, out);
-        lay(bvh, plan, first + 1, lanes - kl, out);
-    } else if let Some(slot) = out.0.get_mut(out.1) {
-        *slot = k;
+        lay(bvh, plan, first, kl, out)?;
+        lay(bvh, plan, first + 1, lanes - kl, out)
+    } else {
+        *out.0.get_mut(out.1)? = k;
         out.1 += 1;
+        Some(())
     }
 }
 
@@ -401,11 +403,11 @@ fn convert(
     let root = bvh.nodes.get(src)?;
     let mut lanes: Lanes = ([0; WIDTH], 0);
     if root.is_leaf() {
-        lay(bvh, plan, src, 1, &mut lanes);
+        lay(bvh, plan, src, 1, &mut lanes)?;
     } else {
         let kl = usize::from(plan.get(src)?.split[0]);
-        lay(bvh, plan, root.first_index as usize, kl, &mut lanes);
-        lay(bvh, plan, root.first_index as usize + 1, WIDTH - kl, &mut lanes);
+        lay(bvh, plan, root.first_index as usize, kl, &mut lanes)?;
+        lay(bvh, plan, root.first_index as usize + 1, WIDTH - kl, &mut lanes)?;
     }
     let mut node = Node::EMPTY;
     for (lane, &k) in lanes.0[..lanes.1].iter().enumerate() {
