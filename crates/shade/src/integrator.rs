@@ -7,7 +7,7 @@
 //! while a row is traced.
 
 use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
-use crate::light::{Target, sample_seed};
+use crate::light::{LightSample, Target, sample_seed};
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
@@ -79,6 +79,26 @@ fn shadow_ray(hit: &Hit, target: Target) -> Ray {
         Target::Point(q) => Ray::spawn_to(hit.point, hit.geo_normal, q),
         Target::Away(dir) => Ray::spawn(hit.point, hit.geo_normal, dir),
     }
+}
+
+/// The Lambert + Phong light of the light sample `ls` at a point with
+/// shading normal `n` (facing the viewer, `n · ls.dir > 0`) seen from the
+/// unit direction `v`, through the shadow transmittance `shadow`; `None`
+/// where no light arrives (`shadow` black).
+#[inline]
+fn phong(mat: &Material, albedo: Vec3, n: Vec3, v: Vec3, ls: &LightSample, shadow: Vec3) -> Option<Vec3> {
+    if !(shadow.max_element() > 0.0) {
+        return None;
+    }
+    let n_dot_l = n.dot(ls.dir);
+    let mut s = mat.diffuse * n_dot_l * albedo;
+    if mat.specular > 0.0 {
+        let r_dot_v = (2.0 * n_dot_l * n - ls.dir).dot(v);
+        if r_dot_v > 0.0 {
+            s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
+        }
+    }
+    Some(shadow * ls.e * s)
 }
 
 /// Whether object `object` is a closed solid: [`Scene::is_closed`].
@@ -358,6 +378,17 @@ impl<'a> Tracer<'a> {
             }
             let seed = sample_seed(p, index, light.sample_count());
             let count = light.sample_count();
+            if count == 1 {
+                // One sample (a point, spot or directional light): no batch
+                // to gather, one shadow ray, the same sum.
+                if let Some(ls) = light.sample(p, 0, seed).filter(|ls| n.dot(ls.dir) > 0.0) {
+                    let shadow = shared.unwrap_or_else(|| self.shadow(hit, ls.target));
+                    if let Some(term) = phong(mat, albedo, n, v, &ls, shadow) {
+                        c += term;
+                    }
+                }
+                continue;
+            }
             let mut k = 0;
             while k < count {
                 // Up to a packet's worth of samples; their shadow rays are
@@ -374,19 +405,9 @@ impl<'a> Tracer<'a> {
                 self.shadows(hit, &targets[..len], &mut seen[..len]);
                 for (slot, ls) in batch[..len].iter().enumerate() {
                     let Some(ls) = ls else { continue };
-                    let n_dot_l = n.dot(ls.dir);
-                    let shadow = shared.unwrap_or(seen[slot]);
-                    if !(shadow.max_element() > 0.0) {
-                        continue;
+                    if let Some(term) = phong(mat, albedo, n, v, ls, shared.unwrap_or(seen[slot])) {
+                        c += term;
                     }
-                    let mut s = mat.diffuse * n_dot_l * albedo;
-                    if mat.specular > 0.0 {
-                        let r_dot_v = (2.0 * n_dot_l * n - ls.dir).dot(v);
-                        if r_dot_v > 0.0 {
-                            s += mat.specular * r_dot_v.powf(mat.shininess) * mat.specular_color;
-                        }
-                    }
-                    c += shadow * ls.e * s;
                 }
                 k = end;
             }
@@ -488,6 +509,10 @@ impl<'a> Tracer<'a> {
         // Entries and exits of different solids arrive in any order, so
         // `open` may keep a rounding remainder (0.6 + 0.1 − 0.6 − 0.1 ≠ 0 in
         // f32): only what exceeds that counts as still inside.
+        if peak == 0.0 {
+            // No absorbing solid on the segment: `exp(-0)` is 1.
+            return t;
+        }
         let tol = 1e-4 * peak;
         let inside = open.to_array().map(|a| if a > tol { a * ray.t_max } else { 0.0 });
         let tau = tau + Vec3::from_array(inside);
