@@ -559,6 +559,10 @@ pub(crate) struct SamplePattern {
 /// Longest table of sample strata kept by a [`SamplePattern`].
 const STRATUM_TABLE: u32 = 4096;
 
+/// Most strata a side whose permutations a [`PixelPattern`] tabulates
+/// (256 spp); beyond it each sample computes its own.
+const PERM_TABLE: usize = 16;
+
 impl SamplePattern {
     pub(crate) fn new(spp: u32) -> Self {
         let spp = spp.max(1);
@@ -590,14 +594,17 @@ impl SamplePattern {
         let p = splitmix64(pixel ^ 0x2545_F491_4F6C_DD1D) as u32;
         let (kx, ky) = (p.wrapping_mul(0xa511_e9b3), p.wrapping_mul(0x63d8_3595));
         let m = self.m.max(1);
-        PixelPattern {
-            pattern: self,
-            seed: (pixel << 32) ^ 0x5851_F42D_4C95_7F2D,
-            kx,
-            ky,
-            rx: kx % m,
-            ry: ky % m,
+        let (rx, ry) = (kx % m, ky % m);
+        // Every sample of the pixel permutes its column and its row: with
+        // few strata a side, permute each column and row once here.
+        let mut perm = [[0u8; PERM_TABLE]; 2];
+        if self.m as usize <= PERM_TABLE {
+            for i in 0..self.m {
+                perm[0][i as usize] = permute_keyed(i, self.m, self.mask, kx, rx) as u8;
+                perm[1][i as usize] = permute_keyed(i, self.m, self.mask, ky, ry) as u8;
+            }
         }
+        PixelPattern { pattern: self, seed: (pixel << 32) ^ 0x5851_F42D_4C95_7F2D, kx, ky, rx, ry, perm }
     }
 
     /// Offset of sample `s` of pixel number `pixel` inside its pixel, in `[0, 1)²`.
@@ -619,6 +626,9 @@ pub(crate) struct PixelPattern<'a> {
     ky: u32,
     rx: u32,
     ry: u32,
+    /// The column (`[0]`) and row (`[1]`) permutations of `0..m`, when
+    /// `m ≤ PERM_TABLE`.
+    perm: [[u8; PERM_TABLE]; 2],
 }
 
 impl PixelPattern<'_> {
@@ -640,8 +650,17 @@ impl PixelPattern<'_> {
         // sits in the sub-column given by its row and the sub-row given by
         // its column, each through a per-pixel permutation, so that the
         // samples of a full grid are also stratified in x and in y alone.
-        let px = permute_keyed(sx, pat.m, pat.mask, self.kx, self.rx);
-        let py = permute_keyed(sy, pat.m, pat.mask, self.ky, self.ry);
+        let (px, py) = if pat.m as usize <= PERM_TABLE {
+            (
+                u32::from(self.perm[0][sx as usize % PERM_TABLE]),
+                u32::from(self.perm[1][sy as usize % PERM_TABLE]),
+            )
+        } else {
+            (
+                permute_keyed(sx, pat.m, pat.mask, self.kx, self.rx),
+                permute_keyed(sy, pat.m, pat.mask, self.ky, self.ry),
+            )
+        };
         let m = pat.m as f32;
         let below_one = 1.0 - f32::EPSILON / 2.0;
         let x = (sx as f32 + (py as f32 + jx) / m) / m;
@@ -809,6 +828,30 @@ mod tests {
                     let (c, r) = ((x * spp as f32) as usize, (y * spp as f32) as usize);
                     assert!(!cols[c] && !rows[r], "m {m} pixel {pixel}: strip taken twice");
                     (cols[c], rows[r]) = (true, true);
+                }
+            }
+        }
+    }
+
+    /// The per-pixel permutation table gives the offsets that permuting
+    /// each sample's column and row does (`m` = 2 … 16 tabulated, 17 not).
+    #[test]
+    fn tabulated_permutations_match_the_computed_ones() {
+        for spp in [2u32, 4, 9, 16, 100, 256, 257, 289] {
+            let p = SamplePattern::new(spp);
+            for pixel in [0u64, 5, 4_000_000_007] {
+                let pp = p.pixel(pixel);
+                for s in 0..spp {
+                    let (sx, sy) = p.stratum(s);
+                    let z = splitmix64(pp.seed ^ u64::from(s));
+                    let jx = (z >> 40) as f32 * (1.0 / 16_777_216.0);
+                    let jy = ((z >> 16) & 0xFF_FFFF) as f32 * (1.0 / 16_777_216.0);
+                    let (px, py) = (permute(sx, p.m, pp.kx), permute(sy, p.m, pp.ky));
+                    let m = p.m as f32;
+                    let below_one = 1.0 - f32::EPSILON / 2.0;
+                    let x = ((sx as f32 + (py as f32 + jx) / m) / m).min(below_one);
+                    let y = ((sy as f32 + (px as f32 + jy) / m) / m).min(below_one);
+                    assert_eq!(pp.offset(s), (x, y), "spp {spp} pixel {pixel} sample {s}");
                 }
             }
         }
