@@ -458,7 +458,10 @@ fn render_to(
             Vec::new()
         }
         _ => {
-            plan.write_image(&image, alpha.as_deref(), passes.as_ref())?;
+            // On the render's threads (`--threads`): the PNG encoder is parallel.
+            prism_shade::in_pool(settings.threads, || {
+                plan.write_image(&image, alpha.as_deref(), passes.as_ref())
+            })?;
             match &passes {
                 Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
                 None => Vec::new(),

@@ -15,6 +15,7 @@
 use crate::{Aov, AovImage, AovImages, BitDepth, Image, PngOptions, linear_to_srgb8};
 use image::{ImageBuffer, ImageFormat, Rgb, Rgba};
 use prism_geometry::glam::Vec3;
+use rayon::prelude::*;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -240,16 +241,25 @@ pub fn write_png(
         check_len(path, w, h, a.len(), 1)?;
     }
     let channels = if alpha.is_some() { 4 } else { 3 };
+    // Rows are encoded in parallel (a transfer function per channel is
+    // most of a PNG's writing time).
     macro_rules! encode {
         ($encode:ident, $max:expr) => {{
-            let mut out = Vec::with_capacity(image.pixels.len() * channels);
-            for (k, &p) in image.pixels.iter().enumerate() {
-                let (c, a) = straight(k, p);
-                out.extend(c.to_array().map(|x| options.$encode(x)));
-                if let Some(a) = a {
-                    out.push((a * $max + 0.5) as _);
-                }
-            }
+            let row = (w as usize).max(1);
+            let mut out = vec![0; image.pixels.len() * channels];
+            out.par_chunks_mut(row * channels).zip(image.pixels.par_chunks(row)).enumerate().for_each(
+                |(j, (o, pixels))| {
+                    for (i, (&p, o)) in pixels.iter().zip(o.chunks_exact_mut(channels)).enumerate() {
+                        let (c, a) = straight(j * row + i, p);
+                        for (o, x) in o.iter_mut().zip(c.to_array()) {
+                            *o = options.$encode(x);
+                        }
+                        if let Some(a) = a {
+                            o[3] = (a * $max + 0.5) as _;
+                        }
+                    }
+                },
+            );
             out
         }};
     }
@@ -524,6 +534,40 @@ mod tests {
         let back = image::open(&p).unwrap().to_rgb8();
         assert_eq!(back.get_pixel(0, 0).0, [255, linear_to_srgb8(0.5), 0]);
         assert_eq!(back.get_pixel(1, 0).0, [0, 0, 0]);
+    }
+
+    /// Every pixel of every row (the rows are encoded in parallel) is the
+    /// per-value encoding of its colour, straight alpha where there is one.
+    #[test]
+    fn png_pixels_are_their_encoded_values_in_every_row() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (7u32, 5u32);
+        let pixels: Vec<Vec3> =
+            (0..w * h).map(|k| Vec3::new(k as f32 / 40.0, 0.9 - k as f32 / 50.0, 0.3)).collect();
+        let alpha: Vec<f32> = (0..w * h).map(|k| [1.0, 0.5, 0.0, 0.25][k as usize % 4]).collect();
+        let img = Image { width: w, height: h, pixels: pixels.clone() };
+        let p = dir.path().join("x.png");
+        for bit_depth in [BitDepth::Eight, BitDepth::Sixteen] {
+            let o = PngOptions { exposure: 0.5, bit_depth, ..PngOptions::default() };
+            write_png(&p, &img, None, &o).unwrap();
+            let rgb = image::open(&p).unwrap().to_rgb16();
+            write_png(&p, &img, Some(&alpha), &o).unwrap();
+            let rgba = image::open(&p).unwrap().to_rgba16();
+            for (k, &c) in pixels.iter().enumerate() {
+                let (i, j) = (k as u32 % w, k as u32 / w);
+                let want = |c: Vec3| match bit_depth {
+                    BitDepth::Eight => c.to_array().map(|x| u16::from(o.encode8(x)) * 257),
+                    BitDepth::Sixteen => c.to_array().map(|x| o.encode16(x)),
+                };
+                assert_eq!(rgb.get_pixel(i, j).0[..3], want(c), "pixel {k}");
+                let a = alpha[k];
+                let straight = if a > 0.0 { c / a } else { Vec3::ZERO };
+                let max = if bit_depth == BitDepth::Eight { 255.0 } else { 65535.0 };
+                let scale = if bit_depth == BitDepth::Eight { 257 } else { 1 };
+                assert_eq!(rgba.get_pixel(i, j).0[..3], want(straight), "pixel {k}");
+                assert_eq!(rgba.get_pixel(i, j).0[3], (a * max + 0.5) as u16 * scale, "alpha {k}");
+            }
+        }
     }
 
     #[test]

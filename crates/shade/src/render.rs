@@ -516,8 +516,11 @@ impl CameraBatch {
 }
 
 /// Runs `f` on a pool of `threads` workers (`None`: the global pool, every
-/// core; a pool that cannot be built falls back to the global one).
-pub(crate) fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
+/// core; a pool that cannot be built falls back to the global one): the
+/// writers ([`crate::write_png`]) run in parallel on the pool they are
+/// called on, so a caller that limits the render's threads limits theirs
+/// the same way.
+pub fn in_pool<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
     match threads {
         Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build() {
             Ok(pool) => pool.install(f),
