@@ -480,10 +480,12 @@ impl<'a> Tracer<'a> {
         // the solids entered and not left.
         let (mut tau, mut open) = (Vec3::ZERO, Vec3::ZERO);
         let mut peak = 0.0f32;
+        let mut absorbed = false;
         scene.accel.for_each_hit(&ray, |sh| {
             let closed = is_closed(scene, sh.object);
             let m = scene.material_of(sh.object);
             if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
+                absorbed = true;
                 peak = peak.max(m.absorption.max_element());
                 let s = m.absorption * sh.hit.t;
                 if sh.hit.front_face {
@@ -509,8 +511,9 @@ impl<'a> Tracer<'a> {
         // Entries and exits of different solids arrive in any order, so
         // `open` may keep a rounding remainder (0.6 + 0.1 − 0.6 − 0.1 ≠ 0 in
         // f32): only what exceeds that counts as still inside.
-        if peak == 0.0 {
-            // No absorbing solid on the segment: `exp(-0)` is 1.
+        if !absorbed {
+            // No absorbing solid on the segment: `tau` and `open` are zero,
+            // and `exp(-0)` is 1.
             return t;
         }
         let tol = 1e-4 * peak;
