@@ -161,6 +161,36 @@ impl SceneHit {
     pub const NO_TRIANGLE: u32 = u32::MAX;
 }
 
+/// A surface crossing met by [`Accel::for_each_crossing`]: which object,
+/// how far and from which side, before its hit record is built
+/// ([`Accel::crossing_hit`] builds it, the [`SceneHit`] that
+/// [`Accel::for_each_hit`] reports).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// Index of the object in the list given to [`Accel::build`].
+    pub object: u32,
+    /// Triangle index within the mesh, or [`SceneHit::NO_TRIANGLE`].
+    pub triangle: u32,
+    /// Ray parameter of the crossing.
+    pub t: f32,
+    /// Whether the ray arrives from the side the outward normal points to
+    /// ([`Hit::front_face`] of the full hit).
+    pub front_face: bool,
+    /// How the full hit is found again.
+    found: Found,
+}
+
+/// What [`Accel::crossing_hit`] needs to build a [`Crossing`]'s hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Found {
+    /// An analytic shape, re-solved over `[t_min, t]`: its nearest crossing
+    /// there is this one, bit for bit (prism-geometry's
+    /// `Intersect::intersect_t` contract).
+    Shape { t_min: f32 },
+    /// A mesh triangle's hit in the mesh's object space.
+    Mesh(Hit),
+}
+
 /// Figures about a built structure.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BuildStats {
@@ -1336,36 +1366,49 @@ impl Accel {
         done
     }
 
-    /// Every crossing of object `i` in the ray's interval.
+    /// Every crossing of analytic object `i` (`s`) in the ray's interval,
+    /// each with its hit record: brute force's reference for
+    /// [`Accel::object_crossings`].
+    fn shape_crossings_brute_force(
+        &self,
+        i: u32,
+        s: &Instance<Shape>,
+        ray: &Ray,
+        f: &mut impl FnMut(&SceneHit) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        step_crossings(
+            ray,
+            |r| self.shape_hit(i, s, r).map(|hit| (hit.t, hit)),
+            |_, _, hit| f(&SceneHit { object: i, triangle: SceneHit::NO_TRIANGLE, hit }),
+        )
+    }
+
+    /// Every crossing of object `i` in the ray's interval, without its hit
+    /// record: object, `t` and side (prism-geometry's
+    /// `Intersect::intersect_side` for shapes; a mesh's object-space hit,
+    /// not yet placed in the world).
     fn object_crossings(
         &self,
         i: u32,
         ray: &Ray,
-        f: &mut impl FnMut(&SceneHit) -> ControlFlow<()>,
+        f: &mut impl FnMut(&Crossing) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
         match &self.objects[i as usize] {
-            Object::Shape(s) => {
-                let mut r = *ray;
-                // Analytic shapes are convex: at most two crossings (a few
-                // more steps only guard against a shape reporting a tangent
-                // twice).
-                for _ in 0..MAX_SHAPE_CROSSINGS {
-                    let Some(hit) = self.shape_hit(i, s, &r) else { break };
-                    f(&SceneHit { object: i, triangle: SceneHit::NO_TRIANGLE, hit })?;
-                    let next = hit.t.next_up();
-                    if !(next <= r.t_max) {
-                        break;
-                    }
-                    r.t_min = next;
-                }
-                ControlFlow::Continue(())
-            }
+            Object::Shape(s) => step_crossings(
+                ray,
+                |r| if self.identity[i as usize] { s.shape.intersect_side(r) } else { s.intersect_side(r) },
+                |t_min, t, front_face| {
+                    let found = Found::Shape { t_min };
+                    f(&Crossing { object: i, triangle: SceneHit::NO_TRIANGLE, t, front_face, found })
+                },
+            ),
             Object::Mesh { mesh, transform } => {
                 let m = &self.meshes[*mesh as usize];
                 let local = transform.ray_to_object(ray);
                 self.blas[*mesh as usize].crossings(&local, |face, t, b1, b2| {
-                    let hit = transform.hit_to_world(&m.hit(face as usize, t, b1, b2, local.dir));
-                    f(&SceneHit { object: i, triangle: face, hit })
+                    let hit = m.hit(face as usize, t, b1, b2, local.dir);
+                    let front_face = hit.front_face;
+                    f(&Crossing { object: i, triangle: face, t, front_face, found: Found::Mesh(hit) })
                 })
             }
         }
@@ -1377,7 +1420,21 @@ impl Accel {
     /// says which by `front_face`. Each mesh triangle is reported at most
     /// once per instance. Used for coloured shadows behind transparent
     /// objects.
+    ///
+    /// [`Accel::for_each_crossing`] gives the same crossings in the same
+    /// order without building each one's hit record.
     pub fn for_each_hit(&self, ray: &Ray, mut f: impl FnMut(&SceneHit) -> ControlFlow<()>) {
+        self.for_each_crossing(ray, |c| match self.crossing_hit(ray, c) {
+            Some(h) => f(&h),
+            None => ControlFlow::Continue(()),
+        });
+    }
+
+    /// [`Accel::for_each_hit`]'s crossings, each as a [`Crossing`] (object,
+    /// `t`, side) whose hit record [`Accel::crossing_hit`] builds on demand:
+    /// a shadow ray needs only the side of an opaque occluder, and the hit
+    /// (point, normal, uv) only of a textured see-through one.
+    pub fn for_each_crossing(&self, ray: &Ray, mut f: impl FnMut(&Crossing) -> ControlFlow<()>) {
         if !usable(ray) {
             return;
         }
@@ -1399,6 +1456,23 @@ impl Accel {
                 self.object_crossings(self.tlas_objects[slot as usize], ray, &mut f).is_continue()
             }),
         );
+    }
+
+    /// The full hit of a crossing that [`Accel::for_each_crossing`] of this
+    /// structure reported for `ray` (the same ray): the [`SceneHit`] that
+    /// [`Accel::for_each_hit`] reports for it, bit for bit. `None` for a
+    /// crossing of another structure whose object is not of the same kind
+    /// here (it never panics).
+    #[must_use]
+    pub fn crossing_hit(&self, ray: &Ray, c: &Crossing) -> Option<SceneHit> {
+        let hit = match (c.found, self.objects.get(c.object as usize)?) {
+            (Found::Shape { t_min }, Object::Shape(s)) => {
+                self.shape_hit(c.object, s, &Ray { t_min, t_max: c.t, ..*ray })?
+            }
+            (Found::Mesh(local), Object::Mesh { transform, .. }) => transform.hit_to_world(&local),
+            _ => return None,
+        };
+        Some(SceneHit { object: c.object, triangle: c.triangle, hit })
     }
 
     fn hit_object_brute_force(&self, i: usize, ray: &Ray) -> Option<SceneHit> {
@@ -1444,7 +1518,7 @@ impl Accel {
         }
         for i in 0..self.objects.len() {
             let flow = match &self.objects[i] {
-                Object::Shape(_) => self.object_crossings(i as u32, ray, &mut f),
+                Object::Shape(s) => self.shape_crossings_brute_force(i as u32, s, ray, &mut f),
                 Object::Mesh { mesh, transform } => {
                     let m = &self.meshes[*mesh as usize];
                     let local = transform.ray_to_object(ray);
@@ -1471,6 +1545,31 @@ impl Accel {
 
 /// Most crossings reported for one analytic shape along one ray.
 const MAX_SHAPE_CROSSINGS: usize = 8;
+
+/// Steps through an analytic shape's crossings in the ray's interval,
+/// nearest first: `probe` finds the nearest crossing in what is left of
+/// the interval (its `t` and what else it gives), `report` takes it with
+/// the start of that interval. Analytic shapes are convex: at most two
+/// crossings (a few more steps only guard against a shape reporting a
+/// tangent twice).
+#[inline(always)]
+fn step_crossings<T>(
+    ray: &Ray,
+    mut probe: impl FnMut(&Ray) -> Option<(f32, T)>,
+    mut report: impl FnMut(f32, f32, T) -> ControlFlow<()>,
+) -> ControlFlow<()> {
+    let mut r = *ray;
+    for _ in 0..MAX_SHAPE_CROSSINGS {
+        let Some((t, x)) = probe(&r) else { break };
+        report(r.t_min, t, x)?;
+        let next = t.next_up();
+        if !(next <= r.t_max) {
+            break;
+        }
+        r.t_min = next;
+    }
+    ControlFlow::Continue(())
+}
 
 #[cfg(test)]
 mod tests {

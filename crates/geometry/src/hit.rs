@@ -32,7 +32,15 @@ impl Hit {
     #[inline]
     #[must_use]
     pub fn new(t: f32, point: Vec3, normal: Vec3, uv: Vec2, dir: Vec3) -> Self {
-        Self { t, point, geo_normal: normal, normal, uv, front_face: dir.dot(normal) < 0.0 }
+        Self { t, point, geo_normal: normal, normal, uv, front_face: Self::faces(dir, normal) }
+    }
+
+    /// Whether a ray along `dir` meets a surface of outward normal `normal`
+    /// from the side the normal points to: [`Hit::front_face`]'s rule.
+    #[inline]
+    #[must_use]
+    pub fn faces(dir: Vec3, normal: Vec3) -> bool {
+        dir.dot(normal) < 0.0
     }
 
     /// The shading normal turned to face the incoming ray (for shading).

@@ -20,6 +20,15 @@ pub trait Intersect {
         self.intersect(ray).map(|h| h.t)
     }
 
+    /// `t` and `front_face` of [`Intersect::intersect`]'s hit, without the
+    /// rest of the hit record (point, uv): what a shadow ray needs of an
+    /// opaque occluder. Every shape of this crate returns exactly
+    /// `self.intersect(ray).map(|h| (h.t, h.front_face))`, bit for bit.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        self.intersect(ray).map(|h| (h.t, h.front_face))
+    }
+
     /// Bounds of the shape ([`Aabb::INFINITE`] for unbounded shapes).
     fn bounds(&self) -> Aabb;
 
@@ -115,6 +124,19 @@ impl Intersect for Shape {
         }
     }
 
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        match self {
+            Shape::Sphere(s) => s.intersect_side(ray),
+            Shape::Plane(s) => s.intersect_side(ray),
+            Shape::Cuboid(s) => s.intersect_side(ray),
+            Shape::Cylinder(s) => s.intersect_side(ray),
+            Shape::Cone(s) => s.intersect_side(ray),
+            Shape::Disk(s) => s.intersect_side(ray),
+            Shape::Triangle(s) => s.intersect_side(ray),
+        }
+    }
+
     fn bounds(&self) -> Aabb {
         match self {
             Shape::Sphere(s) => s.bounds(),
@@ -169,6 +191,13 @@ impl<S: Intersect> Intersect for Instance<S> {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
         self.shape.intersect_t(&self.transform.ray_to_object(ray))
+    }
+
+    /// The ray is mapped into object space; the side is the object-space
+    /// hit's, which [`Transform::hit_to_world`] keeps.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        self.shape.intersect_side(&self.transform.ray_to_object(ray))
     }
 
     fn bounds(&self) -> Aabb {

@@ -184,8 +184,8 @@ proptest! {
         }
     }
 
-    /// The cheap `t`-only query agrees with the full hit bit for bit, in
-    /// object space and placed (planes and meshes included), for any
+    /// The cheap `t`-only and `(t, front_face)` queries agree with the full
+    /// hit bit for bit, in object space and placed (planes and meshes included), for any
     /// interval; `occludes` says the same; the winner's full hit is found
     /// again on the ray clamped to `t_max = t` (how prism-bvh builds it).
     #[test]
@@ -203,6 +203,8 @@ proptest! {
             let t = s.intersect_t(ray);
             prop_assert_eq!(full.map(|h| h.t.to_bits()), t.map(f32::to_bits), "{}", name);
             prop_assert_eq!(s.occludes(ray), t.is_some(), "{}", name);
+            let side = s.intersect_side(ray).map(|(t, front)| (t.to_bits(), front));
+            prop_assert_eq!(full.map(|h| (h.t.to_bits(), h.front_face)), side, "{}: side", name);
             if let (Some(h), Some(t)) = (full, t) {
                 let again = s.intersect(&Ray::with_interval(ray.origin, ray.dir, ray.t_min, t));
                 prop_assert_eq!(again, Some(h), "{}: clamped re-query", name);

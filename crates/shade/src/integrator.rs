@@ -481,20 +481,22 @@ impl<'a> Tracer<'a> {
         let (mut tau, mut open) = (Vec3::ZERO, Vec3::ZERO);
         let mut peak = 0.0f32;
         let mut absorbed = false;
-        scene.accel.for_each_hit(&ray, |sh| {
-            let closed = is_closed(scene, sh.object);
-            let m = scene.material_of(sh.object);
+        // Crossings without their hit records: only a textured see-through
+        // occluder's colour needs the point and uv.
+        scene.accel.for_each_crossing(&ray, |c| {
+            let closed = is_closed(scene, c.object);
+            let m = scene.material_of(c.object);
             if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
                 absorbed = true;
                 peak = peak.max(m.absorption.max_element());
-                let s = m.absorption * sh.hit.t;
-                if sh.hit.front_face {
+                let s = m.absorption * c.t;
+                if c.front_face {
                     (tau, open) = (tau - s, open + m.absorption);
                 } else {
                     (tau, open) = (tau + s, open - m.absorption);
                 }
             }
-            if !sh.hit.front_face && closed {
+            if !c.front_face && closed {
                 return ControlFlow::Continue(());
             }
             let through = m.transparency + m.transmission;
@@ -502,7 +504,15 @@ impl<'a> Tracer<'a> {
                 t = Vec3::ZERO;
                 return ControlFlow::Break(());
             }
-            t *= (through * albedo(scene, m, sh)).clamp(Vec3::ZERO, Vec3::ONE);
+            let colour = match &m.texture {
+                Texture::Solid(solid) => *solid,
+                _ => match scene.accel.crossing_hit(&ray, c) {
+                    Some(sh) => albedo(scene, m, &sh),
+                    // Not reached: the crossing is this structure's own.
+                    None => return ControlFlow::Continue(()),
+                },
+            };
+            t *= (through * colour).clamp(Vec3::ZERO, Vec3::ONE);
             if t.max_element() > 0.0 { ControlFlow::Continue(()) } else { ControlFlow::Break(()) }
         });
         // The shadow ray's direction is unit: `t` is distance. A ray toward

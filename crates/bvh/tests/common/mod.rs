@@ -174,30 +174,50 @@ pub fn compare_closest(accel: &Accel, ray: &Ray) -> Result<Option<SceneHit>, Str
     Ok(fast)
 }
 
-/// Compares every crossing (as sorted (object, triangle, t) lists).
+/// Compares every crossing (as sorted (object, triangle, t) lists), and
+/// the lazy crossings with the hits: `for_each_crossing` reports the
+/// crossings of `for_each_hit` in the same order with the same `t` and
+/// side, and `crossing_hit` builds each one's hit; an analytic shape's hit
+/// is brute force's, bit for bit.
 pub fn compare_all(accel: &Accel, ray: &Ray) -> Result<usize, String> {
     let mut fast = Vec::new();
     accel.for_each_hit(ray, |h| {
-        fast.push((h.object, h.triangle, h.hit.t, hit_finite(h)));
+        fast.push(*h);
         ControlFlow::Continue(())
     });
+    let mut lazy = Vec::new();
+    accel.for_each_crossing(ray, |c| {
+        lazy.push((c.object, c.triangle, c.t.to_bits(), c.front_face, accel.crossing_hit(ray, c)));
+        ControlFlow::Continue(())
+    });
+    let eager: Vec<_> =
+        fast.iter().map(|h| (h.object, h.triangle, h.hit.t.to_bits(), h.hit.front_face, Some(*h))).collect();
+    if lazy != eager {
+        return Err(format!("crossings and hits differ for {ray:?}:\nlazy  {lazy:?}\nhits  {eager:?}"));
+    }
+    if let Some(h) = fast.iter().find(|h| !hit_finite(h)) {
+        return Err(format!("non-finite crossing {h:?} for {ray:?}"));
+    }
     let mut slow = Vec::new();
     accel.for_each_hit_brute_force(ray, |h| {
-        slow.push((h.object, h.triangle, h.hit.t, true));
+        slow.push(*h);
         ControlFlow::Continue(())
     });
-    let key = |a: &(u32, u32, f32, bool), b: &(u32, u32, f32, bool)| {
-        (a.0, a.1).cmp(&(b.0, b.1)).then(a.2.total_cmp(&b.2))
+    let key = |a: &SceneHit, b: &SceneHit| {
+        (a.object, a.triangle).cmp(&(b.object, b.triangle)).then(a.hit.t.total_cmp(&b.hit.t))
     };
     fast.sort_by(key);
     slow.sort_by(key);
-    if fast.len() != slow.len()
-        || fast.iter().zip(&slow).any(|(a, b)| (a.0, a.1) != (b.0, b.1) || !close(a.2, b.2) || !a.3)
-    {
+    let same = |a: &SceneHit, b: &SceneHit| {
+        (a.object, a.triangle, a.hit.front_face) == (b.object, b.triangle, b.hit.front_face)
+            && close(a.hit.t, b.hit.t)
+            && (a.triangle != SceneHit::NO_TRIANGLE || a.hit == b.hit)
+    };
+    if fast.len() != slow.len() || fast.iter().zip(&slow).any(|(a, b)| !same(a, b)) {
         return Err(format!("crossings differ for {ray:?}:\nbvh   {fast:?}\nbrute {slow:?}"));
     }
-    for (_, _, t, _) in &fast {
-        if !(*t >= ray.t_min && *t <= ray.t_max) {
+    for t in fast.iter().map(|h| h.hit.t) {
+        if !(t >= ray.t_min && t <= ray.t_max) {
             return Err(format!("crossing at t = {t} outside the ray interval {ray:?}"));
         }
     }

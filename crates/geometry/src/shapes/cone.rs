@@ -93,6 +93,23 @@ impl Cone {
     }
 }
 
+impl Cone {
+    /// The unit outward normal of `part` at `rel` (relative to the base).
+    #[inline]
+    fn part_normal(&self, rel: Vec3, part: Part) -> Vec3 {
+        match part {
+            Part::Side => {
+                let k = self.0.radius / self.0.height;
+                match Vec3::new(rel.x, 0.0, rel.z).try_normalize() {
+                    Some(radial) => (radial + k * Vec3::Y) / (1.0 + k * k).sqrt(),
+                    None => Vec3::Y,
+                }
+            }
+            Part::Bottom | Part::Top => Vec3::NEG_Y,
+        }
+    }
+}
+
 impl Intersect for Cone {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
@@ -103,23 +120,26 @@ impl Intersect for Cone {
         let o = ray.origin - self.0.base;
         let d = ray.dir;
         let (r, h) = (self.0.radius, self.0.height);
-        let k = r / h;
-        let k2 = k * k;
         let (t, part) = self.solve(ray)?;
         let rel = o + t * d;
-        let (rel, n, uv) = match part {
+        let n = self.part_normal(rel, part);
+        let (rel, uv) = match part {
             Part::Side => {
                 let y = rel.y.clamp(0.0, h);
                 let radial = Vec3::new(rel.x, 0.0, rel.z);
-                let n = match radial.try_normalize() {
-                    Some(radial) => (radial + k * Vec3::Y) / (1.0 + k2).sqrt(),
-                    None => Vec3::Y,
-                };
-                (Vec3::new(rel.x, y, rel.z), n, Vec2::new(azimuth_u(radial), 1.0 - y / h))
+                (Vec3::new(rel.x, y, rel.z), Vec2::new(azimuth_u(radial), 1.0 - y / h))
             }
-            Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r, false)),
+            Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), cap_uv(rel, r, false)),
         };
         Some(Hit::new(t, self.0.base + rel, n, uv, d))
+    }
+
+    /// No uv (`atan2` on the side) and no point: the normal decides the side.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        let (t, part) = self.solve(ray)?;
+        let rel = (ray.origin - self.0.base) + t * ray.dir;
+        Some((t, Hit::faces(ray.dir, self.part_normal(rel, part))))
     }
 
     fn bounds(&self) -> Aabb {

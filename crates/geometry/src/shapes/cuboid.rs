@@ -61,8 +61,7 @@ impl Cuboid {
         let mut p = ray.at(t);
         p[axis] = if positive { self.max[axis] } else { self.min[axis] };
         p = p.clamp(self.min, self.max);
-        let mut n = Vec3::ZERO;
-        n[axis] = if positive { 1.0 } else { -1.0 };
+        let n = face_normal(axis, positive);
         let rel = (p - self.min) / (self.max - self.min);
         let uv = match (axis, positive) {
             (0, true) => Vec2::new(1.0 - rel.z, 1.0 - rel.y),
@@ -120,6 +119,14 @@ impl Cuboid {
     }
 }
 
+/// The outward unit normal of the face across `axis` on its `positive` side.
+#[inline]
+fn face_normal(axis: usize, positive: bool) -> Vec3 {
+    let mut n = Vec3::ZERO;
+    n[axis] = if positive { 1.0 } else { -1.0 };
+    n
+}
+
 impl Intersect for Cuboid {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
@@ -129,6 +136,13 @@ impl Intersect for Cuboid {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let (t, axis, positive) = self.solve(ray)?;
         Some(self.face_hit(ray, t, axis, positive))
+    }
+
+    /// No point and no uv.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        let (t, axis, positive) = self.solve(ray)?;
+        Some((t, Hit::faces(ray.dir, face_normal(axis, positive))))
     }
 
     fn bounds(&self) -> Aabb {

@@ -82,6 +82,16 @@ impl Cylinder {
     }
 }
 
+/// The unit outward normal of `part` at `rel` (relative to the base).
+#[inline]
+fn part_normal(rel: Vec3, part: Part) -> Vec3 {
+    match part {
+        Part::Side => Vec3::new(rel.x, 0.0, rel.z).normalize_or(Vec3::X),
+        Part::Bottom => Vec3::NEG_Y,
+        Part::Top => Vec3::Y,
+    }
+}
+
 impl Intersect for Cylinder {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
@@ -94,16 +104,24 @@ impl Intersect for Cylinder {
         let (r, h) = (self.0.radius, self.0.height);
         let (t, part) = self.solve(ray)?;
         let rel = o + t * d;
-        let (rel, n, uv) = match part {
+        let n = part_normal(rel, part);
+        let (rel, uv) = match part {
             Part::Side => {
-                let radial = Vec3::new(rel.x, 0.0, rel.z).normalize_or(Vec3::X);
-                let p = Vec3::new(radial.x * r, rel.y.clamp(0.0, h), radial.z * r);
-                (p, radial, Vec2::new(azimuth_u(radial), 1.0 - p.y / h))
+                let p = Vec3::new(n.x * r, rel.y.clamp(0.0, h), n.z * r);
+                (p, Vec2::new(azimuth_u(n), 1.0 - p.y / h))
             }
-            Part::Bottom => (Vec3::new(rel.x, 0.0, rel.z), Vec3::NEG_Y, cap_uv(rel, r, false)),
-            Part::Top => (Vec3::new(rel.x, h, rel.z), Vec3::Y, cap_uv(rel, r, true)),
+            Part::Bottom => (Vec3::new(rel.x, 0.0, rel.z), cap_uv(rel, r, false)),
+            Part::Top => (Vec3::new(rel.x, h, rel.z), cap_uv(rel, r, true)),
         };
         Some(Hit::new(t, self.0.base + rel, n, uv, d))
+    }
+
+    /// No uv (`atan2` on the side) and no point: the normal decides the side.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        let (t, part) = self.solve(ray)?;
+        let rel = (ray.origin - self.0.base) + t * ray.dir;
+        Some((t, Hit::faces(ray.dir, part_normal(rel, part))))
     }
 
     fn bounds(&self) -> Aabb {

@@ -90,6 +90,13 @@ impl Intersect for Disk {
         Some(Hit::new(t, self.center + rel, self.normal, uv, ray.dir))
     }
 
+    /// No uv (`atan2`, `sqrt`) and no point.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        let (t, _, _) = self.solve(ray)?;
+        Some((t, Hit::faces(ray.dir, self.normal)))
+    }
+
     fn bounds(&self) -> Aabb {
         let n = self.normal;
         let e = self.radius * (Vec3::ONE - n * n).max(Vec3::ZERO).map(f32::sqrt);

@@ -77,6 +77,13 @@ impl Intersect for Plane {
         Some(Hit::new(t, self.point + rel, self.normal, uv, ray.dir))
     }
 
+    /// No point and no uv.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        let t = self.intersect_t(ray)?;
+        Some((t, Hit::faces(ray.dir, self.normal)))
+    }
+
     fn bounds(&self) -> Aabb {
         Aabb::INFINITE
     }

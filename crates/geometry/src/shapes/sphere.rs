@@ -86,6 +86,12 @@ impl Sphere {
         let ts = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
         super::first_in(ray, ts)
     }
+
+    /// The unit outward normal where the ray is at `t`.
+    #[inline]
+    fn normal_at(&self, ray: &Ray, t: f32) -> Vec3 {
+        ((ray.at(t) - self.center) / self.radius).normalize_or(Vec3::Y)
+    }
 }
 
 impl Intersect for Sphere {
@@ -96,11 +102,17 @@ impl Intersect for Sphere {
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let t = self.solve(ray)?;
-        let n = (ray.at(t) - self.center) / self.radius;
-        let n = n.normalize_or(Vec3::Y);
+        let n = self.normal_at(ray, t);
         // Re-project onto the surface to remove the error in t.
         let point = self.center + self.radius * n;
         Some(Hit::new(t, point, n, sphere_uv(n), ray.dir))
+    }
+
+    /// No uv (`atan2`, `asin`) and no point: the normal decides the side.
+    #[inline]
+    fn intersect_side(&self, ray: &Ray) -> Option<(f32, bool)> {
+        let t = self.solve(ray)?;
+        Some((t, Hit::faces(ray.dir, self.normal_at(ray, t))))
     }
 
     fn bounds(&self) -> Aabb {
