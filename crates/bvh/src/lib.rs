@@ -51,6 +51,9 @@
 //!   shape is reported at each of its crossings, each mesh triangle at most
 //!   once per instance (also with pre-split builds, where a triangle may sit
 //!   in several leaves); the callback may break early (an opaque occluder).
+//!   [`Accel::for_each_crossing`] reports the same crossings in the same
+//!   order as [`Crossing`]s (object, `t`, side) and leaves the hit record
+//!   to [`Accel::crossing_hit`], for callers that need it only for some.
 //!
 //! * [`Accel::closest_hit_packet`] and [`Accel::occluded_packet`] answer
 //!   the first two for up to [`PACKET_SIZE`] coherent rays at a time,
