@@ -177,8 +177,9 @@ pub fn compare_closest(accel: &Accel, ray: &Ray) -> Result<Option<SceneHit>, Str
 /// Compares every crossing (as sorted (object, triangle, t) lists), and
 /// the lazy crossings with the hits: `for_each_crossing` reports the
 /// crossings of `for_each_hit` in the same order with the same `t` and
-/// side, and `crossing_hit` builds each one's hit; an analytic shape's hit
-/// is brute force's, bit for bit.
+/// side. `for_each_hit` builds its hits with `crossing_hit`, so the check
+/// of those hits is against brute force's eager ones: the same side, and
+/// for an analytic shape the same hit, bit for bit.
 pub fn compare_all(accel: &Accel, ray: &Ray) -> Result<usize, String> {
     let mut fast = Vec::new();
     accel.for_each_hit(ray, |h| {

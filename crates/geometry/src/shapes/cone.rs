@@ -91,9 +91,7 @@ impl Cone {
         }
         best
     }
-}
 
-impl Cone {
     /// The unit outward normal of `part` at `rel` (relative to the base).
     #[inline]
     fn part_normal(&self, rel: Vec3, part: Part) -> Vec3 {
