@@ -4,7 +4,7 @@
 //! cargo xtask bench                     both: BVH benchmark, then the seed render
 //! cargo xtask bench [BVH ARGS…]         acceleration-structure benchmark (prism-bench)
 //! cargo xtask bench --vs-peers [--rounds 2] [--threads 1,2] [--reps 3] [--scenes bunny,kitchen,grid]
-//!                                       prism beside Embree and POV-Ray (`peers.rs`)
+//!                   [--embree-robust]   prism beside Embree and POV-Ray (`peers.rs`)
 //! cargo xtask bench --scene SCENE [--threads 1,2] [--reps 5] [--width 1280] [--height 720] [--spp 4]
 //!                                       render benchmark (release `prism render`)
 //! ```
