@@ -25,7 +25,11 @@
 //! * POV-Ray (the seed scene): `povray` on `../shared/peers/povray/seed_scene.pov`
 //!   (1280×720, 2×2 supersampling, 2 threads) alternating with `prism render
 //!   scenes/seed.toml --threads 2` (4 spp); whole-process wall times, the
-//!   best of the rounds, ratio POV-Ray / prism.
+//!   best of the rounds, ratio POV-Ray / prism. Beside it, the ratio of
+//!   the render phases alone: POV-Ray's reported trace time against
+//!   prism's render time (`--stats-json`), which leaves out POV-Ray's
+//!   fixed ~0.7 s of start-up and shut-down and prism's scene loading and
+//!   image writing.
 //!
 //! A peer that cannot be found or built is skipped with the reason.
 
@@ -265,6 +269,9 @@ fn vs_povray(root: &Path, pov: &Path, prism: &Path, pov_dir: &Path, rounds: usiz
     let out_dir = std::env::temp_dir().join(format!("prism-vs-peers-{}", std::process::id()));
     std::fs::create_dir_all(&out_dir)?;
     let (mut best_pov, mut best_prism) = (f64::INFINITY, f64::INFINITY);
+    // Render phases: POV-Ray's "Trace Time", prism's `seconds.render`.
+    let (mut trace_pov, mut render_prism) = (f64::INFINITY, f64::INFINITY);
+    let stats = out_dir.join("prism-stats.json");
     for round in 0..rounds {
         eprintln!("round {}/{rounds}: seed scene, POV-Ray then prism (2 threads)", round + 1);
         let mut p = Command::new("povray");
@@ -273,32 +280,87 @@ fn vs_povray(root: &Path, pov: &Path, prism: &Path, pov_dir: &Path, rounds: usiz
             .arg(format!("+O{}", out_dir.join("pov.png").display()))
             .args(["+W1280", "+H720"])
             .arg(format!("+L{}", pov_dir.display()))
-            .args(["-D", "-V", "-GA", "+WT2", "+A0.0", "+AM1", "+R2", "-J"]);
+            // `-V` without `-GA`: no progress lines, but the statistics
+            // (with the trace time) on stderr.
+            .args(["-D", "-V", "+WT2", "+A0.0", "+AM1", "+R2", "-J"]);
         let t = Instant::now();
-        stdout_of(&mut p)?;
+        let out = p.output().with_context(|| format!("running {p:?}"))?;
         best_pov = best_pov.min(t.elapsed().as_secs_f64());
+        let log = String::from_utf8_lossy(&out.stderr);
+        if !out.status.success() {
+            bail!("{p:?} failed ({}):\n{log}", out.status);
+        }
+        if let Some(s) = pov_trace_seconds(&log) {
+            trace_pov = trace_pov.min(s);
+        }
         let mut r = Command::new(prism);
         r.current_dir(root)
             .args(["render", "scenes/seed.toml", "--threads", "2", "-o"])
-            .arg(out_dir.join("prism.png"));
+            .arg(out_dir.join("prism.png"))
+            .arg("--stats-json")
+            .arg(&stats);
         let t = Instant::now();
         stdout_of(&mut r)?;
         best_prism = best_prism.min(t.elapsed().as_secs_f64());
+        let report =
+            std::fs::read_to_string(&stats).with_context(|| format!("reading {}", stats.display()))?;
+        if let Some(s) = json_field(&report, "render").and_then(|v| v.parse::<f64>().ok()) {
+            render_prism = render_prism.min(s);
+        }
     }
     let _ = std::fs::remove_dir_all(&out_dir);
     let ratio = best_pov / best_prism;
+    let (json, text) = if trace_pov.is_finite() && render_prism.is_finite() {
+        let render_ratio = trace_pov / render_prism;
+        (
+            format!(
+                ",\"povray_trace_s\":{trace_pov:.3},\"prism_render_s\":{render_prism:.3},\"render_ratio\":{render_ratio:.3}"
+            ),
+            format!(
+                "\n  render phases alone: POV-Ray's trace {trace_pov:.2} s, prism's render {render_prism:.2} s: {render_ratio:.2}×"
+            ),
+        )
+    } else {
+        (
+            String::new(),
+            "\n  render phases: not reported (no \"Trace Time\" from POV-Ray or no render time from prism)"
+                .into(),
+        )
+    };
     println!(
-        "{{\"bench\":\"vs-povray\",\"scene\":\"scenes/seed.toml\",\"threads\":2,\"povray_s\":{best_pov:.3},\"prism_s\":{best_prism:.3},\"ratio\":{ratio:.3}}}"
+        "{{\"bench\":\"vs-povray\",\"scene\":\"scenes/seed.toml\",\"threads\":2,\"povray_s\":{best_pov:.3},\"prism_s\":{best_prism:.3},\"ratio\":{ratio:.3}{json}}}"
     );
     eprintln!(
-        "\nseed scene, 1280×720, 2 threads (best of {rounds}): POV-Ray {best_pov:.2} s, prism {best_prism:.2} s: prism {ratio:.2}× faster"
+        "\nseed scene, 1280×720, 2 threads (best of {rounds}): POV-Ray {best_pov:.2} s, prism {best_prism:.2} s: prism {ratio:.2}× faster{text}"
     );
     Ok(())
 }
 
+/// The seconds of POV-Ray's "Trace Time" statistics line
+/// (`  Trace Time:       0 hours  0 minutes  1 seconds (1.690 seconds)`).
+fn pov_trace_seconds(log: &str) -> Option<f64> {
+    let line = log.lines().find(|l| l.trim_start().starts_with("Trace Time:"))?;
+    let inner = line.rsplit_once('(')?.1;
+    inner.strip_suffix(')')?.trim().strip_suffix("seconds")?.trim().parse().ok()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{json_field, parse};
+    use super::{json_field, parse, pov_trace_seconds};
+
+    #[test]
+    fn povray_trace_time() {
+        let log = "Render Time:\n  Photon Time:      No photons\n  Trace Time:       0 hours  0 minutes  1 seconds (1.690 seconds)\n              using 2 thread(s) with 3.213 CPU-seconds total\n";
+        assert_eq!(pov_trace_seconds(log), Some(1.69));
+        assert_eq!(pov_trace_seconds("  Parse Time:  0 hours  0 minutes  0 seconds (0.020 seconds)"), None);
+        assert_eq!(pov_trace_seconds("  Trace Time:  garbled"), None);
+    }
+
+    #[test]
+    fn render_seconds_from_prism_stats() {
+        let stats = "{\n  \"seconds\": {\n    \"bvh_build\": 0.0004,\n    \"render\": 0.74081801,\n    \"total\": 0.787\n  }\n}";
+        assert_eq!(json_field(stats, "render").and_then(|v| v.parse::<f64>().ok()), Some(0.74081801));
+    }
 
     #[test]
     fn robust_embree_is_opt_in() {
