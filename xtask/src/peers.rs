@@ -304,7 +304,7 @@ fn vs_povray(root: &Path, pov: &Path, prism: &Path, pov_dir: &Path, rounds: usiz
         best_prism = best_prism.min(t.elapsed().as_secs_f64());
         let report =
             std::fs::read_to_string(&stats).with_context(|| format!("reading {}", stats.display()))?;
-        if let Some(s) = json_field(&report, "render").and_then(|v| v.parse::<f64>().ok()) {
+        if let Some(s) = prism_render_seconds(&report) {
             render_prism = render_prism.min(s);
         }
     }
@@ -336,6 +336,13 @@ fn vs_povray(root: &Path, pov: &Path, prism: &Path, pov_dir: &Path, rounds: usiz
     Ok(())
 }
 
+/// `seconds.render` of a `prism render --stats-json` report: the value of
+/// `render` inside the `seconds` object, not any other key of that name.
+fn prism_render_seconds(report: &str) -> Option<f64> {
+    let seconds = &report[report.find("\"seconds\":")?..];
+    json_field(seconds, "render")?.parse().ok()
+}
+
 /// The seconds of POV-Ray's "Trace Time" statistics line
 /// (`  Trace Time:       0 hours  0 minutes  1 seconds (1.690 seconds)`).
 fn pov_trace_seconds(log: &str) -> Option<f64> {
@@ -346,7 +353,7 @@ fn pov_trace_seconds(log: &str) -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::{json_field, parse, pov_trace_seconds};
+    use super::{json_field, parse, pov_trace_seconds, prism_render_seconds};
 
     #[test]
     fn povray_trace_time() {
@@ -358,8 +365,11 @@ mod tests {
 
     #[test]
     fn render_seconds_from_prism_stats() {
-        let stats = "{\n  \"seconds\": {\n    \"bvh_build\": 0.0004,\n    \"render\": 0.74081801,\n    \"total\": 0.787\n  }\n}";
-        assert_eq!(json_field(stats, "render").and_then(|v| v.parse::<f64>().ok()), Some(0.74081801));
+        // A `render` key before `seconds` (here a made-up one) is not it.
+        let stats = "{\n  \"rays\": {\"render\": 7},\n  \"seconds\": {\n    \"bvh_build\": 0.0004,\n    \"render\": 0.74081801,\n    \"total\": 0.787\n  }\n}";
+        assert_eq!(prism_render_seconds(stats), Some(0.74081801));
+        assert_eq!(prism_render_seconds("{\"seconds\": {\"total\": 0.7}}"), None);
+        assert_eq!(prism_render_seconds("{\"render\": 0.7}"), None);
     }
 
     #[test]
