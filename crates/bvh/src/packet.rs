@@ -28,12 +28,19 @@
 //! tests compare them), whatever the packet's spread. A spread-out packet
 //! costs more box tests, never a different answer.
 //!
+//! A node that few of the packet's rays reach (at most [`PER_RAY`]: the
+//! instances of a grid of objects, deep nodes of a spread-out packet) is
+//! tested ray by ray instead, each with the single-ray node test, and
+//! takes as entry bound the nearest of those rays' entry distances: the
+//! same children and rays as the frustum and a per-child test would keep,
+//! for less work where the frustum is loose over few rays.
+//!
 //! Rays that fit no frustum (a zero direction component, whose reciprocal
 //! is infinite) and octants holding fewer than [`MIN_PACKET`] rays walk
 //! alone.
 
 use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
-use crate::wide::{FIRST_BITS, LEAF, Node, WIDTH, WideBvh, max_ps, min_ps};
+use crate::wide::{FIRST_BITS, LEAF, Node, NodeTest, WIDTH, WideBvh, WideRay, max_ps, min_ps};
 use prism_geometry::glam::Vec3A;
 
 /// Most rays in one packet (bits of its masks).
@@ -56,6 +63,12 @@ pub(crate) trait Leaf {
 /// Fewer rays of one octant than this walk one by one.
 pub(crate) const MIN_PACKET: u32 = 4;
 
+/// A node that at most this many of a packet's rays reach is tested ray
+/// by ray ([`Soa::per_ray`]) rather than by the frustum. 16 took the
+/// fewest instructions on the 216-bunny grid's packets (2, 4, 8, 16, 32
+/// and 64 measured; docs/benchmarks.md).
+const PER_RAY: u32 = 16;
+
 /// How a packet tests one box against eight of its rays at once: the
 /// single-ray node test's operations, in its order, per ray. The portable
 /// loop is what the compiler makes of it: its comparisons are gathered
@@ -74,6 +87,11 @@ pub(crate) trait Lanes: Copy {
         t_min: &[f32; 8],
         reach: &[f32; 8],
     ) -> u32;
+
+    /// The single-ray node test ([`crate::wide`]'s): the mask of the
+    /// children of `node` that ray `r` meets within `[r.t_min, reach]`,
+    /// with every child's entry distance in `t_near`.
+    fn node(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32;
 }
 
 /// The portable eight-ray box test.
@@ -107,12 +125,18 @@ impl Lanes for Portable {
         }
         m
     }
+
+    #[inline(always)]
+    fn node(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+        crate::wide::Portable.test(node, r, reach, t_near)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod x86 {
     //! The AVX2 eight-ray box test.
     use super::Lanes;
+    use crate::wide::{Node, NodeTest, WIDTH, WideRay};
     use core::arch::x86_64::*;
 
     /// The AVX2 eight-ray box test. Made only inside the packet queries'
@@ -162,6 +186,14 @@ pub(crate) mod x86 {
                 );
                 _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(n, f)) as u32
             }
+        }
+
+        #[inline(always)]
+        fn node(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+            // SAFETY: an `Avx2` exists only where the CPU has AVX2, which
+            // is the contract of the wide node test's token.
+            let test = unsafe { crate::wide::x86::Avx2::new() };
+            test.test(node, r, reach, t_near)
         }
     }
 }
@@ -229,16 +261,19 @@ pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
             t_min = t_min.min(b.t_min);
         }
     }
-    std::array::from_fn(|o| {
-        let m = groups[o];
-        if o == 8 || m.count_ones() < MIN_PACKET {
+    // A loop, not `std::array::from_fn`: its closure was left out of line
+    // in some builds of the packet walks (callgrind).
+    let mut out = [(0u64, None); 9];
+    for (o, (slot, &m)) in out.iter_mut().zip(&groups).enumerate() {
+        *slot = if o == 8 || m.count_ones() < MIN_PACKET {
             (m, None)
         } else if o == first {
             (m, Some(Frustum::from_bounds(o as u32, [o_lo, o_hi], [inv_lo, inv_hi], t_min)))
         } else {
             (m, Frustum::new(br, m))
-        }
-    })
+        };
+    }
+    out
 }
 
 /// The octant of a ray (bit `a` set when axis `a` runs negative), 8 for a
@@ -461,6 +496,51 @@ impl<const N: usize> Soa<N> {
         mask
     }
 
+    /// The children of `node` that the rays of `want` meet, each ray by
+    /// the single-ray node test, written to the front of `out` in lane
+    /// order with the rays that meet them and, as entry bound, the
+    /// smallest of those rays' entry distances; returns how many. For a
+    /// node that few rays reach, this costs less than the frustum's test
+    /// and a [`Soa::meet`] per child it lets through.
+    #[inline(always)]
+    fn per_ray(&self, lanes: impl Lanes, fr: &Frustum, node: &Node, want: u64, out: &mut Hits) -> usize {
+        let mut near = [f32::INFINITY; WIDTH];
+        let mut met = [0u64; WIDTH];
+        let mut any = 0u32;
+        for k in bits(want) {
+            if k >= N {
+                break;
+            }
+            let r = WideRay {
+                origin: [self.origin[0][k], self.origin[1][k], self.origin[2][k]],
+                inv: [self.inv[0][k], self.inv[1][k], self.inv[2][k]],
+                near_row: fr.near_row,
+                far_row: fr.far_row,
+                t_min: self.t_min[k],
+            };
+            let mut t_near = [0.0f32; WIDTH];
+            let mut mask = lanes.node(node, &r, self.reach[k], &mut t_near);
+            any |= mask;
+            while mask != 0 {
+                let c = mask.trailing_zeros() as usize & (WIDTH - 1);
+                mask &= mask - 1;
+                met[c] |= 1 << k;
+                near[c] = min_ps(t_near[c], near[c]);
+            }
+        }
+        let mut count = 0;
+        while any != 0 {
+            let c = any.trailing_zeros() as usize & (WIDTH - 1);
+            any &= any - 1;
+            let j = count & (WIDTH - 1);
+            out.near[j] = near[c];
+            out.child[j] = node.child[c];
+            out.rays[j] = met[c];
+            count += 1;
+        }
+        count
+    }
+
     /// The farthest reach of the rays in the walk: eight running maxima,
     /// one per lane of an eight-ray group, then combined. A fold over the
     /// rays one by one compiled to a chain of scalar `maxss`, a twentieth
@@ -540,20 +620,25 @@ impl WideBvh {
                 let Some(node) = nodes.get(cur as usize) else { return };
                 let mut out =
                     Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
-                let n = fr.hits(node, reach, &mut out).min(WIDTH);
-                // Of the children the frustum may enter, keep those that
-                // some ray enters on its own test, with those rays.
-                let mut kept = 0;
-                for c in 0..n {
-                    let want = rays & active;
-                    let m = soa.meet(lanes, fr, node, usize::from(out.lane[c]), want) & want;
-                    if m != 0 {
-                        out.near[kept] = out.near[c];
-                        out.child[kept] = out.child[c];
-                        out.rays[kept] = m;
-                        kept += 1;
+                let want = rays & active;
+                let kept = if want.count_ones() <= PER_RAY {
+                    soa.per_ray(lanes, fr, node, want, &mut out)
+                } else {
+                    let n = fr.hits(node, reach, &mut out).min(WIDTH);
+                    // Of the children the frustum may enter, keep those
+                    // that some ray enters on its own test, with those rays.
+                    let mut kept = 0;
+                    for c in 0..n {
+                        let m = soa.meet(lanes, fr, node, usize::from(out.lane[c]), want) & want;
+                        if m != 0 {
+                            out.near[kept] = out.near[c];
+                            out.child[kept] = out.child[c];
+                            out.rays[kept] = m;
+                            kept += 1;
+                        }
                     }
-                }
+                    kept
+                };
                 if kept > 0 {
                     if kept > 1 && !ANY {
                         sort(&mut out, kept);
@@ -762,6 +847,22 @@ mod tests {
         }
     }
 
+    /// A node of eight random boxes in `[-5, 5]³`, lane `k`'s child
+    /// `first + k`.
+    fn random_node(rng: &mut impl FnMut() -> f32, first: u32) -> Node {
+        let mut node = Node::EMPTY;
+        for k in 0..WIDTH {
+            let c = Vec3::new(rng(), rng(), rng()) * 10.0 - 5.0;
+            let h = Vec3::new(rng(), rng(), rng()) * 2.0;
+            for a in 0..3 {
+                node.planes[a][k] = c[a] - h[a];
+                node.planes[a + 3][k] = c[a] + h[a];
+            }
+            node.child[k] = first + k as u32;
+        }
+        node
+    }
+
     /// The frustum's bounds contain every ray's own entry and exit
     /// distances (random boxes and packets): a box one ray meets, the
     /// packet meets; each ray's own leaf test is the same alone or in the packet.
@@ -785,16 +886,7 @@ mod tests {
                     continue;
                 }
                 let Some(fr) = Frustum::new(&br, m) else { panic!("one octant") };
-                let mut node = Node::EMPTY;
-                for k in 0..WIDTH {
-                    let c = Vec3::new(rng(), rng(), rng()) * 10.0 - 5.0;
-                    let h = Vec3::new(rng(), rng(), rng()) * 2.0;
-                    for a in 0..3 {
-                        node.planes[a][k] = c[a] - h[a];
-                        node.planes[a + 3][k] = c[a] + h[a];
-                    }
-                    node.child[k] = k as u32;
-                }
+                let node = random_node(&mut rng, 0);
                 let mut out =
                     Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
                 let n = fr.hits(&node, f32::INFINITY, &mut out);
@@ -823,6 +915,99 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// A node tested ray by ray (`per_ray`, taken when few rays reach it)
+    /// keeps the children, and with each the rays, that the frustum and a
+    /// [`Soa::meet`] per child keep; its entry bound is the smallest entry
+    /// distance of the rays that meet the child, each by the single-ray
+    /// node test. Random packets with rays out of the walk (reach `-inf`)
+    /// and shortened reaches; the portable and AVX2 lanes.
+    #[test]
+    fn per_ray_node_test_keeps_what_the_frustum_and_meet_keep() {
+        fn check(lanes: impl Lanes, seed: u64) {
+            let mut r = prism_testkit::Rng::new(seed);
+            let mut rng = move || r.f32();
+            let (mut kept_some, mut culled_some) = (false, false);
+            for _ in 0..2000 {
+                let base = Vec3::new(rng() - 0.5, rng() - 0.5, rng() - 0.5).normalize_or(Vec3::X);
+                let shared = Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0;
+                let rays: Vec<Ray> = (0..PACKET)
+                    .map(|_| {
+                        let o = if rng() < 0.5 { shared } else { Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0 };
+                        let d = base + 0.3 * Vec3::new(rng() - 0.5, rng() - 0.5, rng() - 0.5);
+                        Ray::with_interval(
+                            o,
+                            d,
+                            rng() * 0.1,
+                            if rng() < 0.3 { rng() * 6.0 } else { f32::INFINITY },
+                        )
+                    })
+                    .collect();
+                let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+                let g = octants(&br, u64::MAX);
+                let Some(&m) = g[..8].iter().max_by_key(|m| m.count_ones()) else { continue };
+                let Some(fr) = Frustum::new(&br, m) else { panic!("one octant") };
+                let node = random_node(&mut rng, 100);
+                let mut soa = Soa::<PACKET>::new(&br, m);
+                // Some rays out of the walk, as after an occluded leaf.
+                let mut active = m;
+                for k in bits(m) {
+                    if rng() < 0.2 {
+                        soa.reach[k] = f32::NEG_INFINITY;
+                        active &= !(1 << k);
+                    }
+                }
+                // A few of the rays, as at a node deep in the walk.
+                let mut want = 0;
+                for k in bits(active) {
+                    if rng() < 0.15 {
+                        want |= 1 << k;
+                    }
+                }
+                let empty =
+                    || Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
+                let mut by_frustum = empty();
+                let n = fr.hits(&node, soa.max_reach(), &mut by_frustum);
+                let mut want_children = Vec::new();
+                for c in 0..n {
+                    let met = soa.meet(lanes, &fr, &node, usize::from(by_frustum.lane[c]), want) & want;
+                    if met != 0 {
+                        want_children.push((by_frustum.child[c], met));
+                    }
+                }
+                want_children.sort_unstable();
+                let mut by_ray = empty();
+                let kept = soa.per_ray(lanes, &fr, &node, want, &mut by_ray);
+                let got: Vec<(u32, u64)> = (0..kept).map(|c| (by_ray.child[c], by_ray.rays[c])).collect();
+                assert_eq!(got, want_children, "want {want:b}");
+                for c in 0..kept {
+                    let lane = (by_ray.child[c] - 100) as usize;
+                    let nearest = bits(by_ray.rays[c])
+                        .map(|k| {
+                            let b = br[k];
+                            let r = WideRay::new(&b);
+                            let mut t_near = [0.0; WIDTH];
+                            let hit = Portable.node(&node, &r, soa.reach[k], &mut t_near);
+                            assert_eq!(hit >> lane & 1, 1, "ray {k} meets lane {lane} alone");
+                            t_near[lane]
+                        })
+                        .fold(f32::INFINITY, f32::min);
+                    assert_eq!(by_ray.near[c].to_bits(), nearest.to_bits(), "lane {lane}");
+                }
+                kept_some |= kept > 0;
+                culled_some |= kept < WIDTH && want != 0;
+            }
+            assert!(kept_some && culled_some, "both kept and culled children");
+        }
+        check(Portable, 3);
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") {
+            // SAFETY: checked just above.
+            check(unsafe { x86::Avx2::new() }, 4);
+        } else {
+            eprintln!("AVX2 lanes not checked: this CPU lacks AVX2");
         }
     }
 }

@@ -459,18 +459,18 @@ fn leaf(bvh: &Bvh2, k: usize, slots: &mut Vec<u32>) -> Option<u32> {
 
 /// The ray as the node tests want it (from a [`BoxRay`]).
 #[derive(Clone, Copy)]
-struct WideRay {
-    origin: [f32; 3],
-    inv: [f32; 3],
+pub(crate) struct WideRay {
+    pub(crate) origin: [f32; 3],
+    pub(crate) inv: [f32; 3],
     /// Row of the near and far plane per axis (by the sign of `inv`).
-    near_row: [usize; 3],
-    far_row: [usize; 3],
-    t_min: f32,
+    pub(crate) near_row: [usize; 3],
+    pub(crate) far_row: [usize; 3],
+    pub(crate) t_min: f32,
 }
 
 impl WideRay {
     #[inline(always)]
-    fn new(br: &BoxRay) -> Self {
+    pub(crate) fn new(br: &BoxRay) -> Self {
         // Bit `a` set where `inv[a] < 0`: the max plane is then the near one.
         let neg = br.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         let neg = |a: usize| (neg >> a & 1) * 3;
@@ -497,7 +497,7 @@ pub(crate) fn min_ps(a: f32, b: f32) -> f32 {
 }
 
 /// What a node test writes for the children the ray meets, in lane order.
-struct Hits {
+pub(crate) struct Hits {
     /// Entry distances.
     near: [f32; WIDTH],
     /// References.
@@ -506,7 +506,7 @@ struct Hits {
 
 /// A node test: the entry distance of every lane, and the mask of the
 /// lanes whose box the ray's `[t_min, reach]` meets.
-trait NodeTest: Copy {
+pub(crate) trait NodeTest: Copy {
     fn test(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32;
 
     /// Writes the lanes of `mask` to the front of `out`, in lane order;
@@ -519,7 +519,7 @@ trait NodeTest: Copy {
 
 /// The portable node test.
 #[derive(Clone, Copy)]
-struct Portable;
+pub(crate) struct Portable;
 
 impl NodeTest for Portable {
     #[inline(always)]
@@ -555,7 +555,7 @@ fn compact(mut mask: u32, t_near: &[f32; WIDTH], lanes: &[u32; WIDTH], out: &mut
 }
 
 #[cfg(target_arch = "x86_64")]
-mod x86 {
+pub(crate) mod x86 {
     //! The AVX2 and AVX-512 node tests.
     use super::{Hits, Node, NodeTest, WIDTH, WideRay};
     use core::arch::x86_64::*;
@@ -563,7 +563,7 @@ mod x86 {
     /// The AVX2 node test. Made only inside code compiled for AVX2 that
     /// runs only where the CPU has it ([`super::WideBvh`]'s `walk_avx2`).
     #[derive(Clone, Copy)]
-    pub(super) struct Avx2(());
+    pub(crate) struct Avx2(());
 
     /// The AVX-512 node test; made only inside `walk_avx512`.
     #[derive(Clone, Copy)]
@@ -573,7 +573,7 @@ mod x86 {
         /// # Safety
         /// The CPU must have AVX2.
         #[inline(always)]
-        pub(super) unsafe fn new() -> Self {
+        pub(crate) unsafe fn new() -> Self {
             Self(())
         }
     }
