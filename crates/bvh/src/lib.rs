@@ -459,10 +459,54 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
         dir: Vec3,
         br: &mut [BoxRay],
     ) {
-        if let (Some(r), Some(best), Some(b)) = (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k)) {
+        if let (Some(r), Some(best)) = (self.rays.get_mut(k), self.best.get_mut(k)) {
             r.t_max = t;
             *best = Best::Mesh { object: i, face, t, b1, b2, dir };
-            b.set_t_max(t);
+            if let Some(b) = br.get_mut(k) {
+                b.set_t_max(t);
+            }
+        }
+    }
+
+    /// Tests object `i` against the rays of `meet`: a mesh instance met
+    /// by several rays as a packet, anything else ray by ray. Each closer
+    /// hit becomes its ray's best and shortens the ray and its box ray in
+    /// `br` (when `br` has one: the top level's walk).
+    #[inline(always)]
+    fn object(&mut self, i: u32, meet: u64, br: &mut [BoxRay]) {
+        let accel = self.accel;
+        if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
+            && meet.count_ones() >= MIN_PACKET
+        {
+            let blas = &accel.blas[*mesh as usize];
+            if whole::<N>(transform, meet) {
+                let mut found = [None; N];
+                self.lanes.closest(blas, self.rays, meet, &mut found);
+                for (k, hit) in found.into_iter().enumerate() {
+                    if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
+                        self.keep(i, k, hit, dir, br);
+                    }
+                }
+                return;
+            }
+            let rays = &*self.rays;
+            let ray = |k: usize| rays.get(k).copied();
+            if fits_small::<N>(meet) {
+                let dense = Dense::<SMALL_PACKET>::new(transform, meet, ray);
+                self.mesh_hits(i, blas, dense, br);
+            } else {
+                let dense = Dense::<N>::new(transform, meet, ray);
+                self.mesh_hits(i, blas, dense, br);
+            }
+            return;
+        }
+        for k in bits(meet) {
+            if let (Some(r), Some(best)) = (self.rays.get_mut(k), self.best.get_mut(k)) {
+                match br.get_mut(k) {
+                    Some(b) => accel.closest_object_walked(i, r, best, b),
+                    None => accel.closest_object(i, r, best),
+                }
+            }
         }
     }
 }
@@ -470,41 +514,8 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
 impl<const N: usize, L: MeshPackets> Leaf for ClosestObjects<'_, '_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
-        let accel = self.accel;
         for slot in first..first + count {
-            let i = accel.tlas_objects[slot as usize];
-            if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
-                && meet.count_ones() >= MIN_PACKET
-            {
-                let blas = &accel.blas[*mesh as usize];
-                if whole::<N>(transform, meet) {
-                    let mut found = [None; N];
-                    self.lanes.closest(blas, self.rays, meet, &mut found);
-                    for (k, hit) in found.into_iter().enumerate() {
-                        if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
-                            self.keep(i, k, hit, dir, br);
-                        }
-                    }
-                    continue;
-                }
-                let rays = &*self.rays;
-                let ray = |k: usize| rays.get(k).copied();
-                if fits_small::<N>(meet) {
-                    let dense = Dense::<SMALL_PACKET>::new(transform, meet, ray);
-                    self.mesh_hits(i, blas, dense, br);
-                } else {
-                    let dense = Dense::<N>::new(transform, meet, ray);
-                    self.mesh_hits(i, blas, dense, br);
-                }
-                continue;
-            }
-            for k in bits(meet) {
-                if let (Some(r), Some(best), Some(b)) =
-                    (self.rays.get_mut(k), self.best.get_mut(k), br.get_mut(k))
-                {
-                    accel.closest_object_walked(i, r, best, b);
-                }
-            }
+            self.object(self.accel.tlas_objects[slot as usize], meet, br);
         }
         0
     }
@@ -1241,6 +1252,28 @@ impl Accel {
                 self.closest_object(i, &mut live[k], &mut best[k]);
             }
         }
+        if let Some(i) = self.sole {
+            // One object on the top level: its walk would reach only it
+            // (as `occluded_packet_impl` and the single-ray queries).
+            ClosestObjects { accel: self, lanes, rays: &mut live, best: &mut best }.object(i, mask, &mut []);
+        } else {
+            self.closest_packet_walk(lanes, &mut live, &mut best, mask);
+        }
+        for (k, o) in out.iter_mut().enumerate().take(rays.len().min(N)) {
+            *o = if mask >> k & 1 == 1 { done(best[k]) } else { None };
+        }
+    }
+
+    /// The top-level walk of [`Accel::closest_packet_impl`]'s rays of
+    /// `mask`: each closer hit goes to the ray's `best`.
+    #[inline(always)]
+    fn closest_packet_walk<const N: usize>(
+        &self,
+        lanes: impl MeshPackets,
+        live: &mut [Ray; N],
+        best: &mut [Best; N],
+        mask: u64,
+    ) {
         let mut br: [BoxRay; N] =
             std::array::from_fn(|k| if mask >> k & 1 == 1 { BoxRay::new(&live[k]) } else { BoxRay::NONE });
         for (m, fr) in packet::plan(&br, mask) {
@@ -1251,7 +1284,7 @@ impl Accel {
                     &fr,
                     &mut br,
                     m,
-                    ClosestObjects { accel: self, lanes, rays: &mut live, best: &mut best },
+                    ClosestObjects { accel: self, lanes, rays: live, best },
                 ),
                 None => {
                     for k in bits(m) {
@@ -1261,9 +1294,6 @@ impl Accel {
                     }
                 }
             }
-        }
-        for (k, o) in out.iter_mut().enumerate().take(rays.len().min(N)) {
-            *o = if mask >> k & 1 == 1 { done(best[k]) } else { None };
         }
     }
 

@@ -12,7 +12,7 @@ mod common;
 use common::{Rng, random_scene};
 use prism_bvh::{Accel, BlasKind, BuildOptions, Kernel, Object, PACKET_SIZE, SceneHit};
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Ray, Transform};
+use prism_geometry::{Instance, Ray, Transform};
 use std::sync::Arc;
 
 /// Checks both packet queries against the single-ray ones for `rays`.
@@ -191,6 +191,29 @@ fn instance_grid_agrees_under_every_kernel() {
         }
         assert!(hits > 500, "{}: {hits} hits", kernel.name());
     }
+}
+
+/// A scene of one mesh instance, the top level's only object (its packet
+/// queries then skip the top-level walk), placed as it is or transformed,
+/// alone or beside a plane (an unbounded object tested before it).
+#[test]
+fn one_mesh_scenes_agree_with_single_rays() {
+    let mut hits = 0;
+    for seed in 0..24 {
+        let mut rng = Rng::new(300 + seed);
+        let mesh = Arc::new(common::random_mesh(&mut rng, 60));
+        let transform = if seed % 2 == 0 { Transform::IDENTITY } else { common::random_transform(&mut rng) };
+        let mut objects = vec![Object::Mesh { mesh: 0, transform }];
+        if seed % 3 == 0 {
+            objects
+                .push(Object::Shape(Instance::new(common::random_shape(&mut rng, 6), Transform::IDENTITY)));
+        }
+        let accel = Accel::build(vec![mesh], objects).unwrap();
+        for _ in 0..6 {
+            hits += check_scene(&accel, &mut rng, &format!("one mesh, seed {seed}"));
+        }
+    }
+    assert!(hits > 1000, "the packets should mostly hit something ({hits})");
 }
 
 #[test]
