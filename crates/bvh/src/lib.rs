@@ -1240,16 +1240,39 @@ impl Accel {
         done: &impl Fn(Best) -> Option<T>,
     ) {
         let mut mask = 0u64;
-        let mut best = [Best::None; N];
-        let mut live = [PLACEHOLDER; N];
-        for (k, (l, r)) in live.iter_mut().zip(rays).enumerate() {
-            // Copied whether usable or not: only the rays of `mask` are read.
-            *l = *r;
+        for (k, r) in rays.iter().enumerate().take(N) {
             mask |= u64::from(usable(r)) << k;
         }
-        for k in bits(mask) {
-            for &i in &self.unbounded {
-                self.closest_object(i, &mut live[k], &mut best[k]);
+        if self.unbounded.is_empty()
+            && let Some(i) = self.sole
+            && let Object::Mesh { mesh, transform } = &self.objects[i as usize]
+            && whole::<N>(transform, mask)
+            && let Ok(rays) = <&[Ray; N]>::try_from(rays)
+        {
+            // One mesh placed as it is, met by the whole packet, and
+            // nothing before it: its packet walk takes the rays as they
+            // are, and its hits are the answers (a scene of one model,
+            // such as `prism render model.obj`).
+            let mut found = [None; N];
+            lanes.closest(&self.blas[*mesh as usize], rays, mask, &mut found);
+            for ((o, f), r) in out.iter_mut().zip(found).zip(rays) {
+                *o = f.and_then(|(face, t, b1, b2)| {
+                    done(Best::Mesh { object: i, face, t, b1, b2, dir: r.dir })
+                });
+            }
+            return;
+        }
+        let mut best = [Best::None; N];
+        let mut live = [PLACEHOLDER; N];
+        for (l, r) in live.iter_mut().zip(rays) {
+            // Copied whether usable or not: only the rays of `mask` are read.
+            *l = *r;
+        }
+        if !self.unbounded.is_empty() {
+            for k in bits(mask) {
+                for &i in &self.unbounded {
+                    self.closest_object(i, &mut live[k], &mut best[k]);
+                }
             }
         }
         if let Some(i) = self.sole {
