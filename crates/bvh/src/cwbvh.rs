@@ -72,10 +72,10 @@ fn slab(lo: u8, hi: u8, e: f32, o: f32, inv: f32) -> (f32, f32) {
 /// it). Every `max_ps`/`min_ps` keeps a possible `NaN` in its first
 /// operand, so a `NaN` slab (ray in the face plane) is ignored.
 #[inline(always)]
-pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay) -> u32 {
+pub(crate) fn intersect_node(node: &CwBvhNode, ray: &BoxRay, oct_inv4: u32) -> u32 {
     let ext = node.compute_extent();
     let po = Vec3A::from(node.p) - ray.origin;
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(ray.oct_inv4);
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
     let reach = ray.reach();
     let mut near = [0.0f32; 8];
     let mut far = [0.0f32; 8];
@@ -129,6 +129,7 @@ impl Tree for CwBvh {
         if bvh.nodes.is_empty() {
             return;
         }
+        let oct_inv4 = ray.oct_inv4();
         // (base index, mask) pairs as in obvhs: bit 31 stands for the root.
         let mut current: (u32, u32) = (0, 0x8000_0000);
         let mut prims: (u32, u32) = (0, 0);
@@ -148,12 +149,12 @@ impl Tree for CwBvh {
                 if current.1 & 0xff00_0000 != 0 {
                     stack.push(current);
                 }
-                let slot_index = (child_index_offset - 24) ^ (ray.oct_inv4 & 0xff);
+                let slot_index = (child_index_offset - 24) ^ (oct_inv4 & 0xff);
                 let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
                 let Some(node) = bvh.nodes.get((child_index_base + relative_index) as usize) else {
                     return;
                 };
-                let hitmask = intersect_node(node, ray);
+                let hitmask = intersect_node(node, ray, oct_inv4);
                 current = (node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
                 prims = (node.primitive_base_idx, hitmask & 0x00ff_ffff);
             } else {

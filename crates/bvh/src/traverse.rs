@@ -12,8 +12,6 @@ pub(crate) struct BoxRay {
     pub origin: Vec3A,
     /// `1/dir` per axis, `+inf` for both zeros (see [`crate::cwbvh`]).
     pub inv: Vec3A,
-    /// Child order by octant, as obvhs's `ray_get_octant_inv4`.
-    pub oct_inv4: u32,
     pub t_min: f32,
     /// The ray's `t_max` widened by [`FAR_SCALE`]: see [`BoxRay::reach`].
     reach: f32,
@@ -26,13 +24,8 @@ pub(crate) const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 impl BoxRay {
     /// A ray that meets nothing (an unused packet slot).
-    pub const NONE: Self = Self {
-        origin: Vec3A::ZERO,
-        inv: Vec3A::INFINITY,
-        oct_inv4: 0,
-        t_min: f32::INFINITY,
-        reach: f32::NEG_INFINITY,
-    };
+    pub const NONE: Self =
+        Self { origin: Vec3A::ZERO, inv: Vec3A::INFINITY, t_min: f32::INFINITY, reach: f32::NEG_INFINITY };
 
     /// `inv` is `1/d` per axis with `+inf` for both zeros (slab order uses
     /// `d < 0`): one vector division, whose quotients are those of three
@@ -41,20 +34,23 @@ impl BoxRay {
     pub fn new(ray: &Ray) -> Self {
         let d = Vec3A::from(ray.dir);
         let inv = Vec3A::select(d.cmpeq(Vec3A::ZERO), Vec3A::INFINITY, Vec3A::ONE / d);
-        // Bit `a` set where axis `a` points the positive way.
-        let pos = !d.cmplt(Vec3A::ZERO).bitmask() & 7;
-        let oct_inv4 = ((pos & 1) << 2 | (pos & 2) | pos >> 2) * 0x0101_0101;
-        Self {
-            origin: Vec3A::from(ray.origin),
-            inv,
-            oct_inv4,
-            t_min: ray.t_min,
-            reach: ray.t_max * FAR_SCALE,
-        }
+        Self { origin: Vec3A::from(ray.origin), inv, t_min: ray.t_min, reach: ray.t_max * FAR_SCALE }
     }
 }
 
 impl BoxRay {
+    /// Child order by octant, as obvhs's `ray_get_octant_inv4`: bit `a`
+    /// of each byte set where axis `a` (x as bit 2, z as bit 0) points the
+    /// positive way, by the sign of `inv` (a zero direction component,
+    /// either sign, has `inv = +inf` and counts as positive). Only the
+    /// CWBVH walk reads it, once a walk: made on demand, not with every
+    /// box ray (a tenth of a kitchen camera packet's set-up).
+    #[inline(always)]
+    pub fn oct_inv4(&self) -> u32 {
+        let pos = !self.inv.cmplt(Vec3A::ZERO).bitmask() & 7;
+        ((pos & 1) << 2 | (pos & 2) | pos >> 2) * 0x0101_0101
+    }
+
     /// How far the box tests look: `t_max` widened by [`FAR_SCALE`]. A
     /// box's entry distance may round a few ULPs past the `t` the triangle
     /// test computes for a triangle lying on the box's face; compared with
@@ -245,7 +241,7 @@ mod tests {
             let oct = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
                 | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
                 | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
-            assert_eq!(br.oct_inv4, oct, "{d}");
+            assert_eq!(br.oct_inv4(), oct, "{d}");
             assert_eq!((br.origin, br.t_min, br.reach()), (Vec3A::new(1.0, -2.0, 3.0), 0.5, 4.0 * FAR_SCALE));
         }
     }
