@@ -97,6 +97,12 @@ fn finite_interval(t_min: f32, t_max: f32) -> (f32, f32) {
     (t_min.max(f32::MIN), t_max.min(f32::MAX))
 }
 
+/// The axes `[kx, ky, kz]` of a ray whose dominant axis is `kz`, at index
+/// `2·kz + 1` where `d[kz] < 0` and `2·kz` otherwise: `kx = (kz + 1) % 3`
+/// and `ky = (kx + 1) % 3`, swapped where `d[kz] < 0` (which keeps the
+/// winding). One lookup rather than two and a swap.
+const AXES: [[usize; 3]; 6] = [[1, 2, 0], [2, 1, 0], [2, 0, 1], [0, 2, 1], [0, 1, 2], [1, 0, 2]];
+
 impl TriangleRay {
     /// Prepares `ray` (its direction must be non-zero; a zero or non-finite
     /// direction hits nothing).
@@ -113,10 +119,8 @@ impl TriangleRay {
         let x_wins = (ax >= ay) & (ax >= az);
         let y_wins = ay >= az;
         let kz = usize::from(!x_wins) * (1 + usize::from(!y_wins));
-        // `kx = (kz + 1) % 3`, `ky = (kx + 1) % 3`, swapped where `d[kz] < 0`.
-        let (kx, ky) = ([1, 2, 0][kz], [2, 0, 1][kz]);
         let dz = d[kz];
-        let (kx, ky) = if dz < 0.0 { (ky, kx) } else { (kx, ky) };
+        let [kx, ky, kz] = AXES[kz * 2 + usize::from(dz < 0.0)];
         // `[d[kx] / dz, d[ky] / dz, 1 / dz]` in one vector division (the
         // same quotients as scalar ones, bit for bit).
         let [sx, sy, sz, _] = (Vec4::new(d[kx], d[ky], 1.0, 1.0) / Vec4::splat(dz)).to_array();
