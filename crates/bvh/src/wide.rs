@@ -482,7 +482,7 @@ impl WideRay {
 
 /// Per octant (bit `a` set where axis `a` runs negative): the rows of
 /// [`Node::planes`] that hold each axis's near and far planes.
-const ROWS: [([usize; 3], [usize; 3]); 8] = {
+pub(crate) const ROWS: [([usize; 3], [usize; 3]); 8] = {
     let mut rows = [([0; 3], [0; 3]); 8];
     let mut neg = 0;
     while neg < 8 {
