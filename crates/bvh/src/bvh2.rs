@@ -49,16 +49,33 @@ pub(crate) fn build(
     tris: Option<&[obvhs::triangle::Triangle]>,
     p: BvhBuildParams,
 ) -> Bvh2 {
-    let mut bvh = ploc_tree(aabbs, tris, &p);
-    if bvh.nodes.is_empty() {
-        return bvh;
+    let mut bvh = collapsed_tree(aabbs, tris, &p);
+    if !bvh.nodes.is_empty() {
+        ReinsertionOptimizer::default().run(
+            &mut bvh,
+            p.reinsertion_batch_ratio * p.post_collapse_reinsertion_batch_ratio_multiplier,
+            None,
+        );
     }
-    collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
-    ReinsertionOptimizer::default().run(
-        &mut bvh,
-        p.reinsertion_batch_ratio * p.post_collapse_reinsertion_batch_ratio_multiplier,
-        None,
-    );
+    bvh
+}
+
+/// [`ploc_tree`] with its leaves collapsed to at most
+/// `p.max_prims_per_leaf` primitives, without the second reinsertion of
+/// [`build`]. The wide layout starts from this: its conversion chooses
+/// leaves and lanes by its own surface-area plan, and the second
+/// reinsertion took about a tenth of the 216-bunny grid's build for 0–4 %
+/// more traversal instructions on the kitchen, ±1 % on the other meshes
+/// (docs/benchmarks.md).
+pub(crate) fn collapsed_tree(
+    aabbs: Vec<ObAabb>,
+    tris: Option<&[obvhs::triangle::Triangle]>,
+    p: &BvhBuildParams,
+) -> Bvh2 {
+    let mut bvh = ploc_tree(aabbs, tris, p);
+    if !bvh.nodes.is_empty() {
+        collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
+    }
     bvh
 }
 

@@ -231,7 +231,7 @@ impl WideBvh {
     ) -> Option<(Self, bool)> {
         let mut p = quality.params();
         p.max_prims_per_leaf = max_leaf.clamp(1, MAX_LEAF);
-        let b = crate::bvh2::build(aabbs, tris, p);
+        let b = crate::bvh2::collapsed_tree(aabbs, tris, &p);
         Some((Self::from_bvh2(&b, p.max_prims_per_leaf, kernel)?, b.uses_spatial_splits))
     }
 
@@ -1035,7 +1035,7 @@ mod tests {
                 .collect();
             let mut p = crate::BuildQuality::Medium.params();
             p.max_prims_per_leaf = max_leaf;
-            let bvh = crate::bvh2::build(aabbs, None, p);
+            let bvh = crate::bvh2::collapsed_tree(aabbs, None, &p);
             let Some(w) = WideBvh::from_bvh2(&bvh, max_leaf, Kernel::Portable) else {
                 panic!("case {case}: not converted")
             };
