@@ -63,10 +63,10 @@ pub(crate) fn build(
 /// [`ploc_tree`] with its leaves collapsed to at most
 /// `p.max_prims_per_leaf` primitives, without the second reinsertion of
 /// [`build`]. The wide layout starts from this: its conversion chooses
-/// leaves and lanes by its own surface-area plan, and the second
-/// reinsertion took about a tenth of the 216-bunny grid's build for 0–4 %
-/// more traversal instructions on the kitchen, ±1 % on the other meshes
-/// (docs/benchmarks.md).
+/// leaves and lanes by its own surface-area plan. The second reinsertion
+/// was about 4 % of the 216-bunny grid's build instructions, and with it
+/// the kitchen's traversal took up to 4 % more instructions and the
+/// other meshes ±1 % (docs/benchmarks.md).
 pub(crate) fn collapsed_tree(
     aabbs: Vec<ObAabb>,
     tris: Option<&[obvhs::triangle::Triangle]>,
