@@ -7,11 +7,13 @@ use common::{prism_cmd, text};
 use std::fs;
 use std::path::Path;
 
-/// Mesh instances (packets are used only in scenes with them), an opaque and a glass material,
-/// an area light of 16 samples and a point light.
-fn scene() -> String {
+/// Mesh instances (packets are used only in scenes with them), an opaque and a glass material
+/// (`gem` is the gem's material line: empty for its MTL's glass), an area light of 16 samples and
+/// a point light.
+fn scene(gem: &str) -> String {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let torus = assets.join("torus.obj");
+    let gem_material = gem;
     let gem = assets.join("gem.obj");
     format!(
         r#"[render]
@@ -58,10 +60,12 @@ transform = [{{ rotate_x = 30 }}, {{ translate = [-0.8, 0.7, 0] }}]
 [[objects]]
 type = "mesh"
 path = "{gem}"
+{gem_material}
 transform = [{{ scale = 0.7 }}, {{ translate = [1.2, 0.7, 0.5] }}]
 "#,
         torus = torus.display(),
         gem = gem.display(),
+        gem_material = gem_material,
         adaptive = "{adaptive}",
     )
 }
@@ -86,7 +90,7 @@ fn render(dir: &Path, choice: Option<&str>, name: &str) -> (Vec<u8>, serde_json:
 fn packets_change_no_pixel() {
     for adaptive in ["false", "true"] {
         let dir = tempfile::tempdir().unwrap();
-        let text = scene().replace("{adaptive}", adaptive);
+        let text = scene("").replace("{adaptive}", adaptive);
         fs::write(dir.path().join("s.toml"), text).unwrap();
         let (alone, s0) = render(dir.path(), Some("0"), "alone");
         let (default, sd) = render(dir.path(), None, "default");
@@ -105,5 +109,29 @@ fn packets_change_no_pixel() {
         for s in [&sd, &s1, &s2] {
             assert_eq!(s["rays"]["camera"], s0["rays"]["camera"]);
         }
+    }
+}
+
+/// In a scene with nothing see-through, the default packs the camera hits'
+/// shadow rays toward the point light too: the same image, and the same
+/// count of shadow rays as one by one.
+#[test]
+fn camera_hit_shadow_packets_change_no_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scene(r#"material = "red""#).replace("{adaptive}", "false");
+    fs::write(dir.path().join("s.toml"), text).unwrap();
+    let (alone, s0) = render(dir.path(), Some("0"), "alone");
+    let (default, sd) = render(dir.path(), None, "default");
+    let (all, s2) = render(dir.path(), Some("all"), "all");
+    assert!(alone == default, "the default's shadow packets changed the image");
+    assert!(alone == all, "all packets changed the image");
+    let rays = |s: &serde_json::Value, kind: &str| s["rays"][kind].as_u64().unwrap();
+    let camera = rays(&s0, "camera");
+    // Camera rays, then at most one shadow ray per camera hit toward the point light.
+    let packed = rays(&sd, "packet");
+    assert!(packed > camera && packed <= 2 * camera, "{packed} packed of {camera} camera rays");
+    assert!(rays(&s2, "packet") > packed, "all: the area light's shadow rays too");
+    for kind in ["camera", "shadow", "total"] {
+        assert_eq!(rays(&sd, kind), rays(&s0, kind), "{kind} rays");
     }
 }

@@ -23,6 +23,26 @@ pub const MAX_DEPTH_LIMIT: u32 = 64;
 /// No object: the "skip the exit of" argument of an ordinary ray.
 const NO_OBJECT: u32 = u32::MAX;
 
+/// Most lights whose shadow rays from a packet of camera hits are traced
+/// together ([`Tracer::camera_shadows`]); the shadow rays toward lights
+/// after these go one by one.
+pub(crate) const PRE_LIGHTS: usize = 8;
+
+/// A camera hit's shadow toward one light, traced beforehand with the
+/// shadow rays of the other hits of its packet ([`Tracer::camera_shadows`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) enum PreShadow {
+    /// Not traced beforehand: the shading traces it.
+    #[default]
+    Unknown,
+    /// The transmittance: 1 where nothing lies on the segment, 0 where
+    /// something does and the scene has nothing see-through.
+    Known(Vec3),
+    /// Something lies on the segment of a scene with see-through
+    /// materials: the shading walks its crossings for the transmittance.
+    Occluded,
+}
+
 /// Per-row tracing state.
 pub(crate) struct Tracer<'a> {
     scene: &'a Scene,
@@ -37,6 +57,11 @@ pub(crate) struct Tracer<'a> {
     see_through: bool,
     /// Trace an area light's shadow rays from one point as a packet.
     pub(crate) packets: bool,
+    /// The camera hit whose shadows `pre` holds (its point), while its
+    /// camera ray is traced.
+    pre_point: Option<Vec3>,
+    /// Its shadow toward each of the first [`PRE_LIGHTS`] lights.
+    pre: [PreShadow; PRE_LIGHTS],
     /// The cone of every camera ray (one pixel wide): from a point at the
     /// eye for a perspective camera; a parallel beam one pixel wide at the
     /// look-at distance for an orthographic one.
@@ -133,6 +158,8 @@ impl<'a> Tracer<'a> {
             primary: Vec3::ZERO,
             see_through,
             packets: false,
+            pre_point: None,
+            pre: [PreShadow::Unknown; PRE_LIGHTS],
             camera_cone: camera_cone(settings),
             rays: 0,
             shadow_rays: 0,
@@ -154,6 +181,95 @@ impl<'a> Tracer<'a> {
     pub(crate) fn trace_camera_hit(&mut self, ray: &Ray, hit: Option<SceneHit>) -> Vec3 {
         self.primary = ray.dir;
         self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone)
+    }
+
+    /// [`Tracer::trace_camera_hit`] with the shadows of the hit toward the
+    /// first [`PRE_LIGHTS`] lights traced beforehand (`pre`, from
+    /// [`Tracer::camera_shadows`]): the same radiance.
+    pub(crate) fn trace_camera_hit_pre(
+        &mut self,
+        ray: &Ray,
+        hit: Option<SceneHit>,
+        pre: [PreShadow; PRE_LIGHTS],
+    ) -> Vec3 {
+        self.pre_point = hit.map(|h| h.hit.point);
+        self.pre = pre;
+        let l = self.trace_camera_hit(ray, hit);
+        self.pre_point = None;
+        l
+    }
+
+    /// For camera hits traced together (`hits`), the shadow of each toward
+    /// each of the first [`PRE_LIGHTS`] lights of one sample (point, spot
+    /// and directional lights) that its shading will ask for, into
+    /// `out[k]` for `hits[k]`: per light, the shadow rays of the hits go as
+    /// one packet of occlusion rays. They are the rays [`Tracer::local`]
+    /// would trace (same point, same target), so the shading takes their
+    /// answers and the image is the same bit for bit. Hits whose material
+    /// has no local term, and lights behind a hit, get
+    /// [`PreShadow::Unknown`], as does a light that fewer than four hits
+    /// ask about (too few to pay for a packet).
+    pub(crate) fn camera_shadows(&mut self, hits: &[Option<SceneHit>], out: &mut [[PreShadow; PRE_LIGHTS]]) {
+        const N: usize = prism_bvh::PACKET_SIZE;
+        out.fill([PreShadow::Unknown; PRE_LIGHTS]);
+        let scene = self.scene;
+        for (index, light) in scene.lights.iter().enumerate().take(PRE_LIGHTS) {
+            if light.sample_count() != 1 || !(light.radiance().max_element() > 0.0) {
+                continue;
+            }
+            let mut rays = [Ray { dir: Vec3::ZERO, ..Ray::new(Vec3::ZERO, Vec3::X) }; N];
+            let mut from = [0usize; N];
+            let mut n = 0;
+            for (k, h) in hits.iter().enumerate() {
+                let Some(h) = h else { continue };
+                if n >= N || !(scene.material_of(h.object).local_weight() > 0.0) {
+                    continue;
+                }
+                let (p, normal) = (h.hit.point, h.hit.facing_normal());
+                let Some(ls) =
+                    light.sample(p, 0, sample_seed(p, index, 1)).filter(|ls| normal.dot(ls.dir) > 0.0)
+                else {
+                    continue;
+                };
+                rays[n] = shadow_ray(&h.hit, ls.target);
+                from[n] = k;
+                n += 1;
+            }
+            if n < 4 {
+                continue;
+            }
+            let mut occluded = [false; N];
+            scene.accel.occluded_packet(&rays[..n], &mut occluded[..n]);
+            for (&k, &occ) in from[..n].iter().zip(&occluded) {
+                if let Some(o) = out.get_mut(k) {
+                    o[index] = match (occ, self.see_through) {
+                        (false, _) => PreShadow::Known(Vec3::ONE),
+                        (true, false) => PreShadow::Known(Vec3::ZERO),
+                        (true, true) => PreShadow::Occluded,
+                    };
+                }
+            }
+        }
+    }
+
+    /// The shadow toward light `index` of the camera hit at `p` traced
+    /// beforehand, if it was (counted as one shadow ray in a packet, as
+    /// [`Tracer::shadows`] counts its rays); each is taken once.
+    #[inline]
+    fn pre_shadow(&mut self, index: usize, p: Vec3) -> Option<Vec3> {
+        if self.pre_point != Some(p) {
+            return None;
+        }
+        let pre = std::mem::take(self.pre.get_mut(index)?);
+        if pre != PreShadow::Unknown {
+            self.rays += 1;
+            self.shadow_rays += 1;
+            self.packet_rays += 1;
+        }
+        match pre {
+            PreShadow::Known(s) => Some(s),
+            PreShadow::Unknown | PreShadow::Occluded => None,
+        }
     }
 
     /// Should a ray of path weight `w` be traced?
@@ -382,7 +498,10 @@ impl<'a> Tracer<'a> {
                 // One sample (a point, spot or directional light): no batch
                 // to gather, one shadow ray, the same sum.
                 if let Some(ls) = light.sample(p, 0, seed).filter(|ls| n.dot(ls.dir) > 0.0) {
-                    let shadow = shared.unwrap_or_else(|| self.shadow(hit, ls.target));
+                    let shadow = match shared.or_else(|| self.pre_shadow(index, p)) {
+                        Some(s) => s,
+                        None => self.shadow(hit, ls.target),
+                    };
                     if let Some(term) = phong(mat, albedo, n, v, &ls, shadow) {
                         c += term;
                     }

@@ -1,7 +1,7 @@
 //! The renderer: rows in parallel, deterministic per-pixel samples.
 
 use crate::aov::{Aov, AovRow, render_passes};
-use crate::integrator::Tracer;
+use crate::integrator::{PRE_LIGHTS, PreShadow, Tracer};
 use crate::{Antialias, AovImages, BoundsError, Camera, PixelBounds, Scene};
 use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
@@ -242,8 +242,8 @@ pub(crate) fn render_pixels<'a>(
         beauty && aovs.is_empty() && !alpha && samples == (0..spp) && spp > crate::ADAPTIVE_BASE_SAMPLES
     });
     let see_through = beauty && Tracer::scene_is_see_through(scene);
-    let (camera_packets, shadow_packets) = packet_choice(scene);
-    let packets = camera_packets && beauty && aovs.is_empty() && !alpha && adaptive.is_none();
+    let choice = packet_choice(scene, see_through);
+    let packets = choice.camera && beauty && aovs.is_empty() && !alpha && adaptive.is_none();
     let rays = AtomicU64::new(0);
     let [camera_rays, shadow_rays, aov_rays_all, packet_rays] = [(); 4].map(|()| AtomicU64::new(0));
     let nonfinite = AtomicU64::new(0);
@@ -260,7 +260,7 @@ pub(crate) fn render_pixels<'a>(
             return;
         }
         let mut tracer = Tracer::new(scene, settings, see_through);
-        tracer.packets = shadow_packets;
+        tracer.packets = choice.area_shadows;
         let mut bad = 0u64;
         // Camera rays traced for the beauty (fewer than pixels × spp under adaptive sampling).
         let mut traced = 0u64;
@@ -269,7 +269,7 @@ pub(crate) fn render_pixels<'a>(
             // The same camera rays in the same order, traced PACKET_SIZE at
             // a time; each sample is shaded and summed as below (bit for bit
             // the same pixels).
-            let mut batch = CameraBatch::default();
+            let mut batch = CameraBatch { shadows: choice.camera_shadows, ..CameraBatch::default() };
             for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
                 let pixel_pattern = pattern.pixel(row_start + i as u64);
                 for s in samples.clone() {
@@ -442,26 +442,43 @@ fn refine_flags(sums: &[Vec3], ranges: &[[Vec3; 2]], width: usize, threshold: f3
 }
 
 /// Which rays a render traces in packets (prism_bvh's `closest_hit_packet`
-/// and `occluded_packet`): `(camera rays, an area light's shadow rays from
-/// one shading point)`. Only where the scene has mesh instances (else the
-/// queries go ray by ray anyway). By default, and with
-/// `PRISM_PACKETS=camera`, a pixel row's camera rays go a packet at a time:
-/// after the packets' set-up was made cheaper they measured 3–18 % faster
-/// than single rays on every mesh scene tried (one bunny, the kitchen, a
-/// grid of 36 bunny instances, `scenes/mesh.toml`). `shadow` packs only an
-/// area light's shadow rays, `all` both, and `0` (or any other value)
-/// nothing: shadow packets still measured 35 % slower under a quad light
-/// (docs/benchmarks.md, issue 11). The image is the same bit for bit in
+/// and `occluded_packet`). Only where the scene has mesh instances (else
+/// the queries go ray by ray anyway). The image is the same bit for bit in
 /// every case; only the speed differs.
-fn packet_choice(scene: &Scene) -> (bool, bool) {
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct PacketChoice {
+    /// A pixel row's camera rays, a packet at a time.
+    camera: bool,
+    /// With them, the shadow rays from a packet's hits toward each point,
+    /// spot and directional light, one packet per light
+    /// ([`Tracer::camera_shadows`]).
+    camera_shadows: bool,
+    /// An area light's shadow rays from one shading point.
+    area_shadows: bool,
+}
+
+/// The packets a render uses. By default, and with
+/// `PRISM_PACKETS=camera`: camera rays, which measured 3–18 % faster than
+/// single rays on every mesh scene tried (one bunny, the kitchen, a grid of
+/// 36 bunny instances, `scenes/mesh.toml`), and in a scene with nothing
+/// see-through their hits' shadow rays, which cut the bunny scene's render
+/// instructions by 4.4 % (docs/benchmarks.md, issue 11). A see-through
+/// scene would trace the occluded ones again for their crossings; that
+/// measured 0.6 % more instructions on `scenes/mesh.toml`, so it packs only
+/// with `all`. `shadow` packs only an area light's shadow rays, `all`
+/// everything, and `0` (or any other value) nothing: area-light shadow
+/// packets measured 35 % slower under a quad light.
+fn packet_choice(scene: &Scene, see_through: bool) -> PacketChoice {
     if !scene.accel.packets_pay() {
-        return (false, false);
+        return PacketChoice::default();
     }
     match std::env::var("PRISM_PACKETS").as_deref() {
-        Err(_) | Ok("camera") => (true, false),
-        Ok("shadow") => (false, true),
-        Ok("all") => (true, true),
-        _ => (false, false),
+        Err(_) | Ok("camera") => {
+            PacketChoice { camera: true, camera_shadows: !see_through, area_shadows: false }
+        }
+        Ok("shadow") => PacketChoice { area_shadows: true, ..PacketChoice::default() },
+        Ok("all") => PacketChoice { camera: true, camera_shadows: true, area_shadows: true },
+        _ => PacketChoice::default(),
     }
 }
 
@@ -472,6 +489,11 @@ struct CameraBatch {
     rays: Vec<Ray>,
     pixel: Vec<usize>,
     hits: Vec<Option<prism_bvh::SceneHit>>,
+    /// Per ray, its hit's shadows traced beforehand (when `shadows`).
+    pre: Vec<[PreShadow; PRE_LIGHTS]>,
+    /// Trace the hits' shadow rays toward each point, spot and
+    /// directional light together ([`Tracer::camera_shadows`]).
+    shadows: bool,
 }
 
 impl CameraBatch {
@@ -499,8 +521,13 @@ impl CameraBatch {
         self.hits.resize(self.rays.len(), None);
         scene.accel.closest_hit_packet(&self.rays, &mut self.hits);
         tracer.packet_rays += self.rays.len() as u64;
-        for ((ray, &k), hit) in self.rays.iter().zip(&self.pixel).zip(&self.hits) {
-            let mut l = tracer.trace_camera_hit(ray, *hit);
+        self.pre.clear();
+        self.pre.resize(self.rays.len(), [PreShadow::Unknown; PRE_LIGHTS]);
+        if self.shadows {
+            tracer.camera_shadows(&self.hits, &mut self.pre);
+        }
+        for (((ray, &k), hit), &pre) in self.rays.iter().zip(&self.pixel).zip(&self.hits).zip(&self.pre) {
+            let mut l = tracer.trace_camera_hit_pre(ray, *hit, pre);
             *traced += 1;
             if !l.is_finite() {
                 *bad += 1;
