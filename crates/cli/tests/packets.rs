@@ -113,12 +113,26 @@ fn packets_change_no_pixel() {
 }
 
 /// In a scene with nothing see-through, the default packs the camera hits'
-/// shadow rays toward the point light too: the same image, and the same
+/// shadow rays toward the point, spot and directional lights too (the
+/// spot's cone leaves part of the view unlit): the same image, and the same
 /// count of shadow rays as one by one.
 #[test]
 fn camera_hit_shadow_packets_change_no_pixel() {
     let dir = tempfile::tempdir().unwrap();
-    let text = scene(r#"material = "red""#).replace("{adaptive}", "false");
+    let lights = r#"
+[[lights]]
+type = "spot"
+position = [0.5, 4, 1]
+direction = [-0.2, -1, -0.1]
+outer_angle = 25
+intensity = 0.5
+
+[[lights]]
+type = "directional"
+direction = [1, -2, -1]
+intensity = 0.3
+"#;
+    let text = scene(r#"material = "red""#).replace("{adaptive}", "false") + lights;
     fs::write(dir.path().join("s.toml"), text).unwrap();
     let (alone, s0) = render(dir.path(), Some("0"), "alone");
     let (default, sd) = render(dir.path(), None, "default");
@@ -127,9 +141,9 @@ fn camera_hit_shadow_packets_change_no_pixel() {
     assert!(alone == all, "all packets changed the image");
     let rays = |s: &serde_json::Value, kind: &str| s["rays"][kind].as_u64().unwrap();
     let camera = rays(&s0, "camera");
-    // Camera rays, then at most one shadow ray per camera hit toward the point light.
+    // Camera rays, then at most one shadow ray per camera hit toward each of the three lights.
     let packed = rays(&sd, "packet");
-    assert!(packed > camera && packed <= 2 * camera, "{packed} packed of {camera} camera rays");
+    assert!(packed > 2 * camera && packed <= 4 * camera, "{packed} packed of {camera} camera rays");
     assert!(rays(&s2, "packet") > packed, "all: the area light's shadow rays too");
     for kind in ["camera", "shadow", "total"] {
         assert_eq!(rays(&sd, kind), rays(&s0, kind), "{kind} rays");
