@@ -8,12 +8,11 @@ use std::fs;
 use std::path::Path;
 
 /// Mesh instances (packets are used only in scenes with them), an opaque and a glass material
-/// (`gem` is the gem's material line: empty for its MTL's glass), an area light of 16 samples and
-/// a point light.
-fn scene(gem: &str) -> String {
+/// (`gem_material` is the gem's material line: empty for its MTL's glass), an area light of 16
+/// samples and a point light.
+fn scene(gem_material: &str) -> String {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let torus = assets.join("torus.obj");
-    let gem_material = gem;
     let gem = assets.join("gem.obj");
     format!(
         r#"[render]
@@ -65,7 +64,6 @@ transform = [{{ scale = 0.7 }}, {{ translate = [1.2, 0.7, 0.5] }}]
 "#,
         torus = torus.display(),
         gem = gem.display(),
-        gem_material = gem_material,
         adaptive = "{adaptive}",
     )
 }
