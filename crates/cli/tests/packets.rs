@@ -69,19 +69,20 @@ transform = [{{ scale = 0.7 }}, {{ translate = [1.2, 0.7, 0.5] }}]
 }
 
 /// Renders `scene` with `PRISM_PACKETS=choice` (or unset); returns the
-/// PNG's bytes and the statistics.
+/// bytes of the float EXR image (every bit of every pixel) and the
+/// statistics.
 fn render(dir: &Path, choice: Option<&str>, name: &str) -> (Vec<u8>, serde_json::Value) {
     let mut cmd = prism_cmd(dir);
     cmd.env_remove("PRISM_PACKETS");
     if let Some(c) = choice {
         cmd.env("PRISM_PACKETS", c);
     }
-    let png = format!("{name}.png");
+    let exr = format!("{name}.exr");
     let json = format!("{name}.json");
-    let out = cmd.args(["render", "s.toml", "-q", "-o", &png, "--stats-json", &json]).output().unwrap();
+    let out = cmd.args(["render", "s.toml", "-q", "-o", &exr, "--stats-json", &json]).output().unwrap();
     assert!(out.status.success(), "{}", text(&out.stderr));
     let stats = serde_json::from_slice(&fs::read(dir.join(&json)).unwrap()).unwrap();
-    (fs::read(dir.join(&png)).unwrap(), stats)
+    (fs::read(dir.join(&exr)).unwrap(), stats)
 }
 
 #[test]
@@ -113,7 +114,8 @@ fn packets_change_no_pixel() {
 /// In a scene with nothing see-through, the default packs the camera hits'
 /// shadow rays toward the point, spot and directional lights too (the
 /// spot's cone leaves part of the view unlit): the same image, and the same
-/// count of shadow rays as one by one.
+/// count of shadow rays as one by one. Ten lights: the two after the eighth
+/// are traced one by one.
 #[test]
 fn camera_hit_shadow_packets_change_no_pixel() {
     let dir = tempfile::tempdir().unwrap();
@@ -129,8 +131,12 @@ intensity = 0.5
 type = "directional"
 direction = [1, -2, -1]
 intensity = 0.3
-"#;
-    let text = scene(r#"material = "red""#).replace("{adaptive}", "false") + lights;
+"#
+    .to_owned()
+        + &(0..6)
+            .map(|k| format!("\n[[lights]]\nposition = [{}, 3, {}]\nintensity = 0.05\n", k - 3, 2 - k))
+            .collect::<String>();
+    let text = scene(r#"material = "red""#).replace("{adaptive}", "false") + &lights;
     fs::write(dir.path().join("s.toml"), text).unwrap();
     let (alone, s0) = render(dir.path(), Some("0"), "alone");
     let (default, sd) = render(dir.path(), None, "default");
@@ -139,9 +145,10 @@ intensity = 0.3
     assert!(alone == all, "all packets changed the image");
     let rays = |s: &serde_json::Value, kind: &str| s["rays"][kind].as_u64().unwrap();
     let camera = rays(&s0, "camera");
-    // Camera rays, then at most one shadow ray per camera hit toward each of the three lights.
+    // Camera rays, then at most one shadow ray per camera hit toward each
+    // one-sample light among the first eight (the first is the area light).
     let packed = rays(&sd, "packet");
-    assert!(packed > 2 * camera && packed <= 4 * camera, "{packed} packed of {camera} camera rays");
+    assert!(packed > 2 * camera && packed <= 8 * camera, "{packed} packed of {camera} camera rays");
     assert!(rays(&s2, "packet") > packed, "all: the area light's shadow rays too");
     for kind in ["camera", "shadow", "total"] {
         assert_eq!(rays(&sd, kind), rays(&s0, kind), "{kind} rays");

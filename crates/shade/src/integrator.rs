@@ -23,9 +23,10 @@ pub const MAX_DEPTH_LIMIT: u32 = 64;
 /// No object: the "skip the exit of" argument of an ordinary ray.
 const NO_OBJECT: u32 = u32::MAX;
 
-/// Most lights whose shadow rays from a packet of camera hits are traced
-/// together ([`Tracer::camera_shadows`]); the shadow rays toward lights
-/// after these go one by one.
+/// The scene's first lights (of any kind) among which those of one sample
+/// get their shadow rays from a packet of camera hits traced together
+/// ([`Tracer::camera_shadows`]); the shadow rays toward the lights after
+/// these go one by one.
 pub(crate) const PRE_LIGHTS: usize = 8;
 
 /// A camera hit's shadow toward one light, traced beforehand with the
@@ -200,8 +201,9 @@ impl<'a> Tracer<'a> {
     }
 
     /// For camera hits traced together (`hits`), the shadow of each toward
-    /// each of the first [`PRE_LIGHTS`] lights of one sample (point, spot
-    /// and directional lights) that its shading will ask for, into
+    /// each light of one sample (point, spot and directional lights, and
+    /// an area light of one sample) among the scene's first [`PRE_LIGHTS`]
+    /// lights that its shading will ask for, into
     /// `out[k]` for `hits[k]`: per light, the shadow rays of the hits go as
     /// one packet of occlusion rays. They are the rays [`Tracer::local`]
     /// would trace (same point, same target), so the shading takes their

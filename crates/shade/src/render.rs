@@ -98,8 +98,9 @@ pub struct RenderStats {
     pub camera_rays: u64,
     /// Of `rays`, the shadow rays.
     pub shadow_rays: u64,
-    /// Of `rays`, those traced together in packets (camera rays, and an
-    /// area light's shadow rays where enabled); see [`render`].
+    /// Of `rays`, those traced together in packets (camera rays, their
+    /// hits' shadow rays toward lights of one sample, and an area light's
+    /// shadow rays, each where enabled); see [`render`].
     pub packet_rays: u64,
     /// Of `rays`, the rays the AOV passes (and the coverage test of
     /// [`crate::render_with_alpha`]) traced for themselves.
