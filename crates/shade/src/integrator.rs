@@ -7,7 +7,7 @@
 //! while a row is traced.
 
 use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
-use crate::light::{LightSample, Target, sample_seed};
+use crate::light::{Light, LightSample, Target, sample_seed};
 use crate::optics::{reflect, refract, schlick};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
@@ -107,6 +107,15 @@ fn shadow_ray(hit: &Hit, target: Target) -> Ray {
     }
 }
 
+/// The one sample of light `index` (`light`, of one sample) at the point
+/// `p` with shading normal `n` facing the viewer, if it lights the front:
+/// the sample [`Tracer::local`] shades with and [`Tracer::camera_shadows`]
+/// traces the shadow ray of.
+#[inline]
+fn one_sample(light: &Light, index: usize, p: Vec3, n: Vec3) -> Option<LightSample> {
+    light.sample(p, 0, sample_seed(p, index, 1)).filter(|ls| n.dot(ls.dir) > 0.0)
+}
+
 /// The Lambert + Phong light of the light sample `ls` at a point with
 /// shading normal `n` (facing the viewer, `n · ls.dir > 0`) seen from the
 /// unit direction `v`, through the shadow transmittance `shadow`; `None`
@@ -177,25 +186,20 @@ impl<'a> Tracer<'a> {
     }
 
     /// [`Tracer::trace_camera`] with the ray's closest hit already found
-    /// (by a packet of camera rays): the same radiance.
-    #[inline]
-    pub(crate) fn trace_camera_hit(&mut self, ray: &Ray, hit: Option<SceneHit>) -> Vec3 {
-        self.primary = ray.dir;
-        self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone)
-    }
-
-    /// [`Tracer::trace_camera_hit`] with the shadows of the hit toward the
-    /// first [`PRE_LIGHTS`] lights traced beforehand (`pre`, from
-    /// [`Tracer::camera_shadows`]): the same radiance.
-    pub(crate) fn trace_camera_hit_pre(
+    /// (by a packet of camera rays), and the hit's shadows toward the first
+    /// [`PRE_LIGHTS`] lights that were traced beforehand (`pre`, from
+    /// [`Tracer::camera_shadows`]; all [`PreShadow::Unknown`] if none): the
+    /// same radiance.
+    pub(crate) fn trace_camera_hit(
         &mut self,
         ray: &Ray,
         hit: Option<SceneHit>,
         pre: [PreShadow; PRE_LIGHTS],
     ) -> Vec3 {
+        self.primary = ray.dir;
         self.pre_point = hit.map(|h| h.hit.point);
         self.pre = pre;
-        let l = self.trace_camera_hit(ray, hit);
+        let l = self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone);
         self.pre_point = None;
         l
     }
@@ -227,10 +231,7 @@ impl<'a> Tracer<'a> {
                 if n >= N || !(scene.material_of(h.object).local_weight() > 0.0) {
                     continue;
                 }
-                let (p, normal) = (h.hit.point, h.hit.facing_normal());
-                let Some(ls) =
-                    light.sample(p, 0, sample_seed(p, index, 1)).filter(|ls| normal.dot(ls.dir) > 0.0)
-                else {
+                let Some(ls) = one_sample(light, index, h.hit.point, h.hit.facing_normal()) else {
                     continue;
                 };
                 rays[n] = shadow_ray(&h.hit, ls.target);
@@ -499,7 +500,7 @@ impl<'a> Tracer<'a> {
             if count == 1 {
                 // One sample (a point, spot or directional light): no batch
                 // to gather, one shadow ray, the same sum.
-                if let Some(ls) = light.sample(p, 0, seed).filter(|ls| n.dot(ls.dir) > 0.0) {
+                if let Some(ls) = one_sample(light, index, p, n) {
                     let shadow = match shared.or_else(|| self.pre_shadow(index, p)) {
                         Some(s) => s,
                         None => self.shadow(hit, ls.target),

@@ -528,7 +528,7 @@ impl CameraBatch {
             tracer.camera_shadows(&self.hits, &mut self.pre);
         }
         for (((ray, &k), hit), &pre) in self.rays.iter().zip(&self.pixel).zip(&self.hits).zip(&self.pre) {
-            let mut l = tracer.trace_camera_hit_pre(ray, *hit, pre);
+            let mut l = tracer.trace_camera_hit(ray, *hit, pre);
             *traced += 1;
             if !l.is_finite() {
                 *bad += 1;
