@@ -207,10 +207,13 @@ impl Blas {
     }
 
     /// Closest triangle hit by the object-space `ray`: `(face, t, b1, b2)`.
+    /// `BRANCHLESS` picks a leaf's nearest lane without a branch per lane
+    /// (for single rays, which are mostly incoherent; packets' rays take
+    /// the loop), the same hit either way ([`closest_in_leaf`]).
     #[inline(always)]
-    pub fn closest(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
+    pub fn closest<const BRANCHLESS: bool>(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
         let mut br = BoxRay::new(ray);
-        let mut v = ClosestTriangle {
+        let mut v = ClosestTriangle::<BRANCHLESS> {
             tris: &self.tris,
             blocks: &self.blocks,
             tr: TriangleRay::new(ray),
@@ -243,7 +246,7 @@ impl Blas {
     ) {
         let Nodes::Wide(tree) = &self.nodes else {
             for k in bits(mask) {
-                found[k] = self.closest(&rays[k]);
+                found[k] = self.closest::<false>(&rays[k]);
             }
             return;
         };
@@ -261,7 +264,12 @@ impl Blas {
                 None => {
                     for k in bits(m) {
                         let tr = v.tr[k].unwrap_or_else(|| TriangleRay::new(&rays[k]));
-                        let mut c = ClosestTriangle { tris: v.tris, blocks: v.blocks, tr, found: v.found[k] };
+                        let mut c = ClosestTriangle::<false> {
+                            tris: v.tris,
+                            blocks: v.blocks,
+                            tr,
+                            found: v.found[k],
+                        };
                         self.walk(&mut br[k], &mut c);
                         (v.tr[k], v.found[k]) = (Some(c.tr), c.found);
                     }
@@ -435,7 +443,7 @@ impl<const N: usize> Leaf for &mut ClosestTriangles<'_, N> {
                 (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k), self.rays.get(k))
             {
                 let tr = first_leaf_ray(tr, ray);
-                closest_in_leaf(self.tris, self.blocks, tr, found, first, count, b);
+                closest_in_leaf::<false>(self.tris, self.blocks, tr, found, first, count, b);
             }
         }
         0
@@ -480,10 +488,13 @@ fn first_leaf_ray<'a>(tr: &'a mut Option<TriangleRay>, ray: &Ray) -> &'a mut Tri
 }
 
 /// The nearest hit of `tr` among the leaf's slots `first..first + count`
-/// (a wide leaf's block at once, [`TriangleRay::intersect4`], else slot by
-/// slot in order): narrows `tr` and `br` and records it in `found`.
+/// (a wide leaf's block at once, [`TriangleRay::intersect4`] or, with
+/// `BRANCHLESS`, [`TriangleRay::intersect4_branchless`], the same hit; else
+/// slot by slot in order): narrows `tr` and `br` and records it in
+/// `found`. Single rays take the branchless pick, packets the loop (see
+/// `intersect4_branchless`).
 #[inline(always)]
-fn closest_in_leaf(
+fn closest_in_leaf<const BRANCHLESS: bool>(
     tris: &[[Vec3; 3]],
     blocks: &[Triangles4],
     tr: &mut TriangleRay,
@@ -498,7 +509,8 @@ fn closest_in_leaf(
         }
         return;
     };
-    if let Some((lane, t, b1, b2)) = tr.intersect4(block) {
+    let hit = if BRANCHLESS { tr.intersect4_branchless(block) } else { tr.intersect4(block) };
+    if let Some((lane, t, b1, b2)) = hit {
         tr.set_t_max(t);
         br.set_t_max(t);
         *found = Some((first + lane as u32, t, b1, b2));
@@ -537,8 +549,9 @@ fn any_in_slot(tris: &[[Vec3; 3]], tr: &TriangleRay, slot: u32) -> bool {
     tris.get(slot as usize).is_some_and(|v| tr.intersect(v).is_some())
 }
 
-/// The closest-hit walk over one mesh's triangles.
-struct ClosestTriangle<'a> {
+/// The closest-hit walk over one mesh's triangles (`BRANCHLESS`: as
+/// [`closest_in_leaf`]).
+struct ClosestTriangle<'a, const BRANCHLESS: bool> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     tr: TriangleRay,
@@ -546,7 +559,7 @@ struct ClosestTriangle<'a> {
     found: Option<(u32, f32, f32, f32)>,
 }
 
-impl Visit for &mut ClosestTriangle<'_> {
+impl<const BRANCHLESS: bool> Visit for &mut ClosestTriangle<'_, BRANCHLESS> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         closest_in_slot(self.tris, &mut self.tr, &mut self.found, slot, br);
@@ -557,7 +570,15 @@ impl Visit for &mut ClosestTriangle<'_> {
     /// order ([`TriangleRay::intersect4`]).
     #[inline(always)]
     fn visit_leaf(&mut self, first: u32, count: u32, br: &mut BoxRay) -> bool {
-        closest_in_leaf(self.tris, self.blocks, &mut self.tr, &mut self.found, first, count, br);
+        closest_in_leaf::<BRANCHLESS>(
+            self.tris,
+            self.blocks,
+            &mut self.tr,
+            &mut self.found,
+            first,
+            count,
+            br,
+        );
         true
     }
 }

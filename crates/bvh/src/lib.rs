@@ -80,7 +80,10 @@
 //! another). All give bit-for-bit the same answers (same operations in the
 //! same order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
-//! bit-identical to the scalar test. [`Accel::closest_hit`] and the packet
+//! bit-identical to the scalar test; single rays, mostly incoherent, pick
+//! the nearest lane without a branch per lane
+//! ([`prism_geometry::TriangleRay::intersect4_branchless`], the same hit),
+//! packets with the loop. [`Accel::closest_hit`] and the packet
 //! queries ([`Accel::closest_hit_packet`], [`Accel::occluded_packet`]) are
 //! also compiled for AVX2 as a whole (the CWBVH and BVH2 walks, the
 //! analytic shapes and a packet's eight-ray box tests then use 256-bit
@@ -391,18 +394,19 @@ fn widen_for_rounding(b: Aabb, t: &Transform) -> Aabb {
     Aabb::new(b.min - pad, b.max + pad)
 }
 
-/// The closest-hit walk over the top level's objects.
-struct ClosestObject<'a> {
+/// The closest-hit walk over the top level's objects (`BRANCHLESS`: as
+/// [`Blas::closest`]; `false` for a packet's rays).
+struct ClosestObject<'a, const BRANCHLESS: bool> {
     accel: &'a Accel,
     ray: Ray,
     best: Best,
 }
 
-impl Visit for &mut ClosestObject<'_> {
+impl<const BRANCHLESS: bool> Visit for &mut ClosestObject<'_, BRANCHLESS> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         let i = self.accel.tlas_objects[slot as usize];
-        self.accel.closest_object_walked(i, &mut self.ray, &mut self.best, br);
+        self.accel.closest_object_walked::<BRANCHLESS>(i, &mut self.ray, &mut self.best, br);
         true
     }
 }
@@ -501,8 +505,8 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
         for k in bits(meet) {
             if let (Some(r), Some(best)) = (self.rays.get_mut(k), self.best.get_mut(k)) {
                 match br.get_mut(k) {
-                    Some(b) => accel.closest_object_walked(i, r, best, b),
-                    None => accel.closest_object(i, r, best),
+                    Some(b) => accel.closest_object_walked::<false>(i, r, best, b),
+                    None => accel.closest_object::<false>(i, r, best),
                 }
             }
         }
@@ -991,9 +995,11 @@ impl Accel {
     }
 
     /// Tests object `i` against `ray`; on a hit closer than `ray.t_max`,
-    /// records it in `best` and shrinks `ray.t_max`.
+    /// records it in `best` and shrinks `ray.t_max`. `BRANCHLESS`: as
+    /// [`Blas::closest`] (`true` for single-ray queries, `false` for a
+    /// packet's rays).
     #[inline(always)]
-    fn closest_object(&self, i: u32, ray: &mut Ray, best: &mut Best) {
+    fn closest_object<const BRANCHLESS: bool>(&self, i: u32, ray: &mut Ray, best: &mut Best) {
         match &self.objects[i as usize] {
             Object::Shape(s) => {
                 // The full hit at once, not `intersect_t` and the winner's
@@ -1007,7 +1013,7 @@ impl Accel {
             }
             Object::Mesh { mesh, transform } => {
                 let local = transform.ray_to_object(ray);
-                if let Some((face, t, b1, b2)) = self.blas[*mesh as usize].closest(&local) {
+                if let Some((face, t, b1, b2)) = self.blas[*mesh as usize].closest::<BRANCHLESS>(&local) {
                     ray.t_max = t;
                     *best = Best::Mesh { object: i, face, t, b1, b2, dir: local.dir };
                 }
@@ -1018,9 +1024,15 @@ impl Accel {
     /// [`Accel::closest_object`] inside a walk: a closer hit also narrows
     /// the walk's box ray `br`.
     #[inline(always)]
-    fn closest_object_walked(&self, i: u32, ray: &mut Ray, best: &mut Best, br: &mut BoxRay) {
+    fn closest_object_walked<const BRANCHLESS: bool>(
+        &self,
+        i: u32,
+        ray: &mut Ray,
+        best: &mut Best,
+        br: &mut BoxRay,
+    ) {
         let t_max = ray.t_max;
-        self.closest_object(i, ray, best);
+        self.closest_object::<BRANCHLESS>(i, ray, best);
         if ray.t_max != t_max {
             br.set_t_max(ray.t_max);
         }
@@ -1097,12 +1109,12 @@ impl Accel {
         if !usable(ray) {
             return Best::None;
         }
-        let mut v = ClosestObject { accel: self, ray: *ray, best: Best::None };
+        let mut v = ClosestObject::<true> { accel: self, ray: *ray, best: Best::None };
         for &i in &self.unbounded {
-            self.closest_object(i, &mut v.ray, &mut v.best);
+            self.closest_object::<true>(i, &mut v.ray, &mut v.best);
         }
         if let Some(i) = self.sole {
-            self.closest_object(i, &mut v.ray, &mut v.best);
+            self.closest_object::<true>(i, &mut v.ray, &mut v.best);
             return v.best;
         }
         let mut br = BoxRay::new(&v.ray);
@@ -1276,7 +1288,7 @@ impl Accel {
         if !self.unbounded.is_empty() {
             for k in bits(mask) {
                 for &i in &self.unbounded {
-                    self.closest_object(i, &mut live[k], &mut best[k]);
+                    self.closest_object::<false>(i, &mut live[k], &mut best[k]);
                 }
             }
         }
@@ -1316,7 +1328,7 @@ impl Accel {
                 ),
                 None => {
                     for k in bits(m) {
-                        let mut c = ClosestObject { accel: self, ray: live[k], best: best[k] };
+                        let mut c = ClosestObject::<false> { accel: self, ray: live[k], best: best[k] };
                         walk_any(&self.tlas, self.tlas_depth, &mut br[k], &mut c);
                         (live[k], best[k]) = (c.ray, c.best);
                     }

@@ -2,7 +2,7 @@
 
 use super::check_finite;
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
-use glam::{Vec2, Vec3, Vec4};
+use glam::{BVec4A, Vec2, Vec3, Vec4};
 
 /// A single triangle `(v0, v1, v2)`; its outward normal follows the
 /// counter-clockwise winding, `(v1 − v0) × (v2 − v0)` (right-handed).
@@ -192,12 +192,17 @@ impl TriangleRay {
 /// lane masks of the lanes in use, whether the lane passes the edge and
 /// determinant tests (`ok`) and whether an edge function is exactly zero
 /// (`exact`).
+#[derive(Clone, Copy)]
 struct Lanes4 {
     t: Vec4,
     b1: Vec4,
     b2: Vec4,
     ok: u32,
     exact: u32,
+    /// `ok` as a vector mask, before the lanes in use are picked out: an
+    /// unused lane (zero corners, so zero edge functions and determinant)
+    /// is never set.
+    ok_lanes: BVec4A,
 }
 
 /// Up to four triangles in SoA form (`v[corner][axis][lane]`), for
@@ -280,8 +285,9 @@ impl TriangleRay {
         let det = u + vv + w;
         let t_scaled = u * az + vv * bz + w * cz;
         let rcp = Vec4::ONE / det;
-        let ok = (!outside & det.cmpne(zero) & det.is_finite_mask()).bitmask() & used;
-        Some(Lanes4 { t: t_scaled * rcp, b1: vv * rcp, b2: w * rcp, ok, exact: exact & used })
+        let ok_lanes = !outside & det.cmpne(zero) & det.is_finite_mask();
+        let ok = ok_lanes.bitmask() & used;
+        Some(Lanes4 { t: t_scaled * rcp, b1: vv * rcp, b2: w * rcp, ok, exact: exact & used, ok_lanes })
     }
 
     /// Whether the ray meets any of the (up to) four triangles of `tris`
@@ -319,7 +325,52 @@ impl TriangleRay {
     #[inline(always)]
     #[must_use]
     pub fn intersect4(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
-        let Lanes4 { t, b1, b2, ok, exact } = self.lanes4(tris)?;
+        let lanes = self.lanes4(tris)?;
+        self.nearest4(tris, &lanes)
+    }
+
+    /// [`TriangleRay::intersect4`]'s hit, with the nearest lane picked
+    /// without a branch per lane where no lane needs the scalar test: the
+    /// lanes within the interval as one vector compare, their smallest
+    /// `t`, and the last lane equal to it (a loop that narrows `t_max`
+    /// after each hit keeps exactly that lane: every `t_max` it passes
+    /// through is at least the smallest `t`, and after it only an equal
+    /// `t` is taken). The same hit bit for bit.
+    ///
+    /// For incoherent rays, whose lanes hit and miss at random, this
+    /// avoids the mispredicted branches of the loop; for coherent rays,
+    /// whose branches predict well, the compare, minimum and
+    /// variable-index load in front of the narrowed `t_max` measured
+    /// slower (docs/benchmarks.md). The BVH's single-ray closest-hit
+    /// queries use this one, its packets [`TriangleRay::intersect4`].
+    #[inline(always)]
+    #[must_use]
+    pub fn intersect4_branchless(&self, tris: &Triangles4) -> Option<(usize, f32, f32, f32)> {
+        let lanes = self.lanes4(tris)?;
+        if lanes.exact != 0 {
+            return self.nearest4(tris, &lanes);
+        }
+        let within =
+            lanes.ok_lanes & lanes.t.cmpge(Vec4::splat(self.t_min)) & lanes.t.cmple(Vec4::splat(self.t_max));
+        let inside = within.bitmask() & lanes.ok;
+        if inside == 0 {
+            return None;
+        }
+        let least = Vec4::select(within, lanes.t, Vec4::INFINITY).min_element();
+        let last = lanes.t.cmpeq(Vec4::splat(least)).bitmask() & inside;
+        if last == 0 {
+            // Not reached: the least `t` is that of a lane of `inside`.
+            return self.nearest4(tris, &lanes);
+        }
+        let k = (31 - last.leading_zeros()) as usize & 3;
+        Some((k, lanes.t[k], lanes.b1[k], lanes.b2[k]))
+    }
+
+    /// The lane a loop over the lanes in order keeps (narrowing `t_max`
+    /// after each hit), the scalar test deciding the exact lanes.
+    #[inline(always)]
+    fn nearest4(&self, tris: &Triangles4, lanes: &Lanes4) -> Option<(usize, f32, f32, f32)> {
+        let Lanes4 { t, b1, b2, ok, exact, .. } = *lanes;
         let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
         let mut best: Option<(usize, f32, f32, f32)> = None;
         let mut t_max = self.t_max;
@@ -435,9 +486,9 @@ mod tests {
         assert_eq!(tri().normal(), Vec3::Z);
     }
 
-    /// `intersect4` keeps exactly what a loop of `intersect` over the lanes
-    /// (narrowing `t_max` after each hit) keeps: the same lane, `t`, `b1`,
-    /// `b2` bit for bit, on random and degenerate triangles, rays through
+    /// `intersect4` and `intersect4_branchless` keep exactly what a loop of
+    /// `intersect` over the lanes (narrowing `t_max` after each hit) keeps:
+    /// the same lane, `t`, `b1`, `b2` bit for bit, on random and degenerate triangles, rays through
     /// shared edges and vertices, axis-parallel rays with `±0.0`
     /// components, and every interval kind.
     #[test]
@@ -493,6 +544,10 @@ mod tests {
                 .intersect4(&Triangles4::new(&tris))
                 .map(|(k, t, b1, b2)| (k, t.to_bits(), b1.to_bits(), b2.to_bits()));
             assert_eq!(got, want, "case {case}: {tris:?} {o} {d}");
+            let branchless = tr
+                .intersect4_branchless(&Triangles4::new(&tris))
+                .map(|(k, t, b1, b2)| (k, t.to_bits(), b1.to_bits(), b2.to_bits()));
+            assert_eq!(branchless, want, "case {case}: intersect4_branchless");
             assert_eq!(tr.occludes4(&Triangles4::new(&tris)), want.is_some(), "case {case}: occludes4");
             hits += usize::from(want.is_some());
             exact_lanes += usize::from(case % 3 == 0 && want.is_some());
