@@ -567,7 +567,7 @@ impl<const BRANCHLESS: bool> Visit for &mut ClosestTriangle<'_, BRANCHLESS> {
     }
 
     /// A wide leaf's block at once: the same hit as visiting its slots in
-    /// order ([`TriangleRay::intersect4`]).
+    /// order ([`closest_in_leaf`]).
     #[inline(always)]
     fn visit_leaf(&mut self, first: u32, count: u32, br: &mut BoxRay) -> bool {
         closest_in_leaf::<BRANCHLESS>(

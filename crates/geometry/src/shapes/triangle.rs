@@ -488,9 +488,9 @@ mod tests {
 
     /// `intersect4` and `intersect4_branchless` keep exactly what a loop of
     /// `intersect` over the lanes (narrowing `t_max` after each hit) keeps:
-    /// the same lane, `t`, `b1`, `b2` bit for bit, on random and degenerate triangles, rays through
-    /// shared edges and vertices, axis-parallel rays with `±0.0`
-    /// components, and every interval kind.
+    /// the same lane, `t`, `b1`, `b2` bit for bit, on random and degenerate
+    /// triangles, exact ties, rays through shared edges and vertices,
+    /// axis-parallel rays with `±0.0` components, and every interval kind.
     #[test]
     fn intersect4_is_the_scalar_loop_bit_for_bit() {
         let mut f = uniform(0x2545_f491_u64);
