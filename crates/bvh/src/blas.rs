@@ -250,7 +250,7 @@ impl Blas {
             }
             return;
         };
-        let mut br = packet_rays(rays, mask);
+        let mut br = packet::rays::<N>(rays, mask);
         let mut v = ClosestTriangles {
             tris: &self.tris,
             blocks: &self.blocks,
@@ -288,7 +288,7 @@ impl Blas {
         let Nodes::Wide(tree) = &self.nodes else {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
-        let mut br = packet_rays(rays, mask);
+        let mut br = packet::rays::<N>(rays, mask);
         let mut v = AnyTriangles { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
@@ -405,21 +405,6 @@ mod x86 {
     fn occluded<const N: usize>(lanes: Avx2, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
         blas.occluded_packet(lanes, rays, mask)
     }
-}
-
-/// The box rays of `mask` (the others meet nothing).
-#[inline(always)]
-fn packet_rays<const N: usize>(rays: &[Ray; N], mask: u64) -> [BoxRay; N] {
-    // A loop into the array, not `std::array::from_fn`: that built the
-    // array aside and copied it in (`memcpy`, 1.5 % of a kitchen camera
-    // packet's instructions).
-    let mut br = [BoxRay::NONE; N];
-    for (k, (b, r)) in br.iter_mut().zip(rays).enumerate() {
-        if mask >> k & 1 == 1 {
-            *b = BoxRay::new(r);
-        }
-    }
-    br
 }
 
 /// A packet's closest-hit walk over one mesh's triangles: each ray that

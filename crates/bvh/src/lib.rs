@@ -1314,8 +1314,7 @@ impl Accel {
         best: &mut [Best; N],
         mask: u64,
     ) {
-        let mut br: [BoxRay; N] =
-            std::array::from_fn(|k| if mask >> k & 1 == 1 { BoxRay::new(&live[k]) } else { BoxRay::NONE });
+        let mut br: [BoxRay; N] = packet::rays(&live[..], mask);
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => self.tlas.walk_packet::<false, N>(
@@ -1416,10 +1415,7 @@ impl Accel {
     #[inline(always)]
     fn occluded_packet_walk<const N: usize>(&self, lanes: impl MeshPackets, rays: &[Ray], live: u64) -> u64 {
         let mut done = 0u64;
-        let mut br: [BoxRay; N] = std::array::from_fn(|k| match rays.get(k) {
-            Some(r) if live >> k & 1 == 1 => BoxRay::new(r),
-            _ => BoxRay::NONE,
-        });
+        let mut br: [BoxRay; N] = packet::rays(rays, live);
         for (m, fr) in packet::plan(&br, live) {
             match fr {
                 Some(fr) => {
