@@ -250,7 +250,8 @@ impl Blas {
             }
             return;
         };
-        let mut br = packet::rays::<N>(rays, mask);
+        let mut br = [BoxRay::NONE; N];
+        packet::set_rays(&mut br, rays, mask);
         let mut v = ClosestTriangles {
             tris: &self.tris,
             blocks: &self.blocks,
@@ -288,7 +289,8 @@ impl Blas {
         let Nodes::Wide(tree) = &self.nodes else {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
-        let mut br = packet::rays::<N>(rays, mask);
+        let mut br = [BoxRay::NONE; N];
+        packet::set_rays(&mut br, rays, mask);
         let mut v = AnyTriangles { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
         for (m, fr) in packet::plan(&br, mask) {
             match fr {

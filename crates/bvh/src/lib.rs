@@ -1314,7 +1314,8 @@ impl Accel {
         best: &mut [Best; N],
         mask: u64,
     ) {
-        let mut br: [BoxRay; N] = packet::rays(&live[..], mask);
+        let mut br = [BoxRay::NONE; N];
+        packet::set_rays(&mut br, &live[..], mask);
         for (m, fr) in packet::plan(&br, mask) {
             match fr {
                 Some(fr) => self.tlas.walk_packet::<false, N>(
@@ -1415,7 +1416,8 @@ impl Accel {
     #[inline(always)]
     fn occluded_packet_walk<const N: usize>(&self, lanes: impl MeshPackets, rays: &[Ray], live: u64) -> u64 {
         let mut done = 0u64;
-        let mut br: [BoxRay; N] = packet::rays(rays, live);
+        let mut br = [BoxRay::NONE; N];
+        packet::set_rays(&mut br, rays, live);
         for (m, fr) in packet::plan(&br, live) {
             match fr {
                 Some(fr) => {
