@@ -259,7 +259,7 @@ impl Blas {
             tr: [None; N],
             found: [None; N],
         };
-        for (m, fr) in packet::plan(&br, mask) {
+        for &(m, fr) in &packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
                 None => {
@@ -292,7 +292,7 @@ impl Blas {
         let mut br = [BoxRay::NONE; N];
         packet::set_rays(&mut br, rays, mask);
         let mut v = AnyTriangles { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
-        for (m, fr) in packet::plan(&br, mask) {
+        for &(m, fr) in &packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
                 None => {

@@ -1316,7 +1316,7 @@ impl Accel {
     ) {
         let mut br = [BoxRay::NONE; N];
         packet::set_rays(&mut br, &live[..], mask);
-        for (m, fr) in packet::plan(&br, mask) {
+        for &(m, fr) in &packet::plan(&br, mask) {
             match fr {
                 Some(fr) => self.tlas.walk_packet::<false, N>(
                     lanes,
@@ -1418,7 +1418,7 @@ impl Accel {
         let mut done = 0u64;
         let mut br = [BoxRay::NONE; N];
         packet::set_rays(&mut br, rays, live);
-        for (m, fr) in packet::plan(&br, live) {
+        for &(m, fr) in &packet::plan(&br, live) {
             match fr {
                 Some(fr) => {
                     let mut leaf = AnyObjects::<N, _> { accel: self, lanes, rays, done: 0 };
