@@ -3,7 +3,7 @@
 //! the traversal stack, and the tree depth that sizes it.
 
 use prism_geometry::Ray;
-use prism_geometry::glam::Vec3A;
+use prism_geometry::glam::{Vec3A, Vec4};
 use std::mem::MaybeUninit;
 
 /// A ray prepared for box tests.
@@ -31,11 +31,25 @@ impl BoxRay {
     /// `d < 0`): one vector division, whose quotients are those of three
     /// scalar ones bit for bit, with the zeros' then replaced.
     #[inline(always)]
+    ///
+    /// `origin` and `dir` are read as the ray's two 16-byte halves
+    /// ([`Ray`] is `repr(C)`: `origin, t_min` and `dir, t_max`), one load
+    /// each, the fourth lane then dropped; built from three scalars each,
+    /// they took several inserts per vector.
     pub fn new(ray: &Ray) -> Self {
-        let d = Vec3A::from(ray.dir);
+        let (o, d) = halves(ray);
+        let (o, d) = (Vec3A::from_vec4(o), Vec3A::from_vec4(d));
         let inv = Vec3A::select(d.cmpeq(Vec3A::ZERO), Vec3A::INFINITY, Vec3A::ONE / d);
-        Self { origin: Vec3A::from(ray.origin), inv, t_min: ray.t_min, reach: ray.t_max * FAR_SCALE }
+        Self { origin: o, inv, t_min: ray.t_min, reach: ray.t_max * FAR_SCALE }
     }
+}
+
+/// A ray's two 16-byte halves as vectors: `(origin, t_min)` and `(dir,
+/// t_max)`. [`Ray`] is `repr(C)` with its fields in this order, so each
+/// compiles to one 16-byte load.
+#[inline(always)]
+pub(crate) fn halves(ray: &Ray) -> (Vec4, Vec4) {
+    (ray.origin.extend(ray.t_min), ray.dir.extend(ray.t_max))
 }
 
 impl BoxRay {
