@@ -12,7 +12,7 @@ use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Ray, TriangleMesh, TriangleRay, Triangles4};
+use prism_geometry::{Ray, TriangleMesh, TriangleRay, TriangleRays8, Triangles4};
 use std::ops::ControlFlow;
 
 /// A mesh's nodes, in one of the two layouts.
@@ -291,7 +291,8 @@ impl Blas {
         };
         let mut br = [BoxRay::NONE; N];
         packet::set_rays(&mut br, rays, mask);
-        let mut v = AnyTriangles { tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
+        let mut v =
+            AnyTriangles { lanes, tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
         for &(m, fr) in &packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
@@ -440,7 +441,8 @@ impl<const N: usize> Leaf for &mut ClosestTriangles<'_, N> {
 /// A packet's occlusion walk over one mesh's triangles: collects the
 /// occluded rays in `hit` (and reports them done). A ray's
 /// [`TriangleRay`] is made when it first reaches a leaf, as in [`ClosestTriangles`].
-struct AnyTriangles<'a, const N: usize> {
+struct AnyTriangles<'a, const N: usize, L> {
+    lanes: L,
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
@@ -448,18 +450,65 @@ struct AnyTriangles<'a, const N: usize> {
     hit: u64,
 }
 
-impl<const N: usize> Leaf for &mut AnyTriangles<'_, N> {
+impl<const N: usize, L: Lanes> Leaf for &mut AnyTriangles<'_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
         let mut done = 0u64;
-        for k in bits(meet) {
-            if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
-                let tr = first_leaf_ray(tr, ray);
-                done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
+        match self.blocks.get(first as usize / 4) {
+            Some(block) if meet.count_ones() >= GROUP_MIN => {
+                let mut rest = meet;
+                while rest != 0 {
+                    let (hit, taken) = self.group(block, rest);
+                    done |= hit;
+                    rest &= !taken;
+                }
+            }
+            _ => {
+                for k in bits(meet) {
+                    if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
+                        let tr = first_leaf_ray(tr, ray);
+                        done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
+                    }
+                }
             }
         }
         self.hit |= done;
         done
+    }
+}
+
+/// The fewest rays at a leaf that [`AnyTriangles`] tests eight at a time
+/// ([`TriangleRays8`]) rather than one by one.
+const GROUP_MIN: u32 = 5;
+
+impl<const N: usize, L: Lanes> AnyTriangles<'_, N, L> {
+    /// Tests `block` against up to eight rays of `rest` at once: the lowest
+    /// and those after it with the same axes ([`TriangleRays8::push`]).
+    /// Returns the rays that meet a triangle and the rays tested.
+    #[inline(always)]
+    fn group(&mut self, block: &Triangles4, rest: u64) -> (u64, u64) {
+        let lowest = rest.trailing_zeros() as usize;
+        let (Some(tr), Some(ray)) = (self.tr.get_mut(lowest), self.rays.get(lowest)) else {
+            return (0, rest);
+        };
+        let mut g = TriangleRays8::like(first_leaf_ray(tr, ray));
+        let mut lane = [0u8; 8];
+        let mut taken = 0u64;
+        for k in bits(rest) {
+            if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
+                let i = g.len();
+                if g.push(first_leaf_ray(tr, ray)) {
+                    lane[i & 7] = k as u8;
+                    taken |= 1 << k;
+                    if g.len() == 8 {
+                        break;
+                    }
+                }
+            }
+        }
+        let hit =
+            bits(u64::from(self.lanes.occluded8(&g, block))).fold(0u64, |m, i| m | 1 << (lane[i & 7] & 63));
+        (hit, taken | 1 << lowest)
     }
 }
 

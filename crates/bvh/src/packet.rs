@@ -41,8 +41,8 @@
 
 use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
 use crate::wide::{FIRST_BITS, LEAF, Node, NodeTest, ROWS, WIDTH, WideBvh, WideRay, max_ps, min_ps};
-use prism_geometry::Ray;
 use prism_geometry::glam::Vec3A;
+use prism_geometry::{Ray, TriangleRays8, Triangles4};
 
 /// Most rays in one packet (bits of its masks).
 pub const PACKET: usize = 64;
@@ -93,6 +93,10 @@ pub(crate) trait Lanes: Copy {
     /// children of `node` that ray `r` meets within `[r.t_min, reach]`,
     /// with every child's entry distance in `t_near`.
     fn node(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32;
+
+    /// The rays of `rays` that meet a triangle of `tris`:
+    /// [`TriangleRays8::occluded`], bit for bit.
+    fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32;
 
     /// Ray `k`'s node test result merged into a per-ray node test's
     /// running state: for each child `c` in `mask`, `met[c]` gains bit `k`
@@ -153,6 +157,11 @@ impl Lanes for Portable {
     fn node(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32 {
         crate::wide::Portable.test(node, r, reach, t_near)
     }
+
+    #[inline(always)]
+    fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32 {
+        rays.occluded(tris)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -161,6 +170,7 @@ pub(crate) mod x86 {
     use super::Lanes;
     use crate::wide::{Node, NodeTest, WIDTH, WideRay};
     use core::arch::x86_64::*;
+    use prism_geometry::{TriangleRays8, Triangles4};
 
     /// The AVX2 eight-ray box test. Made only inside the packet queries'
     /// AVX2 builds, which run only where the CPU has it
@@ -174,6 +184,29 @@ pub(crate) mod x86 {
         #[inline(always)]
         pub(crate) unsafe fn new() -> Self {
             Self(())
+        }
+    }
+
+    /// Corner `p` (on the axes `kx`, `ky`, `kz`) sheared for eight rays
+    /// (`o`: their origins, `s`: their shears), as `TriangleRay::shear`
+    /// does per ray. A function (always inlined), not a closure: a
+    /// closure was compiled on its own without AVX, its intrinsics then
+    /// calls.
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[inline(always)]
+    unsafe fn shear8(
+        [px, py, pz]: [f32; 3],
+        [ox, oy, oz]: [__m256; 3],
+        [sx, sy, sz]: [__m256; 3],
+    ) -> (__m256, __m256, __m256) {
+        // SAFETY: the caller's contract.
+        unsafe {
+            let z = _mm256_sub_ps(_mm256_set1_ps(pz), oz);
+            let x = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(px), ox), _mm256_mul_ps(sx, z));
+            let y = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(py), oy), _mm256_mul_ps(sy, z));
+            (x, y, _mm256_mul_ps(sz, z))
         }
     }
 
@@ -217,6 +250,85 @@ pub(crate) mod x86 {
             // is the contract of the wide node test's token.
             let test = unsafe { crate::wide::x86::Avx2::new() };
             test.test(node, r, reach, t_near)
+        }
+
+        /// [`TriangleRays8::occluded`] with each step on all eight lanes at
+        /// once: the portable loop's operations in the same order, and its
+        /// comparisons as their ordered (`_OQ`) forms, except `det != 0`,
+        /// which holds for `NaN` (`_NEQ_UQ`); `is_finite` is `|det| < inf`
+        /// (ordered). Lanes with an exactly zero edge function take the
+        /// scalar test, as there.
+        #[inline(always)]
+        fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32 {
+            let used = (1u32 << rays.len().min(8)) - 1;
+            let [kx, ky, kz] = rays.axes();
+            let (t_min, t_max) = rays.interval();
+            let mut hit = 0u32;
+            for j in 0..tris.len() {
+                // SAFETY: an `Avx2` exists only where the CPU has AVX2
+                // (its `new` is unsafe with that contract); each load
+                // reads the eight `f32`s of an `&[f32; 8]` (unaligned).
+                let (ok, exact) = unsafe {
+                    let [ox, oy, oz] = rays.origin().each_ref().map(|x| _mm256_loadu_ps(x.as_ptr()));
+                    let [sx, sy, sz] = rays.shear().each_ref().map(|x| _mm256_loadu_ps(x.as_ptr()));
+                    let v = tris.rows();
+                    let at = |p: &[[f32; 4]; 3]| [p[kx][j & 3], p[ky][j & 3], p[kz][j & 3]];
+                    let (o, sh) = ([ox, oy, oz], [sx, sy, sz]);
+                    let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) =
+                        (shear8(at(&v[0]), o, sh), shear8(at(&v[1]), o, sh), shear8(at(&v[2]), o, sh));
+                    let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+                    let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+                    let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+                    let zero = _mm256_setzero_ps();
+                    let or3 = |a, b, c| _mm256_or_ps(_mm256_or_ps(a, b), c);
+                    let is0 = or3(
+                        _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
+                        _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
+                        _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
+                    );
+                    let negative = or3(
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
+                        _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+                    );
+                    let positive = or3(
+                        _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
+                        _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero),
+                        _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+                    );
+                    let outside = _mm256_and_ps(negative, positive);
+                    let exact = _mm256_movemask_ps(is0) as u32;
+                    // No lane still open that passes the edge test or
+                    // needs the scalar one (most of a leaf's triangles):
+                    // the rest would find no hit.
+                    if (!(_mm256_movemask_ps(outside) as u32) | exact) & used & !hit == 0 {
+                        continue;
+                    }
+                    let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
+                    let t_scaled = _mm256_add_ps(
+                        _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(vv, bz)),
+                        _mm256_mul_ps(w, cz),
+                    );
+                    let t = _mm256_mul_ps(t_scaled, _mm256_div_ps(_mm256_set1_ps(1.0), det));
+                    let abs = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
+                    let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(abs, _mm256_set1_ps(f32::INFINITY));
+                    let inside = _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_loadu_ps(t_min.as_ptr())),
+                        _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_loadu_ps(t_max.as_ptr())),
+                    );
+                    let pass = _mm256_andnot_ps(
+                        outside,
+                        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero), finite), inside),
+                    );
+                    (_mm256_movemask_ps(_mm256_andnot_ps(is0, pass)) as u32, exact)
+                };
+                hit |= ok;
+                hit |= rays.scalar_hits(tris, j, exact & used & !hit);
+                if hit & used == used {
+                    break;
+                }
+            }
+            hit & used
         }
 
         /// The portable merge without its loop over the set bits, whose
@@ -1107,5 +1219,62 @@ mod tests {
             assert_eq!(near_a.map(f32::to_bits), near_b.map(f32::to_bits), "round {round}");
             assert_eq!(met_a, met_b, "round {round}");
         }
+    }
+
+    /// The AVX2 eight-ray leaf test gives the portable one's rays
+    /// ([`TriangleRays8::occluded`], itself each ray's `occludes4`): groups
+    /// of one to eight rays from nearby origins in nearby directions,
+    /// against one to four triangles, with integer coordinates (edge
+    /// functions exactly zero, the scalar test's lanes), degenerate
+    /// triangles, zero direction components and several intervals.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn avx2_eight_ray_leaf_test_is_the_portable_one() {
+        use prism_geometry::glam::Vec3;
+        use prism_geometry::{TriangleRay, TriangleRays8, Triangles4};
+        if !is_x86_feature_detected!("avx2") {
+            prism_testkit::skip("this CPU lacks AVX2 (nothing to compare)");
+            return;
+        }
+        // SAFETY: checked just above.
+        let avx2 = unsafe { x86::Avx2::new() };
+        let mut r = prism_testkit::Rng::new(29);
+        let mut f = move || r.f32() * 2.0 - 1.0;
+        let (mut hits, mut exact_cases) = (0u32, 0u32);
+        for case in 0..20_000usize {
+            let integer = case % 4 == 0;
+            let mut p = |s: f32| {
+                let v = Vec3::new(f(), f(), f()) * s;
+                if integer { v.round() } else { v }
+            };
+            let tris: Vec<[Vec3; 3]> = (0..1 + case % 4)
+                .map(|k| {
+                    let t = [p(2.0), p(2.0), p(2.0)];
+                    if (case + k) % 9 == 0 { [t[0], t[1], t[1]] } else { t }
+                })
+                .collect();
+            let tris = Triangles4::new(&tris);
+            let (o0, d0) = (p(3.0), p(1.0) + Vec3::Z * 0.5);
+            let mut group: Option<TriangleRays8> = None;
+            for i in 0..1 + case % 8 {
+                let mut d = d0 + p(0.2);
+                if (case + i) % 7 == 0 {
+                    d[i % 3] = if i % 2 == 0 { 0.0 } else { -0.0 };
+                }
+                if d == Vec3::ZERO {
+                    d = Vec3::Z;
+                }
+                let (t_min, t_max) =
+                    [(0.0, f32::INFINITY), (0.5, 1.5), (f32::MIN, f32::MAX), (-1.0, 0.25)][(case + i) % 4];
+                let tr = TriangleRay::new(&Ray::with_interval(o0 + p(0.1), d, t_min, t_max));
+                group.get_or_insert_with(|| TriangleRays8::like(&tr)).push(&tr);
+            }
+            let Some(g) = group else { continue };
+            let want = Portable.occluded8(&g, &tris);
+            assert_eq!(avx2.occluded8(&g, &tris), want, "case {case}: {g:?} {tris:?}");
+            hits += want.count_ones();
+            exact_cases += u32::from(integer && want != 0);
+        }
+        assert!(hits > 2000 && exact_cases > 300, "{hits} hits, {exact_cases} integer cases with hits");
     }
 }

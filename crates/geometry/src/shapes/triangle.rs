@@ -236,9 +236,32 @@ impl Triangles4 {
         out
     }
 
-    /// Corners of triangle `lane`.
+    /// The coordinates as `[corner][axis][lane]`: what a SIMD leaf test
+    /// outside this crate reads.
     #[inline(always)]
-    fn corners(&self, lane: usize) -> [Vec3; 3] {
+    #[must_use]
+    pub fn rows(&self) -> &[[[f32; 4]; 3]; 3] {
+        &self.v
+    }
+
+    /// How many lanes hold a triangle (at most 4).
+    #[inline(always)]
+    #[must_use]
+    pub fn len(&self) -> usize {
+        (self.len as usize).min(4)
+    }
+
+    /// Whether no lane holds a triangle.
+    #[inline(always)]
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Corners of triangle `lane` (of the first four).
+    #[inline(always)]
+    #[must_use]
+    pub fn corners(&self, lane: usize) -> [Vec3; 3] {
         let v = &self.v;
         let p = |c: usize| Vec3::new(v[c][0][lane & 3], v[c][1][lane & 3], v[c][2][lane & 3]);
         [p(0), p(1), p(2)]
@@ -393,6 +416,199 @@ impl TriangleRay {
     }
 }
 
+/// Up to eight [`TriangleRay`]s with the same axes `kx`, `ky`, `kz`, in
+/// SoA lanes: the rays of a packet that reach one leaf, tested against
+/// each of its triangles eight rays at a time (one lane per ray) where
+/// [`TriangleRay::occludes4`] tests one ray against four triangles. Every
+/// lane computes what [`TriangleRay::intersect`] computes, by the same
+/// operations in the same order, so the answers are the same bit for bit;
+/// a lane with an exactly zero edge function takes the scalar test, as in
+/// [`TriangleRay::occludes4`].
+///
+/// Plain arrays in loops of eight, which the compiler vectorises: in a
+/// caller compiled for AVX2, one 256-bit operation a step.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleRays8 {
+    origin: [[f32; 8]; 3],
+    shear: [[f32; 8]; 3],
+    /// `+inf` in an unused lane, so that no `t` passes.
+    t_min: [f32; 8],
+    t_max: [f32; 8],
+    k: [usize; 3],
+    len: usize,
+}
+
+impl TriangleRays8 {
+    /// No rays yet; [`TriangleRays8::push`] takes rays with the axes of
+    /// `first` (which it does not add).
+    #[inline(always)]
+    #[must_use]
+    pub fn like(first: &TriangleRay) -> Self {
+        Self {
+            origin: [[0.0; 8]; 3],
+            shear: [[0.0; 8]; 3],
+            t_min: [f32::INFINITY; 8],
+            t_max: [f32::NEG_INFINITY; 8],
+            k: first.k,
+            len: 0,
+        }
+    }
+
+    /// Adds `ray` in the next lane; `false` (and nothing added) when all
+    /// eight are taken or its axes differ from the group's.
+    #[inline(always)]
+    pub fn push(&mut self, ray: &TriangleRay) -> bool {
+        let i = self.len;
+        if i >= 8 || ray.k != self.k {
+            return false;
+        }
+        for a in 0..3 {
+            self.origin[a][i] = ray.origin[a];
+            self.shear[a][i] = ray.shear[a];
+        }
+        self.t_min[i] = ray.t_min;
+        self.t_max[i] = ray.t_max;
+        self.len = i + 1;
+        true
+    }
+
+    /// How many lanes are in use.
+    #[inline(always)]
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether no lane is in use.
+    #[inline(always)]
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The origins on the axes `kx`, `ky`, `kz`, as `[axis][lane]`.
+    #[inline(always)]
+    #[must_use]
+    pub fn origin(&self) -> &[[f32; 8]; 3] {
+        &self.origin
+    }
+
+    /// The shears `sx`, `sy`, `sz`, as `[component][lane]`.
+    #[inline(always)]
+    #[must_use]
+    pub fn shear(&self) -> &[[f32; 8]; 3] {
+        &self.shear
+    }
+
+    /// The lanes' intervals, narrowed to finite bounds as
+    /// [`TriangleRay`]'s are (an unused lane's is empty: `[+inf, -inf]`).
+    #[inline(always)]
+    #[must_use]
+    pub fn interval(&self) -> (&[f32; 8], &[f32; 8]) {
+        (&self.t_min, &self.t_max)
+    }
+
+    /// The axes `kx`, `ky`, `kz` the group shares, each below 3.
+    #[inline(always)]
+    #[must_use]
+    pub fn axes(&self) -> [usize; 3] {
+        self.k.map(|k| k.min(2))
+    }
+
+    /// The ray of lane `i` (below [`TriangleRays8::len`]), for the scalar
+    /// test of a lane with an exactly zero edge function.
+    #[inline(always)]
+    #[must_use]
+    pub fn ray(&self, i: usize) -> TriangleRay {
+        let i = i & 7;
+        TriangleRay {
+            origin: [self.origin[0][i], self.origin[1][i], self.origin[2][i]],
+            k: self.k,
+            shear: [self.shear[0][i], self.shear[1][i], self.shear[2][i]],
+            t_min: self.t_min[i],
+            t_max: self.t_max[i],
+        }
+    }
+
+    /// The lanes (bit `i` for the `i`th ray pushed) whose ray meets any of
+    /// the (up to) four triangles of `tris` within its interval: bit `i`
+    /// is `self`'s `i`th ray's [`TriangleRay::occludes4`].
+    #[inline(always)]
+    #[must_use]
+    pub fn occluded(&self, tris: &Triangles4) -> u32 {
+        let used = (1u32 << self.len.min(8)) - 1;
+        let mut hit = 0u32;
+        for j in 0..tris.len() {
+            let (_, ok, exact) = self.lanes(tris, j);
+            hit |= ok;
+            hit |= self.scalar_hits(tris, j, exact & used & !hit);
+        }
+        hit & used
+    }
+
+    /// The lanes of `lanes` whose ray meets triangle `j` of `tris`, each
+    /// by the scalar test ([`TriangleRay::intersect`], whose `f64`
+    /// fallback decides a zero edge function).
+    #[inline(always)]
+    #[must_use]
+    pub fn scalar_hits(&self, tris: &Triangles4, j: usize, mut lanes: u32) -> u32 {
+        let mut hit = 0;
+        while lanes != 0 {
+            let i = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            if self.ray(i).intersect(&tris.corners(j)).is_some() {
+                hit |= 1 << i;
+            }
+        }
+        hit
+    }
+
+    /// Corner `p` (on the axes `kx`, `ky`, `kz`) sheared per lane as
+    /// [`TriangleRay::shear`] does.
+    #[inline(always)]
+    fn shear8(&self, [px, py, pz]: [f32; 3]) -> [[f32; 8]; 3] {
+        let [ox, oy, oz] = &self.origin;
+        let [sx, sy, sz] = &self.shear;
+        let mut out = [[0.0f32; 8]; 3];
+        for i in 0..8 {
+            let z = pz - oz[i];
+            out[0][i] = (px - ox[i]) - sx[i] * z;
+            out[1][i] = (py - oy[i]) - sy[i] * z;
+            out[2][i] = sz[i] * z;
+        }
+        out
+    }
+
+    /// Each lane's test of triangle `j` of `tris`: its `t`, the lanes
+    /// that meet it within their interval with no edge function exactly
+    /// zero (`ok`; their `t` is [`TriangleRay::intersect`]'s, bit for
+    /// bit), and the lanes with an edge function exactly zero (`exact`),
+    /// which the scalar test must decide.
+    #[inline(always)]
+    fn lanes(&self, tris: &Triangles4, j: usize) -> ([f32; 8], u32, u32) {
+        let [kx, ky, kz] = self.k.map(|k| k.min(2));
+        let (v, j) = (&tris.v, j & 3);
+        let [a, b, c] = [&v[0], &v[1], &v[2]].map(|p| self.shear8([p[kx][j], p[ky][j], p[kz][j]]));
+        let ([ax, ay, az], [bx, by, bz], [cx, cy, cz]) = (a, b, c);
+        let (mut t, mut ok, mut exact) = ([0.0f32; 8], 0u32, 0u32);
+        for i in 0..8 {
+            let u = cx[i] * by[i] - cy[i] * bx[i];
+            let vv = ax[i] * cy[i] - ay[i] * cx[i];
+            let w = bx[i] * ay[i] - by[i] * ax[i];
+            let zero = (u == 0.0) | (vv == 0.0) | (w == 0.0);
+            let outside = ((u < 0.0) | (vv < 0.0) | (w < 0.0)) & ((u > 0.0) | (vv > 0.0) | (w > 0.0));
+            let det = u + vv + w;
+            let t_scaled = u * az[i] + vv * bz[i] + w * cz[i];
+            t[i] = t_scaled * (1.0 / det);
+            let pass =
+                !outside & (det != 0.0) & det.is_finite() & (t[i] >= self.t_min[i]) & (t[i] <= self.t_max[i]);
+            ok |= u32::from(pass & !zero) << i;
+            exact |= u32::from(zero) << i;
+        }
+        (t, ok, exact)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -497,22 +713,7 @@ mod tests {
         let mut hits = 0;
         let mut exact_lanes = 0;
         for case in 0..40_000 {
-            let n = 1 + case % 4;
-            let mut tris = Vec::new();
-            for k in 0..n {
-                let mut t = [Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f())];
-                match (case / 4 + k) % 7 {
-                    // Degenerate: a repeated corner, or collinear corners.
-                    0 => t[2] = t[1],
-                    1 => t[2] = t[0] + (t[1] - t[0]) * 0.5,
-                    // Small integers: rays hit shared edges and vertices exactly.
-                    2 | 3 => t = t.map(|p| (p * 2.0).round()),
-                    // A copy of the previous triangle (an exact tie).
-                    4 if k > 0 => t = tris[k - 1],
-                    _ => {}
-                }
-                tris.push(t);
-            }
+            let tris = random_leaf(&mut f, case);
             let mut o = Vec3::new(f(), f(), f()) * 2.0;
             let mut d = Vec3::new(f(), f(), f());
             if case % 3 == 0 {
@@ -553,6 +754,86 @@ mod tests {
             exact_lanes += usize::from(case % 3 == 0 && want.is_some());
         }
         assert!(hits > 1500 && exact_lanes > 500, "{hits} {exact_lanes}");
+    }
+
+    /// One to four random triangles for test case `case`, with degenerate
+    /// ones, small-integer corners (exact hits on shared edges and
+    /// vertices) and exact copies among them.
+    fn random_leaf(f: &mut impl FnMut() -> f32, case: usize) -> Vec<[Vec3; 3]> {
+        let n = 1 + case % 4;
+        let mut tris = Vec::new();
+        for k in 0..n {
+            let mut t = [Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f()), Vec3::new(f(), f(), f())];
+            match (case / 4 + k) % 7 {
+                // Degenerate: a repeated corner, or collinear corners.
+                0 => t[2] = t[1],
+                1 => t[2] = t[0] + (t[1] - t[0]) * 0.5,
+                // Small integers: rays hit shared edges and vertices exactly.
+                2 | 3 => t = t.map(|p| (p * 2.0).round()),
+                // A copy of the previous triangle (an exact tie).
+                4 if k > 0 => t = tris[k - 1],
+                _ => {}
+            }
+            tris.push(t);
+        }
+        tris
+    }
+
+    /// Eight rays at a time give each ray's own `occludes4`, bit for bit
+    /// the same answers: rays from nearby origins in nearby directions (a
+    /// packet), some with integer coordinates (exact edge hits), some
+    /// with a zero direction component, under several intervals; a ray
+    /// whose axes differ from the group's is refused.
+    #[test]
+    fn eight_rays_occluded_is_each_rays_occludes4() {
+        let mut f = uniform(0x9e37_79b9_u64);
+        let (mut hits, mut exact, mut refused) = (0, 0, 0);
+        for case in 0..20_000 {
+            let tris = Triangles4::new(&random_leaf(&mut f, case));
+            let (o0, d0) = (Vec3::new(f(), f(), f()) * 2.0, Vec3::new(f(), f(), f()));
+            let spread = [0.0, 0.05, 0.5][case % 3];
+            let mut group: Option<TriangleRays8> = None;
+            let mut rays = Vec::new();
+            for i in 0..(1 + case % 11) {
+                let mut o = o0 + Vec3::new(f(), f(), f()) * spread;
+                let mut d = d0 + Vec3::new(f(), f(), f()) * spread;
+                if case % 4 == 0 {
+                    (o, d) = (o.round(), d.round());
+                }
+                if (case + i) % 9 == 0 {
+                    d[i % 3] = if i % 2 == 0 { 0.0 } else { -0.0 };
+                }
+                if d == Vec3::ZERO {
+                    d = Vec3::Z;
+                }
+                let (t_min, t_max) =
+                    [(0.0, f32::INFINITY), (0.5, 1.5), (f32::MIN, f32::MAX), (-1.0, 0.25)][(case + i) % 4];
+                let tr = TriangleRay::new(&Ray::with_interval(o, d, t_min, t_max));
+                let g = group.get_or_insert_with(|| TriangleRays8::like(&tr));
+                let full = g.len() == 8;
+                if g.push(&tr) {
+                    rays.push(tr);
+                } else {
+                    assert!(full || tr.k != g.k, "case {case}: ray {i} refused");
+                    refused += 1;
+                }
+            }
+            let Some(g) = group else { continue };
+            // Each lane's `t`, triangle by triangle, is the scalar test's.
+            for j in 0..tris.len as usize {
+                let (t, ok, exact) = g.lanes(&tris, j);
+                for (i, r) in rays.iter().enumerate().filter(|(i, _)| exact >> i & 1 == 0) {
+                    let scalar = r.intersect(&tris.corners(j)).map(|h| h.0.to_bits());
+                    let lane = (ok >> i & 1 == 1).then(|| t[i].to_bits());
+                    assert_eq!(lane, scalar, "case {case}: triangle {j}, ray {i}");
+                }
+            }
+            let want = rays.iter().enumerate().fold(0u32, |m, (i, r)| m | u32::from(r.occludes4(&tris)) << i);
+            assert_eq!(g.occluded(&tris), want, "case {case}: {tris:?} {rays:?}");
+            hits += want.count_ones();
+            exact += u32::from(case % 4 == 0 && want != 0);
+        }
+        assert!(hits > 2500 && exact > 200 && refused > 1000, "{hits} {exact} {refused}");
     }
 
     /// The prepared ray runs along +z in its sheared frame, whichever axis
