@@ -42,7 +42,7 @@
 use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
 use crate::wide::{FIRST_BITS, LEAF, Node, NodeTest, ROWS, WIDTH, WideBvh, WideRay, max_ps, min_ps};
 use prism_geometry::glam::Vec3A;
-use prism_geometry::{Ray, TriangleRays8, Triangles4};
+use prism_geometry::{Nearest8, Ray, TriangleRays8, Triangles4};
 
 /// Most rays in one packet (bits of its masks).
 pub const PACKET: usize = 64;
@@ -97,6 +97,10 @@ pub(crate) trait Lanes: Copy {
     /// The rays of `rays` that meet a triangle of `tris`:
     /// [`TriangleRays8::occluded`], bit for bit.
     fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32;
+
+    /// Each ray's nearest hit on `tris`, narrowing its interval:
+    /// [`TriangleRays8::closest`], bit for bit.
+    fn closest8(self, rays: &mut TriangleRays8, tris: &Triangles4) -> Nearest8;
 
     /// Ray `k`'s node test result merged into a per-ray node test's
     /// running state: for each child `c` in `mask`, `met[c]` gains bit `k`
@@ -162,6 +166,11 @@ impl Lanes for Portable {
     fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32 {
         rays.occluded(tris)
     }
+
+    #[inline(always)]
+    fn closest8(self, rays: &mut TriangleRays8, tris: &Triangles4) -> Nearest8 {
+        rays.closest(tris)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -170,7 +179,7 @@ pub(crate) mod x86 {
     use super::Lanes;
     use crate::wide::{Node, NodeTest, WIDTH, WideRay};
     use core::arch::x86_64::*;
-    use prism_geometry::{TriangleRays8, Triangles4};
+    use prism_geometry::{Nearest8, TriangleRays8, Triangles4};
 
     /// The AVX2 eight-ray box test. Made only inside the packet queries'
     /// AVX2 builds, which run only where the CPU has it
@@ -207,6 +216,105 @@ pub(crate) mod x86 {
             let x = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(px), ox), _mm256_mul_ps(sx, z));
             let y = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(py), oy), _mm256_mul_ps(sy, z));
             (x, y, _mm256_mul_ps(sz, z))
+        }
+    }
+
+    /// One triangle's test on eight rays, [`TriangleRays8`]'s lane
+    /// operations on all lanes at once, in the same order, its
+    /// comparisons as their ordered (`_OQ`) forms except `det != 0`,
+    /// which holds for `NaN` (`_NEQ_UQ`); `is_finite` is `|det| < inf`
+    /// (ordered).
+    struct Test8 {
+        t: __m256,
+        b1: __m256,
+        b2: __m256,
+        /// The lanes that meet the triangle within their interval, with no
+        /// edge function exactly zero.
+        ok: u32,
+        /// The lanes with an edge function exactly zero.
+        exact: u32,
+    }
+
+    /// Triangle `j` of `tris` against the eight rays of `rays` within
+    /// their current intervals; `None` when no lane of `open` passes the
+    /// edge test or needs the scalar one (most of a leaf's triangles),
+    /// before the division.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    unsafe fn test8(rays: &TriangleRays8, tris: &Triangles4, j: usize, open: u32) -> Option<Test8> {
+        let [kx, ky, kz] = rays.axes();
+        let (t_min, t_max) = rays.interval();
+        // SAFETY: the caller's contract; each load reads the eight `f32`s
+        // of an `&[f32; 8]` (unaligned).
+        unsafe {
+            let [ox, oy, oz] = rays.origin().each_ref().map(|x| _mm256_loadu_ps(x.as_ptr()));
+            let [sx, sy, sz] = rays.shear().each_ref().map(|x| _mm256_loadu_ps(x.as_ptr()));
+            let v = tris.rows();
+            let at = |p: &[[f32; 4]; 3]| [p[kx][j & 3], p[ky][j & 3], p[kz][j & 3]];
+            let (o, sh) = ([ox, oy, oz], [sx, sy, sz]);
+            let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) =
+                (shear8(at(&v[0]), o, sh), shear8(at(&v[1]), o, sh), shear8(at(&v[2]), o, sh));
+            let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+            let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+            let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+            let zero = _mm256_setzero_ps();
+            let or3 = |a, b, c| _mm256_or_ps(_mm256_or_ps(a, b), c);
+            let is0 = or3(
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
+            );
+            let negative = or3(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+            );
+            let positive = or3(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+            );
+            let outside = _mm256_and_ps(negative, positive);
+            let exact = _mm256_movemask_ps(is0) as u32;
+            if (!(_mm256_movemask_ps(outside) as u32) | exact) & open == 0 {
+                return None;
+            }
+            let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
+            let t_scaled = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(vv, bz)),
+                _mm256_mul_ps(w, cz),
+            );
+            let rcp = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+            let t = _mm256_mul_ps(t_scaled, rcp);
+            let abs = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
+            let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(abs, _mm256_set1_ps(f32::INFINITY));
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_loadu_ps(t_min.as_ptr())),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_loadu_ps(t_max.as_ptr())),
+            );
+            let pass = _mm256_andnot_ps(
+                outside,
+                _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero), finite), inside),
+            );
+            let ok = _mm256_movemask_ps(_mm256_andnot_ps(is0, pass)) as u32;
+            Some(Test8 { t, b1: _mm256_mul_ps(vv, rcp), b2: _mm256_mul_ps(w, rcp), ok, exact })
+        }
+    }
+
+    /// `dst`'s lanes where `take` is set replaced by `src`'s. A function
+    /// (always inlined), not a closure, as [`shear8`].
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[inline(always)]
+    unsafe fn blend8(dst: &mut [f32; 8], src: __m256, take: __m256) {
+        // SAFETY: the caller's contract; `dst` holds eight `f32`s, read
+        // and written whole (unaligned).
+        unsafe {
+            let d = _mm256_loadu_ps(dst.as_ptr());
+            _mm256_storeu_ps(dst.as_mut_ptr(), _mm256_blendv_ps(d, src, take));
         }
     }
 
@@ -253,82 +361,63 @@ pub(crate) mod x86 {
         }
 
         /// [`TriangleRays8::occluded`] with each step on all eight lanes at
-        /// once: the portable loop's operations in the same order, and its
-        /// comparisons as their ordered (`_OQ`) forms, except `det != 0`,
-        /// which holds for `NaN` (`_NEQ_UQ`); `is_finite` is `|det| < inf`
-        /// (ordered). Lanes with an exactly zero edge function take the
-        /// scalar test, as there.
+        /// once ([`test8`]). Lanes with an exactly zero edge function take
+        /// the scalar test, as there.
         #[inline(always)]
         fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32 {
             let used = (1u32 << rays.len().min(8)) - 1;
-            let [kx, ky, kz] = rays.axes();
-            let (t_min, t_max) = rays.interval();
             let mut hit = 0u32;
             for j in 0..tris.len() {
                 // SAFETY: an `Avx2` exists only where the CPU has AVX2
-                // (its `new` is unsafe with that contract); each load
-                // reads the eight `f32`s of an `&[f32; 8]` (unaligned).
-                let (ok, exact) = unsafe {
-                    let [ox, oy, oz] = rays.origin().each_ref().map(|x| _mm256_loadu_ps(x.as_ptr()));
-                    let [sx, sy, sz] = rays.shear().each_ref().map(|x| _mm256_loadu_ps(x.as_ptr()));
-                    let v = tris.rows();
-                    let at = |p: &[[f32; 4]; 3]| [p[kx][j & 3], p[ky][j & 3], p[kz][j & 3]];
-                    let (o, sh) = ([ox, oy, oz], [sx, sy, sz]);
-                    let ((ax, ay, az), (bx, by, bz), (cx, cy, cz)) =
-                        (shear8(at(&v[0]), o, sh), shear8(at(&v[1]), o, sh), shear8(at(&v[2]), o, sh));
-                    let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-                    let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-                    let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
-                    let zero = _mm256_setzero_ps();
-                    let or3 = |a, b, c| _mm256_or_ps(_mm256_or_ps(a, b), c);
-                    let is0 = or3(
-                        _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
-                        _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
-                        _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
-                    );
-                    let negative = or3(
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
-                        _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
-                    );
-                    let positive = or3(
-                        _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
-                        _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero),
-                        _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
-                    );
-                    let outside = _mm256_and_ps(negative, positive);
-                    let exact = _mm256_movemask_ps(is0) as u32;
-                    // No lane still open that passes the edge test or
-                    // needs the scalar one (most of a leaf's triangles):
-                    // the rest would find no hit.
-                    if (!(_mm256_movemask_ps(outside) as u32) | exact) & used & !hit == 0 {
-                        continue;
-                    }
-                    let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
-                    let t_scaled = _mm256_add_ps(
-                        _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(vv, bz)),
-                        _mm256_mul_ps(w, cz),
-                    );
-                    let t = _mm256_mul_ps(t_scaled, _mm256_div_ps(_mm256_set1_ps(1.0), det));
-                    let abs = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
-                    let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(abs, _mm256_set1_ps(f32::INFINITY));
-                    let inside = _mm256_and_ps(
-                        _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_loadu_ps(t_min.as_ptr())),
-                        _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_loadu_ps(t_max.as_ptr())),
-                    );
-                    let pass = _mm256_andnot_ps(
-                        outside,
-                        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero), finite), inside),
-                    );
-                    (_mm256_movemask_ps(_mm256_andnot_ps(is0, pass)) as u32, exact)
-                };
-                hit |= ok;
-                hit |= rays.scalar_hits(tris, j, exact & used & !hit);
+                // (its `new` is unsafe with that contract).
+                let Some(l) = (unsafe { test8(rays, tris, j, used & !hit) }) else { continue };
+                hit |= l.ok;
+                hit |= rays.scalar_hits(tris, j, l.exact & used & !hit);
                 if hit & used == used {
                     break;
                 }
             }
             hit & used
+        }
+
+        /// [`TriangleRays8::closest`] with each step on all eight lanes at
+        /// once ([`test8`]): the lanes that pass take the triangle's `t`,
+        /// `b1`, `b2` and narrow their `t_max` (blends), triangle by
+        /// triangle in order; the lanes with an exactly zero edge function
+        /// then take the scalar test, as there.
+        #[inline(always)]
+        fn closest8(self, rays: &mut TriangleRays8, tris: &Triangles4) -> Nearest8 {
+            let used = (1u32 << rays.len().min(8)) - 1;
+            let mut out = Nearest8::default();
+            for j in 0..tris.len() {
+                // SAFETY: an `Avx2` exists only where the CPU has AVX2
+                // (its `new` is unsafe with that contract); the loads and
+                // stores read and write the eight `f32`s or `u32`s of
+                // `[f32; 8]`/`[u32; 8]` arrays (unaligned).
+                unsafe {
+                    let Some(l) = test8(rays, tris, j, used) else { continue };
+                    let ok = l.ok & used;
+                    if ok != 0 {
+                        let lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+                        let take = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                            _mm256_and_si256(_mm256_set1_epi32(ok as i32), lane_bits),
+                            lane_bits,
+                        ));
+                        blend8(rays.t_max_mut(), l.t, take);
+                        blend8(&mut out.t, l.t, take);
+                        blend8(&mut out.b1, l.b1, take);
+                        blend8(&mut out.b2, l.b2, take);
+                        let tri = out.triangle.as_mut_ptr().cast::<__m256i>();
+                        let j8 = _mm256_set1_epi32(j as i32);
+                        let d = _mm256_loadu_si256(tri);
+                        let picked = _mm256_blendv_epi8(d, j8, _mm256_castps_si256(take));
+                        _mm256_storeu_si256(tri, picked);
+                        out.lanes |= ok;
+                    }
+                    rays.scalar_nearest(tris, j, l.exact & used, &mut out);
+                }
+            }
+            out
         }
 
         /// The portable merge without its loop over the set bits, whose
@@ -1221,8 +1310,10 @@ mod tests {
         }
     }
 
-    /// The AVX2 eight-ray leaf test gives the portable one's rays
-    /// ([`TriangleRays8::occluded`], itself each ray's `occludes4`): groups
+    /// The AVX2 eight-ray leaf tests give the portable ones' answers
+    /// ([`TriangleRays8::occluded`] and `closest`, themselves each ray's
+    /// `occludes4` and `intersect4`), the nearest hits and narrowed
+    /// intervals bit for bit: groups
     /// of one to eight rays from nearby origins in nearby directions,
     /// against one to four triangles, with integer coordinates (edge
     /// functions exactly zero, the scalar test's lanes), degenerate
@@ -1240,7 +1331,7 @@ mod tests {
         let avx2 = unsafe { x86::Avx2::new() };
         let mut r = prism_testkit::Rng::new(29);
         let mut f = move || r.f32() * 2.0 - 1.0;
-        let (mut hits, mut exact_cases) = (0u32, 0u32);
+        let (mut hits, mut exact_cases, mut nearest) = (0u32, 0u32, 0u32);
         for case in 0..20_000usize {
             let integer = case % 4 == 0;
             let mut p = |s: f32| {
@@ -1272,9 +1363,30 @@ mod tests {
             let Some(g) = group else { continue };
             let want = Portable.occluded8(&g, &tris);
             assert_eq!(avx2.occluded8(&g, &tris), want, "case {case}: {g:?} {tris:?}");
+            // The nearest hits, bit for bit, and the narrowed intervals.
+            let (mut a, mut b) = (g, g);
+            let (near_a, near_b) = (Portable.closest8(&mut a, &tris), avx2.closest8(&mut b, &tris));
+            let bits = |n: &Nearest8| {
+                (
+                    n.lanes,
+                    (0..8)
+                        .map(|i| n.get(i).map(|(j, t, b1, b2)| (j, [t, b1, b2].map(f32::to_bits))))
+                        .collect::<Vec<_>>(),
+                )
+            };
+            assert_eq!(bits(&near_b), bits(&near_a), "case {case}: closest8");
+            assert_eq!(
+                b.interval().1.map(f32::to_bits),
+                a.interval().1.map(f32::to_bits),
+                "case {case}: t_max"
+            );
+            nearest += near_a.lanes.count_ones();
             hits += want.count_ones();
             exact_cases += u32::from(integer && want != 0);
         }
-        assert!(hits > 2000 && exact_cases > 300, "{hits} hits, {exact_cases} integer cases with hits");
+        assert!(
+            hits > 2000 && exact_cases > 300 && nearest == hits,
+            "{hits} hits, {exact_cases} integer cases with hits, {nearest} nearest hits"
+        );
     }
 }

@@ -431,7 +431,7 @@ impl TriangleRay {
 pub struct TriangleRays8 {
     origin: [[f32; 8]; 3],
     shear: [[f32; 8]; 3],
-    /// `+inf` in an unused lane, so that no `t` passes.
+    /// `+inf` in a lane never used, so that no `t` passes there.
     t_min: [f32; 8],
     t_max: [f32; 8],
     k: [usize; 3],
@@ -439,6 +439,21 @@ pub struct TriangleRays8 {
 }
 
 impl TriangleRays8 {
+    /// No rays, and none to be taken: [`TriangleRays8::push`] refuses
+    /// every ray (no ray has these axes).
+    #[inline(always)]
+    #[must_use]
+    pub fn empty() -> Self {
+        Self {
+            origin: [[0.0; 8]; 3],
+            shear: [[0.0; 8]; 3],
+            t_min: [f32::INFINITY; 8],
+            t_max: [f32::NEG_INFINITY; 8],
+            k: [usize::MAX; 3],
+            len: 0,
+        }
+    }
+
     /// No rays yet; [`TriangleRays8::push`] takes rays with the axes of
     /// `first` (which it does not add).
     #[inline(always)]
@@ -452,6 +467,15 @@ impl TriangleRays8 {
             k: first.k,
             len: 0,
         }
+    }
+
+    /// Empties the group for rays with the axes of `first` (which it does
+    /// not add), in place: the lanes keep their old values, which no
+    /// answer reads (every test masks its lanes by [`TriangleRays8::len`]).
+    #[inline(always)]
+    pub fn restart(&mut self, first: &TriangleRay) {
+        self.k = first.k;
+        self.len = 0;
     }
 
     /// Adds `ray` in the next lane; `false` (and nothing added) when all
@@ -539,7 +563,7 @@ impl TriangleRays8 {
         let used = (1u32 << self.len.min(8)) - 1;
         let mut hit = 0u32;
         for j in 0..tris.len() {
-            let (_, ok, exact) = self.lanes(tris, j);
+            let Lanes8 { ok, exact, .. } = self.lanes(tris, j);
             hit |= ok;
             hit |= self.scalar_hits(tris, j, exact & used & !hit);
         }
@@ -579,18 +603,63 @@ impl TriangleRays8 {
         out
     }
 
-    /// Each lane's test of triangle `j` of `tris`: its `t`, the lanes
-    /// that meet it within their interval with no edge function exactly
-    /// zero (`ok`; their `t` is [`TriangleRay::intersect`]'s, bit for
-    /// bit), and the lanes with an edge function exactly zero (`exact`),
-    /// which the scalar test must decide.
+    /// Each lane's nearest hit among the (up to) four triangles of `tris`,
+    /// the one [`TriangleRay::intersect4`] gives that lane's ray (the last
+    /// triangle among equal `t`), bit for bit; each lane hit has its
+    /// interval narrowed to its `t`, as the ray's would be.
     #[inline(always)]
-    fn lanes(&self, tris: &Triangles4, j: usize) -> ([f32; 8], u32, u32) {
+    #[must_use]
+    pub fn closest(&mut self, tris: &Triangles4) -> Nearest8 {
+        let used = (1u32 << self.len.min(8)) - 1;
+        let mut out = Nearest8::default();
+        for j in 0..tris.len() {
+            let Lanes8 { t, b1, b2, ok, exact } = self.lanes(tris, j);
+            let mut ok = ok & used;
+            while ok != 0 {
+                let i = ok.trailing_zeros() as usize & 7;
+                ok &= ok - 1;
+                self.t_max[i] = t[i];
+                out.record(i, j, (t[i], b1[i], b2[i]));
+            }
+            self.scalar_nearest(tris, j, exact & used, &mut out);
+        }
+        out
+    }
+
+    /// For each lane of `lanes`, the scalar test of triangle `j` of
+    /// `tris` within the lane's (narrowed) interval: a hit narrows it and
+    /// is recorded in `out`.
+    #[inline(always)]
+    pub fn scalar_nearest(&mut self, tris: &Triangles4, j: usize, mut lanes: u32, out: &mut Nearest8) {
+        while lanes != 0 {
+            let i = lanes.trailing_zeros() as usize & 7;
+            lanes &= lanes - 1;
+            if let Some(hit) = self.ray(i).intersect(&tris.corners(j)) {
+                self.t_max[i] = hit.0;
+                out.record(i, j, hit);
+            }
+        }
+    }
+
+    /// The lanes' upper interval ends, to narrow them.
+    #[inline(always)]
+    #[must_use]
+    pub fn t_max_mut(&mut self) -> &mut [f32; 8] {
+        &mut self.t_max
+    }
+
+    /// Each lane's test of triangle `j` of `tris`: its `t`, `b1`, `b2`,
+    /// the lanes that meet it within their interval with no edge function
+    /// exactly zero (`ok`; their values are [`TriangleRay::intersect`]'s,
+    /// bit for bit), and the lanes with an edge function exactly zero
+    /// (`exact`), which the scalar test must decide.
+    #[inline(always)]
+    fn lanes(&self, tris: &Triangles4, j: usize) -> Lanes8 {
         let [kx, ky, kz] = self.k.map(|k| k.min(2));
         let (v, j) = (&tris.v, j & 3);
         let [a, b, c] = [&v[0], &v[1], &v[2]].map(|p| self.shear8([p[kx][j], p[ky][j], p[kz][j]]));
         let ([ax, ay, az], [bx, by, bz], [cx, cy, cz]) = (a, b, c);
-        let (mut t, mut ok, mut exact) = ([0.0f32; 8], 0u32, 0u32);
+        let mut out = Lanes8 { t: [0.0; 8], b1: [0.0; 8], b2: [0.0; 8], ok: 0, exact: 0 };
         for i in 0..8 {
             let u = cx[i] * by[i] - cy[i] * bx[i];
             let vv = ax[i] * cy[i] - ay[i] * cx[i];
@@ -599,13 +668,59 @@ impl TriangleRays8 {
             let outside = ((u < 0.0) | (vv < 0.0) | (w < 0.0)) & ((u > 0.0) | (vv > 0.0) | (w > 0.0));
             let det = u + vv + w;
             let t_scaled = u * az[i] + vv * bz[i] + w * cz[i];
-            t[i] = t_scaled * (1.0 / det);
+            let rcp = 1.0 / det;
+            let t = t_scaled * rcp;
+            (out.t[i], out.b1[i], out.b2[i]) = (t, vv * rcp, w * rcp);
             let pass =
-                !outside & (det != 0.0) & det.is_finite() & (t[i] >= self.t_min[i]) & (t[i] <= self.t_max[i]);
-            ok |= u32::from(pass & !zero) << i;
-            exact |= u32::from(zero) << i;
+                !outside & (det != 0.0) & det.is_finite() & (t >= self.t_min[i]) & (t <= self.t_max[i]);
+            out.ok |= u32::from(pass & !zero) << i;
+            out.exact |= u32::from(zero) << i;
         }
-        (t, ok, exact)
+        out
+    }
+}
+
+/// [`TriangleRays8::lanes`]'s values for one triangle.
+struct Lanes8 {
+    t: [f32; 8],
+    b1: [f32; 8],
+    b2: [f32; 8],
+    ok: u32,
+    exact: u32,
+}
+
+/// Each lane's nearest hit ([`TriangleRays8::closest`]): bit `i` of
+/// `lanes` set when lane `i` hit, then its triangle (lane of the block),
+/// `t` and barycentrics `b1`, `b2`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Nearest8 {
+    /// The lanes with a hit.
+    pub lanes: u32,
+    /// Per lane, the triangle hit (0–3).
+    pub triangle: [u32; 8],
+    /// Per lane, the hit's `t`.
+    pub t: [f32; 8],
+    /// Per lane, the barycentric coordinate of the triangle's second corner.
+    pub b1: [f32; 8],
+    /// Per lane, the barycentric coordinate of the triangle's third corner.
+    pub b2: [f32; 8],
+}
+
+impl Nearest8 {
+    /// Records hit `(t, b1, b2)` on triangle `j` for lane `i`.
+    #[inline(always)]
+    pub fn record(&mut self, i: usize, j: usize, (t, b1, b2): (f32, f32, f32)) {
+        let i = i & 7;
+        self.lanes |= 1 << i;
+        self.triangle[i] = j as u32;
+        (self.t[i], self.b1[i], self.b2[i]) = (t, b1, b2);
+    }
+
+    /// Lane `i`'s hit as `(triangle, t, b1, b2)`.
+    #[must_use]
+    pub fn get(&self, i: usize) -> Option<(usize, f32, f32, f32)> {
+        let i = i & 7;
+        (self.lanes >> i & 1 == 1).then(|| (self.triangle[i] as usize, self.t[i], self.b1[i], self.b2[i]))
     }
 }
 
@@ -821,12 +936,25 @@ mod tests {
             let Some(g) = group else { continue };
             // Each lane's `t`, triangle by triangle, is the scalar test's.
             for j in 0..tris.len as usize {
-                let (t, ok, exact) = g.lanes(&tris, j);
-                for (i, r) in rays.iter().enumerate().filter(|(i, _)| exact >> i & 1 == 0) {
-                    let scalar = r.intersect(&tris.corners(j)).map(|h| h.0.to_bits());
-                    let lane = (ok >> i & 1 == 1).then(|| t[i].to_bits());
+                let l = g.lanes(&tris, j);
+                for (i, r) in rays.iter().enumerate().filter(|(i, _)| l.exact >> i & 1 == 0) {
+                    let scalar = r.intersect(&tris.corners(j)).map(|h| [h.0, h.1, h.2].map(f32::to_bits));
+                    let lane = (l.ok >> i & 1 == 1).then(|| [l.t[i], l.b1[i], l.b2[i]].map(f32::to_bits));
                     assert_eq!(lane, scalar, "case {case}: triangle {j}, ray {i}");
                 }
+            }
+            // Each lane's nearest hit is its ray's `intersect4`, and its
+            // interval is narrowed to it.
+            let mut near = g;
+            let nearest = near.closest(&tris);
+            for (i, r) in rays.iter().enumerate() {
+                let want = r.intersect4(&tris);
+                let bits = |h: Option<(usize, f32, f32, f32)>| {
+                    h.map(|(j, t, b1, b2)| (j, [t, b1, b2].map(f32::to_bits)))
+                };
+                assert_eq!(bits(nearest.get(i)), bits(want), "case {case}: ray {i}");
+                let t_max = want.map_or(g.interval().1[i], |h| h.1);
+                assert_eq!(near.interval().1[i].to_bits(), t_max.to_bits(), "case {case}: ray {i}'s t_max");
             }
             let want = rays.iter().enumerate().fold(0u32, |m, (i, r)| m | u32::from(r.occludes4(&tris)) << i);
             assert_eq!(g.occluded(&tris), want, "case {case}: {tris:?} {rays:?}");
