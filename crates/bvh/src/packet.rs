@@ -22,11 +22,15 @@
 //! and by the same operations as the single-ray node test, eight rays at a
 //! time (SoA); a child no ray enters is culled, and a stack entry carries
 //! the rays that enter it. At a leaf those rays test the leaf's primitives,
-//! each with the single-ray leaf test. A ray therefore tests every
-//! primitive its single-ray walk would find nearest, with the same
-//! primitive test: packet and single queries return the same hits (the
-//! tests compare them), whatever the packet's spread. A spread-out packet
-//! costs more box tests, never a different answer.
+//! each with the single-ray leaf test, or, where at least five reach a
+//! leaf of four triangles, eight rays with the same permuted axes at a
+//! time against one triangle ([`Lanes::occluded8`], [`Lanes::closest8`]:
+//! each lane the single-ray test's operations in the same order). A ray
+//! therefore tests every primitive its single-ray walk would find
+//! nearest, with the same primitive test: packet and single queries
+//! return the same hits (the tests compare them), whatever the packet's
+//! spread. A spread-out packet costs more box tests, never a different
+//! answer.
 //!
 //! A node that few of the packet's rays reach (at most [`PER_RAY`]: the
 //! instances of a grid of objects, deep nodes of a spread-out packet) is
