@@ -67,16 +67,169 @@ pub(crate) fn build(
 /// was about 4 % of the 216-bunny grid's build instructions, and with it
 /// the kitchen's traversal took up to 4 % more instructions and the
 /// other meshes ±1 % (docs/benchmarks.md).
+///
+///
+/// Without pre-splitting, a set of at least `2 * PART_MIN` boxes is first
+/// cut in two by a surface-area split of the box centres ([`split`]); each
+/// side is built the same way, the two in parallel (`rayon::join`), and
+/// the two trees are joined under a new root ([`join`]). obvhs's PLOC
+/// runs its merge passes on one thread and parallelises its search only
+/// for more than 4000 clusters, so one build of the bunny's 69 451
+/// triangles took about as long on two threads as on one. The cut depends
+/// only on the boxes, never on the thread count, so every machine builds
+/// the same tree.
 pub(crate) fn collapsed_tree(
-    aabbs: Vec<ObAabb>,
+    mut aabbs: Vec<ObAabb>,
     tris: Option<&[obvhs::triangle::Triangle]>,
     p: &BvhBuildParams,
 ) -> Bvh2 {
-    let mut bvh = ploc_tree(aabbs, tris, p);
-    if !bvh.nodes.is_empty() {
-        collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
+    if p.pre_split && tris.is_some() {
+        let mut bvh = ploc_tree(aabbs, tris, p);
+        if !bvh.nodes.is_empty() {
+            collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
+        }
+        return bvh;
+    }
+    let mut ids: Vec<u32> = (0..aabbs.len() as u32).collect();
+    part_tree(&mut aabbs, &mut ids, p)
+}
+
+/// Sets smaller than twice this many boxes are built in one piece. Each
+/// cut costs some tree quality where large primitives straddle it (the
+/// kitchen's walls and floor: its binary tree's surface-area cost rose
+/// 1.9 % when cut in two and 5.5 % when cut in four), and lets a set of
+/// `2 * PART_MIN` build on two threads. At `1 << 15` the bunny (69 451 triangles) is cut once and
+/// the kitchen (56 939) not at all (docs/benchmarks.md).
+const PART_MIN: usize = 1 << 15;
+
+/// The collapsed tree over `aabbs`, whose primitive indices are `ids`
+/// (both reordered by the cuts): cut in two and built in parallel while
+/// there are at least `2 * PART_MIN` boxes and [`split`] finds a cut.
+fn part_tree(aabbs: &mut [ObAabb], ids: &mut [u32], p: &BvhBuildParams) -> Bvh2 {
+    if aabbs.is_empty() {
+        return Bvh2::default();
+    }
+    if aabbs.len() >= 2 * PART_MIN
+        && let Some(k) = split(aabbs, ids)
+    {
+        let (la, ra) = aabbs.split_at_mut(k);
+        let (li, ri) = ids.split_at_mut(k);
+        let (l, r) = rayon::join(|| part_tree(la, li, p), || part_tree(ra, ri, p));
+        return join(l, r);
+    }
+    let mut bvh = ploc(aabbs, (0..aabbs.len() as u32).collect(), p);
+    collapse(&mut bvh, p.max_prims_per_leaf.clamp(1, 255), p.collapse_traversal_cost);
+    for i in &mut bvh.primitive_indices {
+        *i = ids[*i as usize];
     }
     bvh
+}
+
+/// Bins per axis of [`split`]'s surface-area sweep.
+const BINS: usize = 32;
+
+/// Cuts the boxes in two by their centres: of the planes between
+/// [`BINS`] equal bins along each axis of the centres' bounds, the one
+/// with the least surface-area cost (each side's box half area times its
+/// count) among those that leave at least a quarter of the boxes on each
+/// side, so that the two builds take similar time. Reorders `aabbs` and
+/// `ids` together so that the first side comes first; returns its
+/// length, or `None` (nothing moved) if no plane qualifies (the centres
+/// bunch in one bin).
+fn split(aabbs: &mut [ObAabb], ids: &mut [u32]) -> Option<usize> {
+    let n = aabbs.len();
+    let mut bounds = ObAabb::empty();
+    for b in aabbs.iter() {
+        bounds.extend(b.center());
+    }
+    let extent = bounds.diagonal();
+    // Per axis and bin: the boxes' union and count.
+    let mut bins = [[(ObAabb::empty(), 0usize); BINS]; 3];
+    let bin = |c: f32, axis: usize| {
+        let f = (c - bounds.min[axis]) / extent[axis] * BINS as f32;
+        (f as usize).min(BINS - 1)
+    };
+    for b in aabbs.iter() {
+        let c = b.center();
+        for (axis, row) in bins.iter_mut().enumerate() {
+            if extent[axis] > 0.0 {
+                let e = &mut row[bin(c[axis], axis)];
+                e.0 = e.0.union(b);
+                e.1 += 1;
+            }
+        }
+    }
+    let mut best: Option<(f32, usize, usize)> = None;
+    for (axis, row) in bins.iter().enumerate() {
+        if !(extent[axis] > 0.0) {
+            continue;
+        }
+        // Right sides' areas and counts, swept from the last bin.
+        let mut right = [(0.0f32, 0usize); BINS];
+        let (mut acc, mut count) = (ObAabb::empty(), 0);
+        for k in (1..BINS).rev() {
+            acc = acc.union(&row[k].0);
+            count += row[k].1;
+            right[k] = (acc.half_area(), count);
+        }
+        let (mut acc, mut count) = (ObAabb::empty(), 0);
+        for k in 1..BINS {
+            acc = acc.union(&row[k - 1].0);
+            count += row[k - 1].1;
+            let (ra, rc) = right[k];
+            if 4 * count.min(rc) < n {
+                continue;
+            }
+            let cost = acc.half_area() * count as f32 + ra * rc as f32;
+            if best.is_none_or(|b| cost < b.0) {
+                best = Some((cost, axis, k));
+            }
+        }
+    }
+    let (_, axis, k) = best?;
+    // Partition both slices: boxes whose centre falls below bin `k` first.
+    let (mut lo, mut hi) = (0, n);
+    while lo < hi {
+        if bin(aabbs[lo].center()[axis], axis) < k {
+            lo += 1;
+        } else {
+            hi -= 1;
+            aabbs.swap(lo, hi);
+            ids.swap(lo, hi);
+        }
+    }
+    Some(lo)
+}
+
+/// The tree with `l` and `r` as the two children of a new root: the root
+/// first, then the two old roots, then the rest of `l`'s nodes and of
+/// `r`'s, each child reference and `r`'s leaves' primitive offsets
+/// renumbered.
+fn join(l: Bvh2, r: Bvh2) -> Bvh2 {
+    let (nl, pl) = (l.nodes.len() as u32, l.primitive_indices.len() as u32);
+    let renumber = |n: &Bvh2Node, node: &dyn Fn(u32) -> u32, prim: u32| {
+        let mut n = *n;
+        n.first_index = if n.is_leaf() { n.first_index + prim } else { node(n.first_index) };
+        n
+    };
+    let in_l = |i: u32| if i == 0 { 1 } else { i + 2 };
+    let in_r = |i: u32| if i == 0 { 2 } else { i + nl + 1 };
+    let mut nodes = Vec::with_capacity(l.nodes.len() + r.nodes.len() + 1);
+    nodes.push(Bvh2Node::new(l.nodes[0].aabb().union(r.nodes[0].aabb()), 0, 1));
+    nodes.push(renumber(&l.nodes[0], &in_l, 0));
+    nodes.push(renumber(&r.nodes[0], &in_r, pl));
+    nodes.extend(l.nodes[1..].iter().map(|n| renumber(n, &in_l, 0)));
+    nodes.extend(r.nodes[1..].iter().map(|n| renumber(n, &in_r, pl)));
+    let mut primitive_indices = l.primitive_indices;
+    primitive_indices.extend_from_slice(&r.primitive_indices);
+    Bvh2 {
+        nodes,
+        primitive_indices,
+        children_are_ordered_after_parents: l.children_are_ordered_after_parents
+            && r.children_are_ordered_after_parents,
+        max_depth: l.max_depth.max(r.max_depth) + 1,
+        ..Bvh2::default()
+    }
 }
 
 /// The binary tree both layouts start from: optional pre-splitting of
@@ -103,14 +256,21 @@ pub(crate) fn ploc_tree(
         obvhs::splits::split_aabbs_preset(&mut aabbs, &mut indices, tris, avg, largest);
         split = true;
     }
+    let mut bvh = ploc(&aabbs, indices, p);
+    bvh.uses_spatial_splits = split;
+    bvh
+}
+
+/// obvhs's PLOC build over `aabbs` (primitive `i`'s index `indices[i]`),
+/// then one pass of reinsertion.
+fn ploc(aabbs: &[ObAabb], indices: Vec<u32>, p: &BvhBuildParams) -> Bvh2 {
     let mut bvh = PlocBuilder::with_capacity(aabbs.len()).build(
         p.ploc_search_distance,
-        &aabbs,
+        aabbs,
         indices,
         p.sort_precision,
         p.search_depth_threshold,
     );
-    bvh.uses_spatial_splits = split;
     ReinsertionOptimizer::default().run(&mut bvh, p.reinsertion_batch_ratio, None);
     bvh
 }
@@ -310,5 +470,96 @@ impl Tree for Bvh2 {
                 },
             };
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prism_testkit::Rng;
+
+    /// `n` boxes in three clumps of different density, and a thin sheet.
+    fn boxes(n: usize, seed: u64) -> Vec<ObAabb> {
+        let mut rng = Rng::new(seed);
+        (0..n)
+            .map(|i| {
+                let c = match i % 4 {
+                    0 => Vec3A::new(rng.range(-10.0, -6.0), rng.range(0.0, 2.0), rng.range(0.0, 2.0)),
+                    1 => Vec3A::new(rng.range(5.0, 5.5), rng.range(-1.0, 1.0), rng.range(3.0, 9.0)),
+                    2 => Vec3A::new(rng.range(-20.0, 20.0), 0.25, rng.range(-20.0, 20.0)),
+                    _ => Vec3A::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-3.0, 3.0)),
+                };
+                let h = Vec3A::new(rng.range(0.0, 0.1), rng.range(0.0, 0.1), rng.range(0.0, 0.1));
+                ObAabb::new(c - h, c + h)
+            })
+            .collect()
+    }
+
+    fn params() -> BvhBuildParams {
+        let mut p = crate::BuildQuality::Medium.params();
+        p.max_prims_per_leaf = 4;
+        p
+    }
+
+    /// Primitives under node `k`.
+    fn prims(bvh: &Bvh2, k: usize) -> u32 {
+        let n = &bvh.nodes[k];
+        if n.is_leaf() {
+            n.prim_count
+        } else {
+            prims(bvh, n.first_index as usize) + prims(bvh, n.first_index as usize + 1)
+        }
+    }
+
+    /// A set large enough to be cut is built into one valid tree (obvhs's
+    /// own check: tight boxes, every primitive once, children after their
+    /// parents), cut at the root into two sides of at least a quarter
+    /// each, and the same tree node for node on one thread as on two.
+    #[test]
+    fn a_cut_build_is_one_valid_tree_whatever_the_threads() {
+        let n = 2 * PART_MIN + 123;
+        let aabbs = boxes(n, 7);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| collapsed_tree(aabbs.clone(), None, &params()))
+        };
+        let (one, two) = (on(1), on(2));
+        let r = one.validate(&aabbs, false, true);
+        assert_eq!(r.prim_count, n);
+        let root = &one.nodes[0];
+        let sides = [prims(&one, root.first_index as usize), prims(&one, root.first_index as usize + 1)];
+        assert!(sides.iter().all(|&s| 4 * s as usize >= n), "root sides {sides:?} of {n}");
+        assert_eq!(one.primitive_indices, two.primitive_indices);
+        assert_eq!(one.nodes.len(), two.nodes.len());
+        for (a, b) in one.nodes.iter().zip(&two.nodes) {
+            assert_eq!((a.aabb(), a.prim_count, a.first_index), (b.aabb(), b.prim_count, b.first_index));
+        }
+    }
+
+    /// `split` reorders boxes and ids together, leaves at least a quarter
+    /// on each side, and some axis separates the two sides' centres; with
+    /// every centre in one point it finds no cut and moves nothing.
+    #[test]
+    fn split_cuts_between_centres_and_keeps_a_quarter_each_side() {
+        for seed in 0..4 {
+            let n = 1000 + 37 * seed as usize;
+            let before = boxes(n, seed);
+            let (mut aabbs, mut ids) = (before.clone(), (0..n as u32).collect::<Vec<_>>());
+            let Some(k) = split(&mut aabbs, &mut ids) else { panic!("seed {seed}: no cut") };
+            assert!(4 * k >= n && 4 * (n - k) >= n, "seed {seed}: {k} of {n}");
+            for (b, &i) in aabbs.iter().zip(&ids) {
+                assert_eq!(*b, before[i as usize]);
+            }
+            let mut sorted = ids.clone();
+            sorted.sort_unstable();
+            assert!(sorted.iter().copied().eq(0..n as u32), "seed {seed}: ids a permutation");
+            let side = |s: &[ObAabb]| s.iter().fold(ObAabb::empty(), |mut a, b| *a.extend(b.center()));
+            let (l, r) = (side(&aabbs[..k]), side(&aabbs[k..]));
+            assert!((0..3).any(|a| l.max[a] <= r.min[a]), "seed {seed}: sides overlap on every axis");
+        }
+        let same = vec![ObAabb::new(Vec3A::ONE, Vec3A::splat(2.0)); 500];
+        let (mut aabbs, mut ids) = (same.clone(), (0..500).collect::<Vec<u32>>());
+        assert_eq!(split(&mut aabbs, &mut ids), None);
+        assert!(ids.iter().copied().eq(0..500));
     }
 }
