@@ -74,7 +74,8 @@ pub(crate) fn build(
 /// the two trees are joined under a new root ([`join`]). obvhs's PLOC
 /// runs its merge passes on one thread and parallelises its search only
 /// for more than 4000 clusters, so one build of the bunny's 69 451
-/// triangles took about as long on two threads as on one. The cut depends
+/// triangles ran only about 1.15× faster on two threads than on one
+/// (docs/benchmarks.md). The cut depends
 /// only on the boxes, never on the thread count, so every machine builds
 /// the same tree.
 pub(crate) fn collapsed_tree(
