@@ -12,7 +12,7 @@ use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Ray, TriangleMesh, TriangleRay, TriangleRays8, Triangles4};
+use prism_geometry::{PacketRays, Ray, TriangleMesh, TriangleRay, TriangleRays8, Triangles4};
 use std::ops::ControlFlow;
 
 /// A mesh's nodes, in one of the two layouts.
@@ -257,7 +257,7 @@ impl Blas {
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
-            tr: [None; N],
+            pr: PacketRays::new(),
             found: [None; N],
         };
         for &(m, fr) in &packet::plan(&br, mask) {
@@ -265,7 +265,8 @@ impl Blas {
                 Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
                 None => {
                     for k in bits(m) {
-                        let tr = v.tr[k].unwrap_or_else(|| TriangleRay::new(&rays[k]));
+                        // A ray of no frustum reaches no packet leaf.
+                        let tr = TriangleRay::new(&rays[k]);
                         let mut c = ClosestTriangle::<false> {
                             tris: v.tris,
                             blocks: v.blocks,
@@ -273,7 +274,7 @@ impl Blas {
                             found: v.found[k],
                         };
                         self.walk(&mut br[k], &mut c);
-                        (v.tr[k], v.found[k]) = (Some(c.tr), c.found);
+                        v.found[k] = c.found;
                     }
                 }
             }
@@ -292,8 +293,14 @@ impl Blas {
         };
         let mut br = [BoxRay::NONE; N];
         packet::set_rays(&mut br, rays, mask);
-        let mut v =
-            AnyTriangles { lanes, tris: &self.tris, blocks: &self.blocks, rays, tr: [None; N], hit: 0 };
+        let mut v = AnyTriangles {
+            lanes,
+            tris: &self.tris,
+            blocks: &self.blocks,
+            rays,
+            pr: PacketRays::new(),
+            hit: 0,
+        };
         for &(m, fr) in &packet::plan(&br, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
@@ -413,36 +420,35 @@ mod x86 {
 
 /// A packet's closest-hit walk over one mesh's triangles: each ray that
 /// meets a leaf tests it as [`ClosestTriangle`] does (per-ray state in flat
-/// arrays, cheaper to set up than a visitor per ray). A ray's
-/// [`TriangleRay`] is made when it first reaches a leaf (many rays of a
-/// packet reach none).
+/// arrays, cheaper to set up than a visitor per ray). The rays'
+/// [`TriangleRay`]s are made eight at a time ([`PacketRays`]) where one of
+/// the eight first reaches a leaf (many rays of a packet reach none).
 struct ClosestTriangles<'a, const N: usize, L> {
     lanes: L,
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
-    tr: [Option<TriangleRay>; N],
+    pr: PacketRays<N>,
     found: [Option<(u32, f32, f32, f32)>; N],
 }
 
 impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
+        self.pr.prepare(self.rays, meet);
         if let Some(block) = self.blocks.get(first as usize / 4)
             && meet.count_ones() >= GROUP_MIN
         {
             let (mut g, mut lane) = (TriangleRays8::empty(), [0u8; 8]);
             let mut rest = meet;
             while rest != 0 {
-                rest &= !group(&mut self.tr, self.rays, rest, &mut g, &mut lane);
+                rest &= !self.pr.group(rest, &mut g, &mut lane);
                 let nearest = self.lanes.closest8(&mut g, block);
                 for i in bits(u64::from(nearest.lanes)) {
                     let Some((j, t, b1, b2)) = nearest.get(i) else { continue };
                     let k = usize::from(lane[i & 7]);
-                    if let (Some(Some(tr)), Some(found), Some(b)) =
-                        (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k))
-                    {
-                        tr.set_t_max(t);
+                    if let (Some(found), Some(b)) = (self.found.get_mut(k), br.get_mut(k)) {
+                        self.pr.set_t_max(k, t);
                         b.set_t_max(t);
                         *found = Some((first + j as u32, t, b1, b2));
                     }
@@ -451,11 +457,14 @@ impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
             return 0;
         }
         for k in bits(meet) {
-            if let (Some(tr), Some(found), Some(b), Some(ray)) =
-                (self.tr.get_mut(k), self.found.get_mut(k), br.get_mut(k), self.rays.get(k))
-            {
-                let tr = first_leaf_ray(tr, ray);
-                closest_in_leaf::<false>(self.tris, self.blocks, tr, found, first, count, b);
+            if let (Some(found), Some(b)) = (self.found.get_mut(k), br.get_mut(k)) {
+                let mut tr = self.pr.ray(k);
+                closest_in_leaf::<false>(self.tris, self.blocks, &mut tr, found, first, count, b);
+                // The ray's interval ends at its nearest hit so far (set
+                // again, unchanged, where this leaf held none nearer).
+                if let Some((_, t, _, _)) = *found {
+                    self.pr.set_t_max(k, t);
+                }
             }
         }
         0
@@ -464,13 +473,13 @@ impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
 
 /// A packet's occlusion walk over one mesh's triangles: collects the
 /// occluded rays in `hit` (and reports them done). A ray's
-/// [`TriangleRay`] is made when it first reaches a leaf, as in [`ClosestTriangles`].
+/// [`TriangleRay`] is made eight at a time, as in [`ClosestTriangles`].
 struct AnyTriangles<'a, const N: usize, L> {
     lanes: L,
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
-    tr: [Option<TriangleRay>; N],
+    pr: PacketRays<N>,
     hit: u64,
 }
 
@@ -478,22 +487,21 @@ impl<const N: usize, L: Lanes> Leaf for &mut AnyTriangles<'_, N, L> {
     #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
         let mut done = 0u64;
+        self.pr.prepare(self.rays, meet);
         match self.blocks.get(first as usize / 4) {
             Some(block) if meet.count_ones() >= GROUP_MIN => {
                 let (mut g, mut lane) = (TriangleRays8::empty(), [0u8; 8]);
                 let mut rest = meet;
                 while rest != 0 {
-                    rest &= !group(&mut self.tr, self.rays, rest, &mut g, &mut lane);
+                    rest &= !self.pr.group(rest, &mut g, &mut lane);
                     let hit = self.lanes.occluded8(&g, block);
                     done |= bits(u64::from(hit)).fold(0u64, |m, i| m | 1 << (lane[i & 7] & 63));
                 }
             }
             _ => {
                 for k in bits(meet) {
-                    if let (Some(tr), Some(ray)) = (self.tr.get_mut(k), self.rays.get(k)) {
-                        let tr = first_leaf_ray(tr, ray);
-                        done |= u64::from(any_in_leaf(self.tris, self.blocks, tr, first, count)) << k;
-                    }
+                    let tr = self.pr.ray(k);
+                    done |= u64::from(any_in_leaf(self.tris, self.blocks, &tr, first, count)) << k;
                 }
             }
         }
@@ -506,54 +514,6 @@ impl<const N: usize, L: Lanes> Leaf for &mut AnyTriangles<'_, N, L> {
 /// [`ClosestTriangles`]) tests eight at a time ([`TriangleRays8`]) rather
 /// than one by one.
 const GROUP_MIN: u32 = 5;
-
-/// Up to eight of the rays of `rest` with the same axes, to test a leaf
-/// at once: the lowest and those after it that [`TriangleRays8::push`]
-/// takes (each ray's [`TriangleRay`] made if not yet), into `g`, with
-/// each lane's ray in `lane`; returns the rays taken. Fills the caller's
-/// group in place: returned by value, it was copied (`memcpy`, 2.4 % of
-/// a kitchen shadow packet's instructions).
-#[inline(always)]
-fn group<const N: usize>(
-    tr: &mut [Option<TriangleRay>; N],
-    rays: &[Ray; N],
-    rest: u64,
-    g: &mut TriangleRays8,
-    lane: &mut [u8; 8],
-) -> u64 {
-    let lowest = rest.trailing_zeros() as usize;
-    let (Some(first), Some(ray)) = (tr.get_mut(lowest), rays.get(lowest)) else {
-        // Not reached: `rest` holds rays of the packet.
-        *g = TriangleRays8::empty();
-        return rest;
-    };
-    g.restart(first_leaf_ray(first, ray));
-    let mut taken = 0u64;
-    for k in bits(rest) {
-        if let (Some(tr), Some(ray)) = (tr.get_mut(k), rays.get(k)) {
-            let i = g.len();
-            if g.push(first_leaf_ray(tr, ray)) {
-                lane[i & 7] = k as u8;
-                taken |= 1 << k;
-                if g.len() == 8 {
-                    break;
-                }
-            }
-        }
-    }
-    taken | 1 << lowest
-}
-
-/// A packet ray's [`TriangleRay`], prepared at the first leaf it reaches.
-/// Not `Option::get_or_insert_with`: its closure stayed a call, compiled
-/// without the caller's AVX2 (perf).
-#[inline(always)]
-fn first_leaf_ray<'a>(tr: &'a mut Option<TriangleRay>, ray: &Ray) -> &'a mut TriangleRay {
-    match tr {
-        Some(tr) => tr,
-        None => tr.insert(TriangleRay::new(ray)),
-    }
-}
 
 /// The nearest hit of `tr` among the leaf's slots `first..first + count`
 /// (a wide leaf's block at once, [`TriangleRay::intersect4`] or, with

@@ -63,7 +63,7 @@ pub use normals::{DEFAULT_CREASE_DEG, with_computed_normals};
 pub use ray::{Ray, offset_ray_origin};
 pub use shape::{Instance, Intersect, Shape};
 pub use shapes::{
-    Cone, Cuboid, Cylinder, Disk, Nearest8, Plane, Sphere, Triangle, TriangleRay, TriangleRays8, Triangles4,
-    azimuth_u, sphere_uv,
+    Cone, Cuboid, Cylinder, Disk, Nearest8, PacketRays, Plane, Sphere, Triangle, TriangleRay, TriangleRays8,
+    Triangles4, azimuth_u, sphere_uv,
 };
 pub use transform::{Shear, Transform};

@@ -15,7 +15,7 @@ pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use plane::Plane;
 pub use sphere::{Sphere, azimuth_u, sphere_uv};
-pub use triangle::{Nearest8, Triangle, TriangleRay, TriangleRays8, Triangles4};
+pub use triangle::{Nearest8, PacketRays, Triangle, TriangleRay, TriangleRays8, Triangles4};
 
 use crate::{GeometryError, Ray};
 

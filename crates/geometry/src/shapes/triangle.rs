@@ -469,15 +469,6 @@ impl TriangleRays8 {
         }
     }
 
-    /// Empties the group for rays with the axes of `first` (which it does
-    /// not add), in place: the lanes keep their old values, which no
-    /// answer reads (every test masks its lanes by [`TriangleRays8::len`]).
-    #[inline(always)]
-    pub fn restart(&mut self, first: &TriangleRay) {
-        self.k = first.k;
-        self.len = 0;
-    }
-
     /// Adds `ray` in the next lane; `false` (and nothing added) when all
     /// eight are taken or its axes differ from the group's.
     #[inline(always)]
@@ -677,6 +668,226 @@ impl TriangleRays8 {
             out.exact |= u32::from(zero) << i;
         }
         out
+    }
+}
+
+/// The rays of a packet (`N` of them, a multiple of 8, at most 64), each
+/// prepared as [`TriangleRay::new`] prepares it, in SoA lanes: made eight
+/// rays at a time where the packet first reaches a leaf
+/// ([`PacketRays::prepare`]), by operations the compiler runs eight lanes
+/// wide, and read from there into a [`TriangleRays8`] group
+/// ([`PacketRays::group`]) or as one [`TriangleRay`] ([`PacketRays::ray`]).
+/// Every lane holds what [`TriangleRay::new`] gives its ray, bit for bit.
+#[derive(Clone, Debug)]
+pub struct PacketRays<const N: usize> {
+    /// The origins on each ray's axes `kx`, `ky`, `kz`.
+    origin: [[f32; N]; 3],
+    /// The shears `sx`, `sy`, `sz`.
+    shear: [[f32; N]; 3],
+    t_min: [f32; N],
+    t_max: [f32; N],
+    /// Each ray's axes, as its index into `AXES`.
+    code: [u8; N],
+    /// The rays made (whole blocks of eight).
+    made: u64,
+    /// Per index into `AXES`, the rays made with those axes.
+    by_code: [u64; 6],
+}
+
+impl<const N: usize> Default for PacketRays<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> PacketRays<N> {
+    /// Blocks of eight rays.
+    const BLOCKS: usize = {
+        assert!(N.is_multiple_of(8) && N <= 64, "a packet of 8, 16, …, 64 rays");
+        N / 8
+    };
+
+    /// No ray made yet.
+    #[inline(always)]
+    #[must_use]
+    pub fn new() -> Self {
+        Self {
+            origin: [[0.0; N]; 3],
+            shear: [[0.0; N]; 3],
+            t_min: [0.0; N],
+            t_max: [0.0; N],
+            code: [0; N],
+            made: 0,
+            by_code: [0; 6],
+        }
+    }
+
+    /// Makes the rays of `want` not made yet, with the others of their
+    /// blocks of eight: ray `k` from `rays[k]`, whose direction must be
+    /// non-zero and finite, as for [`TriangleRay::new`] (another ray's
+    /// lanes hold values no answer reads).
+    #[inline(always)]
+    pub fn prepare(&mut self, rays: &[Ray; N], want: u64) {
+        let todo = want & !self.made;
+        if todo == 0 {
+            return;
+        }
+        for b in 0..Self::BLOCKS {
+            if todo >> (8 * b) & 0xff != 0 {
+                self.prepare8(rays, b);
+            }
+        }
+    }
+
+    /// Makes block `b` (rays `8b..8b + 8`).
+    #[inline(always)]
+    fn prepare8(&mut self, rays: &[Ray; N], b: usize) {
+        let base = 8 * b;
+        let Some(block) = rays.get(base..base + 8) else { return };
+        let mut o = [[0.0f32; 8]; 3];
+        let mut d = [[0.0f32; 8]; 3];
+        let (mut t0, mut t1) = ([0.0f32; 8], [0.0f32; 8]);
+        for (i, r) in block.iter().enumerate() {
+            let (ro, rd) = (r.origin.to_array(), r.dir.to_array());
+            for a in 0..3 {
+                o[a][i] = ro[a];
+                d[a][i] = rd[a];
+            }
+            (t0[i], t1[i]) = finite_interval(r.t_min, r.t_max);
+        }
+        let mut code = [0u8; 8];
+        let mut out = [[0.0f32; 8]; 6];
+        for i in 0..8 {
+            let (dx, dy, dz) = (d[0][i], d[1][i], d[2][i]);
+            let (ox, oy, oz) = (o[0][i], o[1][i], o[2][i]);
+            let (ax, ay, az) = (dx.abs(), dy.abs(), dz.abs());
+            // As `TriangleRay::new`: the dominant axis `kz`, then
+            // `kx = (kz + 1) % 3`, `ky = (kx + 1) % 3`, swapped where
+            // `d[kz] < 0`; by selects, which run eight lanes wide.
+            let x_wins = (ax >= ay) & (ax >= az);
+            let y_wins = ay >= az;
+            let (pz, pa, pb, qz, qa, qb) = if x_wins {
+                (dx, dy, dz, ox, oy, oz)
+            } else if y_wins {
+                (dy, dz, dx, oy, oz, ox)
+            } else {
+                (dz, dx, dy, oz, ox, oy)
+            };
+            let neg = pz < 0.0;
+            let (px, py, qx, qy) = if neg { (pb, pa, qb, qa) } else { (pa, pb, qa, qb) };
+            let kz = u8::from(!x_wins) * (1 + u8::from(!y_wins));
+            code[i] = kz * 2 + u8::from(neg);
+            // `[d[kx], d[ky], 1] / dz`, the quotients of `TriangleRay::new`.
+            out[0][i] = px / pz;
+            out[1][i] = py / pz;
+            out[2][i] = 1.0 / pz;
+            out[3][i] = qx;
+            out[4][i] = qy;
+            out[5][i] = qz;
+        }
+        for a in 0..3 {
+            self.shear[a][base..base + 8].copy_from_slice(&out[a]);
+            self.origin[a][base..base + 8].copy_from_slice(&out[3 + a]);
+        }
+        self.t_min[base..base + 8].copy_from_slice(&t0);
+        self.t_max[base..base + 8].copy_from_slice(&t1);
+        self.code[base..base + 8].copy_from_slice(&code);
+        for (c, m) in self.by_code.iter_mut().enumerate() {
+            let lanes =
+                code.iter().enumerate().fold(0u64, |m, (i, &k)| m | u64::from(usize::from(k) == c) << i);
+            *m |= lanes << base;
+        }
+        self.made |= 0xff << base;
+    }
+
+    /// Whether ray `k` is made.
+    #[inline(always)]
+    #[must_use]
+    pub fn is_made(&self, k: usize) -> bool {
+        k < N && self.made >> k & 1 == 1
+    }
+
+    /// Ray `k` (made), as [`TriangleRay::new`] gives it, with its interval
+    /// as narrowed since.
+    #[inline(always)]
+    #[must_use]
+    pub fn ray(&self, k: usize) -> TriangleRay {
+        let k = k % N;
+        TriangleRay {
+            origin: [self.origin[0][k], self.origin[1][k], self.origin[2][k]],
+            k: AXES[usize::from(self.code[k]) % 6],
+            shear: [self.shear[0][k], self.shear[1][k], self.shear[2][k]],
+            t_min: self.t_min[k],
+            t_max: self.t_max[k],
+        }
+    }
+
+    /// Narrows ray `k`'s interval to end at `t_max` (after a closer hit),
+    /// as [`TriangleRay::set_t_max`].
+    #[inline(always)]
+    pub fn set_t_max(&mut self, k: usize, t_max: f32) {
+        let k = k % N;
+        self.t_max[k] = finite_interval(self.t_min[k], t_max).1;
+    }
+
+    /// Fills `g` with up to eight made rays of `rest` that share axes: the
+    /// lowest and those after it with its axes, in order (the rays
+    /// [`TriangleRays8::push`] takes from them), with each lane's ray in
+    /// `lane`; returns the rays taken.
+    #[inline(always)]
+    pub fn group(&self, rest: u64, g: &mut TriangleRays8, lane: &mut [u8; 8]) -> u64 {
+        let lowest = rest.trailing_zeros() as usize;
+        if lowest >= N || self.made >> lowest & 1 == 0 {
+            *g = TriangleRays8::empty();
+            return rest;
+        }
+        let c = usize::from(self.code[lowest]) % 6;
+        let mut taken = rest & self.by_code[c];
+        // Keep the first eight: `after` ends as the bits past the eighth.
+        let mut after = taken;
+        for _ in 0..8 {
+            after &= after.wrapping_sub(1);
+        }
+        taken ^= after;
+        g.k = AXES[c];
+        g.len = taken.count_ones() as usize;
+        let run = taken >> lowest;
+        if run & (run + 1) == 0 && lowest + 8 <= N {
+            // Consecutive rays: eight lanes copied at once (those past
+            // `len` hold other rays, which no answer reads).
+            for (i, l) in lane.iter_mut().enumerate() {
+                *l = (lowest + i) as u8;
+            }
+            let from = |x: &[f32; N]| -> [f32; 8] {
+                let mut v = [0.0; 8];
+                v.copy_from_slice(&x[lowest..lowest + 8]);
+                v
+            };
+            g.origin = [from(&self.origin[0]), from(&self.origin[1]), from(&self.origin[2])];
+            g.shear = [from(&self.shear[0]), from(&self.shear[1]), from(&self.shear[2])];
+            g.t_min = from(&self.t_min);
+            g.t_max = from(&self.t_max);
+        } else {
+            // Each lane's ray (the lanes past `len` repeat the lowest),
+            // then each row built whole from its eight values: stored lane
+            // by lane and read back as one vector, a row waited on the
+            // stores.
+            let mut m = taken;
+            let mut ks = [lowest; 8];
+            for (k, l) in ks.iter_mut().zip(lane.iter_mut()) {
+                if m != 0 {
+                    *k = m.trailing_zeros() as usize % N;
+                    m &= m - 1;
+                }
+                *l = *k as u8;
+            }
+            let row = |x: &[f32; N]| ks.map(|k| x[k % N]);
+            g.origin = [row(&self.origin[0]), row(&self.origin[1]), row(&self.origin[2])];
+            g.shear = [row(&self.shear[0]), row(&self.shear[1]), row(&self.shear[2])];
+            g.t_min = row(&self.t_min);
+            g.t_max = row(&self.t_max);
+        }
+        taken
     }
 }
 
@@ -962,6 +1173,139 @@ mod tests {
             exact += u32::from(case % 4 == 0 && want != 0);
         }
         assert!(hits > 2500 && exact > 200 && refused > 1000, "{hits} {exact} {refused}");
+    }
+
+    /// A [`TriangleRay`]'s fields as bits, to compare two bit for bit.
+    fn ray_bits(r: &TriangleRay) -> ([u32; 3], [usize; 3], [u32; 3], [u32; 2]) {
+        (r.origin.map(f32::to_bits), r.k, r.shear.map(f32::to_bits), [r.t_min.to_bits(), r.t_max.to_bits()])
+    }
+
+    /// `N` rays for [`PacketRays`]: near one direction (or, in every
+    /// fourth case, any), with zero and `-0.0` components, components of
+    /// equal size (ties for the dominant axis), lattice values and the
+    /// interval kinds of the eight-ray test.
+    fn packet_of<const N: usize>(f: &mut impl FnMut() -> f32, case: usize) -> [Ray; N] {
+        let d0 = Vec3::new(f(), f(), f());
+        std::array::from_fn(|i| {
+            let mut d = if case.is_multiple_of(4) {
+                Vec3::new(f(), f(), f())
+            } else {
+                d0 + Vec3::new(f(), f(), f()) * 0.1
+            };
+            match (case + i) % 13 {
+                0 => d[i % 3] = 0.0,
+                1 => d[i % 3] = -0.0,
+                2 => d = Vec3::new(d.x, d.x, -d.x),
+                3 => d = Vec3::new(-d.y, d.y, d.z.abs().min(d.y.abs())),
+                4 => d = Vec3::new(0.0, -0.0, d.z),
+                6 => d = Vec3::new(d.x * 0.5, d.y, -d.y),
+                5 => d = d.round(),
+                _ => {}
+            }
+            if d == Vec3::ZERO {
+                d = Vec3::NEG_Y;
+            }
+            let o = Vec3::new(f(), f(), f()) * 3.0;
+            let (t_min, t_max) =
+                [(0.0, f32::INFINITY), (0.5, 1.5), (f32::MIN, f32::MAX), (-1.0, 0.25)][(case + i) % 4];
+            Ray::with_interval(o, d, t_min, t_max)
+        })
+    }
+
+    /// A random mask of `N` bits: dense, sparse, one run, or all.
+    fn mask_of<const N: usize>(f: &mut impl FnMut() -> f32, case: usize) -> u64 {
+        let all = if N == 64 { u64::MAX } else { (1 << N) - 1 };
+        let bits = (0..N).fold(0u64, |m, k| m | u64::from(f() > [-0.8, 0.0, 0.7][case % 3]) << k);
+        let run = (all >> (case % N)) << (case / 3 % N) & all;
+        [bits, bits, run, all][case / 2 % 4] & all
+    }
+
+    /// Each made ray of a [`PacketRays`] is [`TriangleRay::new`]'s ray,
+    /// bit for bit, in packets of 16 and 64, made whole blocks of eight at
+    /// a time; and narrowing its interval is [`TriangleRay::set_t_max`].
+    #[test]
+    fn packet_rays_are_triangle_ray_new_bit_for_bit() {
+        fn check<const N: usize>(f: &mut impl FnMut() -> f32, case: usize) -> usize {
+            let rays = packet_of::<N>(f, case);
+            let want = mask_of::<N>(f, case);
+            let mut pr = PacketRays::<N>::new();
+            pr.prepare(&rays, want);
+            // A second call makes nothing more and changes nothing.
+            pr.prepare(&rays, want);
+            let mut seen = 0;
+            for (k, ray) in rays.iter().enumerate() {
+                let block_wanted = want >> (k / 8 * 8) & 0xff != 0;
+                assert_eq!(pr.is_made(k), block_wanted, "case {case}: ray {k}");
+                if !block_wanted {
+                    continue;
+                }
+                let mut tr = TriangleRay::new(ray);
+                assert_eq!(ray_bits(&pr.ray(k)), ray_bits(&tr), "case {case}: ray {k} {ray:?}");
+                let t = f().abs() * 2.0;
+                tr.set_t_max(t);
+                let mut narrowed = pr.clone();
+                narrowed.set_t_max(k, t);
+                assert_eq!(ray_bits(&narrowed.ray(k)), ray_bits(&tr), "case {case}: ray {k} narrowed to {t}");
+                seen += 1;
+            }
+            seen
+        }
+        let mut f = uniform(0x2545_f491_u64);
+        let mut made = 0;
+        for case in 0..3000 {
+            made += check::<64>(&mut f, case) + check::<16>(&mut f, case);
+        }
+        assert!(made > 100_000, "{made}");
+    }
+
+    /// [`PacketRays::group`] takes the rays [`TriangleRays8::push`] takes
+    /// (the lowest of `rest` and those after it with its axes, up to
+    /// eight) in the same lanes, and the group answers as the pushed one
+    /// does, whether its rays lie in one run or apart.
+    #[test]
+    fn packet_groups_are_the_pushed_groups() {
+        fn check<const N: usize>(f: &mut impl FnMut() -> f32, case: usize, runs: &mut [usize; 2]) {
+            let rays = packet_of::<N>(f, case);
+            let meet = mask_of::<N>(f, case);
+            let tris = Triangles4::new(&random_leaf(f, case));
+            let mut pr = PacketRays::<N>::new();
+            pr.prepare(&rays, meet);
+            let prepared: Vec<TriangleRay> = rays.iter().map(TriangleRay::new).collect();
+            let (mut g, mut lane) = (TriangleRays8::empty(), [0u8; 8]);
+            let mut rest = meet;
+            while rest != 0 {
+                let lowest = rest.trailing_zeros() as usize;
+                let mut want = TriangleRays8::like(&prepared[lowest]);
+                let mut want_lanes = Vec::new();
+                for k in (lowest..N).filter(|&k| rest >> k & 1 == 1) {
+                    if want.push(&prepared[k]) {
+                        want_lanes.push(k as u8);
+                    }
+                }
+                let taken = pr.group(rest, &mut g, &mut lane);
+                let want_taken = want_lanes.iter().fold(0u64, |m, &k| m | 1 << k);
+                assert_eq!(taken, want_taken, "case {case}: rest {rest:#x}");
+                assert_eq!((g.len(), g.k), (want.len(), want.k), "case {case}");
+                assert_eq!(&lane[..g.len()], &want_lanes[..], "case {case}");
+                for i in 0..g.len() {
+                    assert_eq!(ray_bits(&g.ray(i)), ray_bits(&want.ray(i)), "case {case}: lane {i}");
+                }
+                assert_eq!(g.occluded(&tris), want.occluded(&tris), "case {case}");
+                let (mut a, mut b) = (g, want);
+                assert_eq!(a.closest(&tris), b.closest(&tris), "case {case}");
+                let run = taken >> lowest;
+                runs[usize::from(run & (run + 1) == 0 && lowest + 8 <= N)] += 1;
+                rest &= !taken;
+            }
+        }
+        let mut f = uniform(0x6c07_8965_u64);
+        let mut runs = [0; 2];
+        for case in 0..3000 {
+            check::<64>(&mut f, case, &mut runs);
+            check::<16>(&mut f, case, &mut runs);
+        }
+        // Both ways of filling a group ran, many times.
+        assert!(runs[0] > 2000 && runs[1] > 2000, "{runs:?}");
     }
 
     /// The prepared ray runs along +z in its sheared frame, whichever axis
