@@ -830,14 +830,16 @@ impl<const N: usize> PacketRays<N> {
         self.t_max[k] = finite_interval(self.t_min[k], t_max).1;
     }
 
-    /// Fills `g` with up to eight made rays of `rest` that share axes: the
-    /// lowest and those after it with its axes, in order (the rays
-    /// [`TriangleRays8::push`] takes from them), with each lane's ray in
-    /// `lane`; returns the rays taken.
+    /// Fills `g` with up to eight rays of `rest` (all made, by
+    /// [`PacketRays::prepare`]) that share axes: the lowest and those after
+    /// it with its axes, in order (the rays [`TriangleRays8::push`] takes
+    /// from them), with each lane's ray in `lane`; returns the rays taken.
     #[inline(always)]
     pub fn group(&self, rest: u64, g: &mut TriangleRays8, lane: &mut [u8; 8]) -> u64 {
+        debug_assert!(rest & !self.made == 0, "every ray of `rest` made ({rest:#x}, {:#x})", self.made);
         let lowest = rest.trailing_zeros() as usize;
         if lowest >= N || self.made >> lowest & 1 == 0 {
+            // Not reached: the caller made the rays of `rest`.
             *g = TriangleRays8::empty();
             return rest;
         }
@@ -869,9 +871,9 @@ impl<const N: usize> PacketRays<N> {
             g.t_max = from(&self.t_max);
         } else {
             // Each lane's ray (the lanes past `len` repeat the lowest),
-            // then each row built whole from its eight values: stored lane
-            // by lane and read back as one vector, a row waited on the
-            // stores.
+            // then each row built whole from its eight values: written
+            // lane by lane into the group, as `push` writes, the kitchen's
+            // shadow packets measured 6 % slower (docs/benchmarks.md).
             let mut m = taken;
             let mut ks = [lowest; 8];
             for (k, l) in ks.iter_mut().zip(lane.iter_mut()) {
