@@ -21,7 +21,7 @@
 //! from the project root with `--data ../shared/data` unless `--data` is
 //! given. Arguments pass through: `--mesh PATH [--grid N]`, `--reps N`,
 //! `--threads 1,2`, `--quality NAME`, `--width W --height H`, `--queries
-//! primary,primary-packet,incoherent,shadow,shadow-packet` (a subset of the
+//! primary,primary-packet,incoherent,incoherent-packet,shadow,shadow-packet` (a subset of the
 //! ray sets, e.g. to profile one). JSON lines go to stdout, the table to
 //! stderr. See docs/benchmarks.md.
 

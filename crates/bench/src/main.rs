@@ -12,7 +12,8 @@
 //! Without `--mesh`: the Stanford bunny, the kitchen, and a 6×6×6 grid of
 //! bunny instances, from `DIR` (default `../shared/data`).
 //!
-//! The closest-hit sets (`primary`, `primary-packet`, `incoherent`) ask
+//! The closest-hit sets (`primary`, `primary-packet`, `incoherent`,
+//! `incoherent-packet`) ask
 //! for hit records (`Accel::closest_record`: object, triangle, `t`,
 //! barycentrics), as Embree's `rtcIntersect` answers, not for the shading
 //! hit the renderer then builds with `Accel::resolve`.
@@ -47,7 +48,8 @@ struct Options {
 }
 
 /// The ray sets and queries the harness runs, in order.
-const QUERIES: [&str; 5] = ["primary", "primary-packet", "incoherent", "shadow", "shadow-packet"];
+const QUERIES: [&str; 6] =
+    ["primary", "primary-packet", "incoherent", "incoherent-packet", "shadow", "shadow-packet"];
 
 fn parse(args: &[String]) -> Result<Options, Error> {
     let mut o = Options {
@@ -93,7 +95,7 @@ fn parse(args: &[String]) -> Result<Options, Error> {
                 eprintln!(
                     "prism-bench [--data DIR] [--mesh PATH [--grid N]] [--reps N] [--threads 1,2] \
                      [--quality fastest|very-fast|fast|medium|slow|very-slow] [--width W --height H] \
-                     [--queries primary,primary-packet,incoherent,shadow,shadow-packet]"
+                     [--queries primary,primary-packet,incoherent,incoherent-packet,shadow,shadow-packet]"
                 );
                 std::process::exit(0);
             }
@@ -191,10 +193,11 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
             })
             .sum()
     };
-    let sets: [(&'static str, &[Ray], Query<'_>); 5] = [
+    let sets: [(&'static str, &[Ray], Query<'_>); 6] = [
         ("primary", &primary, &closest),
         ("primary-packet", &primary, &closest_packet),
         ("incoherent", &incoherent, &closest),
+        ("incoherent-packet", &incoherent, &closest_packet),
         ("shadow", &shadow, &occluded),
         ("shadow-packet", &shadow, &occluded_packet),
     ];
