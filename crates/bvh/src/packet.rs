@@ -39,9 +39,16 @@
 //! same children and rays as the frustum and a per-child test would keep,
 //! for less work where the frustum is loose over few rays.
 //!
+//! A packet whose rays run into [`MIXED_OCTANTS`] or more octants
+//! (secondary rays from neighbouring points into their hemispheres) is not
+//! split by octant: all its rays walk together, every node tested ray by
+//! ray, each ray with its own octant's planes ([`Frustum::mixed`]). Split,
+//! each octant's handful of rays walked the tree alone, and the rays from
+//! one point, which share the nodes around it, never met at them.
+//!
 //! Rays that fit no frustum (a zero direction component, whose reciprocal
-//! is infinite) and octants holding fewer than [`MIN_PACKET`] rays walk
-//! alone.
+//! is infinite) and octants (or a mixed packet) holding fewer than
+//! [`MIN_PACKET`] rays walk alone.
 
 use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
 use crate::wide::{FIRST_BITS, LEAF, Node, NodeTest, ROWS, WIDTH, WideBvh, WideRay, max_ps, min_ps};
@@ -73,6 +80,12 @@ pub(crate) const MIN_PACKET: u32 = 4;
 /// fewest instructions on the 216-bunny grid's packets (2, 4, 8, 16, 32
 /// and 64 measured; docs/benchmarks.md).
 const PER_RAY: u32 = 16;
+
+/// A packet whose rays run into at least this many octants walks as one
+/// mixed packet ([`Frustum::mixed`]), not octant by octant. Incoherent
+/// packets measured 11-23 % faster so; 2, 3 and 5 measured alike
+/// (docs/benchmarks.md, "Incoherent packets walked whole").
+const MIXED_OCTANTS: usize = 3;
 
 /// How a packet tests one box against eight of its rays at once: the
 /// single-ray node test's operations, in its order, per ray. The portable
@@ -509,7 +522,10 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
 }
 
 /// How the rays of `mask` walk: per octant, the rays and, when there are
-/// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one).
+/// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one);
+/// or, when they run into [`MIXED_OCTANTS`] or more octants, all of them
+/// in entry 0 with [`Frustum::mixed`] (entry 8, as always, holding those
+/// with a zero direction component, which walk alone).
 /// One pass over the rays sorts them into `octants` (a test-only
 /// reference) and bounds those in the first ray's octant; any other octant
 /// big enough for a packet is bounded by [`Frustum::new`] (the tests
@@ -542,9 +558,16 @@ pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
             t_min = t_min.min(b.t_min);
         }
     }
+    let mut out = [(0u64, None); 9];
+    let spread = groups[..8].iter().filter(|&&m| m != 0).count();
+    if spread >= MIXED_OCTANTS {
+        let all = mask & !groups[8];
+        out[0] = (all, (all.count_ones() >= MIN_PACKET).then(Frustum::mixed));
+        out[8] = (groups[8], None);
+        return out;
+    }
     // A loop, not `std::array::from_fn`: its closure was left out of line
     // in some builds of the packet walks (callgrind).
-    let mut out = [(0u64, None); 9];
     for (o, (slot, &m)) in out.iter_mut().zip(&groups).enumerate() {
         *slot = if o == 8 || m.count_ones() < MIN_PACKET {
             (m, None)
@@ -579,6 +602,9 @@ pub(crate) struct Frustum {
     /// Every ray starts at the same point (a pinhole camera's rays, shadow
     /// rays from one shading point): two corner products instead of four.
     same_origin: bool,
+    /// Rays of several octants walked together, every node tested ray by
+    /// ray with each ray's own rows (the bounds and rows here unused).
+    mixed: bool,
 }
 
 impl Frustum {
@@ -605,6 +631,17 @@ impl Frustum {
         Some(Self::from_bounds(signs, [o_lo, o_hi], [inv_lo, inv_hi], t_min))
     }
 
+    /// For the rays of a packet that run into several octants, walked
+    /// together: every node is tested ray by ray ([`Soa::per_ray`]) with
+    /// each ray's own rows, so nothing of the frustum is read. Its bounds
+    /// are empty, so that a frustum test with it would keep nothing (and
+    /// the tests comparing packets with single rays would fail).
+    #[inline(always)]
+    fn mixed() -> Self {
+        let none = [Vec3A::INFINITY, Vec3A::NEG_INFINITY];
+        Self { mixed: true, ..Self::from_bounds(0, none, none, f32::INFINITY) }
+    }
+
     /// From the bounds of rays of the octant `signs` (bit `a` set when
     /// axis `a` runs negative): their origins, reciprocals and smallest
     /// `t_min`.
@@ -621,6 +658,7 @@ impl Frustum {
             far_row,
             t_min,
             same_origin: o_lo == o_hi,
+            mixed: false,
         }
     }
 
@@ -695,17 +733,22 @@ struct Soa<const N: usize> {
     reach: [f32; N],
     /// Lanes to test: the highest active ray's, rounded up to eight.
     len: usize,
+    /// Each ray's octant (bit `a` set when axis `a` runs negative), for
+    /// the rows of a [`Frustum::mixed`] walk.
+    oct: [u8; N],
 }
 
 impl<const N: usize> Soa<N> {
+    /// `mixed`: also each ray's octant (for a [`Frustum::mixed`] walk).
     #[inline(always)]
-    fn new(br: &[BoxRay], active: u64) -> Self {
+    fn new(br: &[BoxRay], active: u64, mixed: bool) -> Self {
         let mut s = Self {
             origin: [[0.0; N]; 3],
             inv: [[1.0; N]; 3],
             t_min: [f32::INFINITY; N],
             reach: [f32::NEG_INFINITY; N],
             len: ((64 - active.leading_zeros() as usize).div_ceil(8) * 8).min(N),
+            oct: [0; N],
         };
         for k in bits(active) {
             let Some(b) = br.get(k) else { continue };
@@ -716,6 +759,9 @@ impl<const N: usize> Soa<N> {
             }
             s.t_min[k] = b.t_min;
             s.reach[k] = b.reach();
+            if mixed {
+                s.oct[k] = (b.inv.cmplt(Vec3A::ZERO).bitmask() & 7) as u8;
+            }
         }
         s
     }
@@ -779,6 +825,24 @@ impl<const N: usize> Soa<N> {
     /// and a [`Soa::meet`] per child it lets through.
     #[inline(always)]
     fn per_ray(&self, lanes: impl Lanes, fr: &Frustum, node: &Node, want: u64, out: &mut Hits) -> usize {
+        // The rows' choice out of the loop over the rays.
+        if fr.mixed {
+            self.per_ray_in::<true>(lanes, fr, node, want, out)
+        } else {
+            self.per_ray_in::<false>(lanes, fr, node, want, out)
+        }
+    }
+
+    /// [`Soa::per_ray`], each ray with its own rows where `MIXED`.
+    #[inline(always)]
+    fn per_ray_in<const MIXED: bool>(
+        &self,
+        lanes: impl Lanes,
+        fr: &Frustum,
+        node: &Node,
+        want: u64,
+        out: &mut Hits,
+    ) -> usize {
         let mut near = [f32::INFINITY; WIDTH];
         let mut met = [0u64; WIDTH];
         let mut any = 0u32;
@@ -786,11 +850,13 @@ impl<const N: usize> Soa<N> {
             if k >= N {
                 break;
             }
+            let (near_row, far_row) =
+                if MIXED { ROWS[usize::from(self.oct[k]) & 7] } else { (fr.near_row, fr.far_row) };
             let r = WideRay {
                 origin: [self.origin[0][k], self.origin[1][k], self.origin[2][k]],
                 inv: [self.inv[0][k], self.inv[1][k], self.inv[2][k]],
-                near_row: fr.near_row,
-                far_row: fr.far_row,
+                near_row,
+                far_row,
                 t_min: self.t_min[k],
             };
             let mut t_near = [0.0f32; WIDTH];
@@ -881,8 +947,10 @@ impl WideBvh {
         if nodes.is_empty() || active == 0 {
             return;
         }
-        let mut soa = Soa::<N>::new(br, active & (u64::MAX >> (64 - N.min(64))));
+        let mut soa = Soa::<N>::new(br, active & (u64::MAX >> (64 - N.min(64))), fr.mixed);
         let mut reach = soa.max_reach();
+        // A mixed walk tests every node ray by ray.
+        let per_ray = if fr.mixed { u64::BITS } else { PER_RAY };
         // The node or leaf taken next, and the rays that meet its box.
         let (mut cur, mut rays) = (0u32, active);
         loop {
@@ -891,7 +959,7 @@ impl WideBvh {
                 let mut out =
                     Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
                 let want = rays & active;
-                let kept = if want.count_ones() <= PER_RAY {
+                let kept = if want.count_ones() <= per_ray {
                     soa.per_ray(lanes, fr, node, want, &mut out)
                 } else {
                     let n = fr.hits(node, reach, &mut out).min(WIDTH);
@@ -1065,6 +1133,7 @@ mod tests {
                     _ => rng() * 100.0 - 10.0,
                 }),
                 len: (1 + (rng() * 8.0) as usize).min(8) * 8,
+                oct: [0; PACKET],
             };
             let fold = |reach: &[f32]| reach.iter().fold(f32::NEG_INFINITY, |r, &x| max_ps(x, r));
             let want = fold(&soa.reach[..soa.len]);
@@ -1076,6 +1145,7 @@ mod tests {
                 t_min: [0.0; SMALL_PACKET],
                 reach: std::array::from_fn(|k| soa.reach[k]),
                 len: 16,
+                oct: [0; SMALL_PACKET],
             };
             assert_eq!(small.max_reach().to_bits(), fold(&soa.reach[..16]).to_bits());
             assert_eq!(soa.max_reach().to_bits(), fold(&soa.reach[..16]).to_bits());
@@ -1083,12 +1153,18 @@ mod tests {
     }
 
     /// `plan`'s one pass gives the reference's groups and frustums: rays
-    /// of mixed octants, zero direction components, partial masks.
+    /// of mixed octants, zero direction components, partial masks; and
+    /// rays of at least [`MIXED_OCTANTS`] octants go together, with the
+    /// mixed frustum.
     #[test]
     fn plan_matches_octants_and_frustum_new() {
         let mut r = prism_testkit::Rng::new(11);
         let mut rng = move || r.f32();
-        for _ in 0..500 {
+        let (mut by_octant, mut mixed) = (0, 0);
+        for i in 0..600 {
+            // Packets mostly of one octant (as camera and shadow rays),
+            // and packets of every octant (as hemisphere rays).
+            let one = [1.0, 0.97, 0.8, 0.0][i % 4];
             let rays: Vec<Ray> = (0..PACKET)
                 .map(|_| {
                     let o = Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0;
@@ -1096,8 +1172,7 @@ mod tests {
                     if rng() < 0.05 {
                         d.y = if rng() < 0.5 { 0.0 } else { -0.0 };
                     }
-                    // Mostly one octant, as a real packet.
-                    if rng() < 0.8 {
+                    if rng() < one {
                         d = d.abs();
                     }
                     Ray::with_interval(o, d, rng(), 10.0)
@@ -1107,6 +1182,16 @@ mod tests {
             let mask = (u64::from(rng().to_bits()) << 32 | u64::from(rng().to_bits())) | 1;
             let got = plan(&br, mask);
             let groups = octants(&br, mask);
+            if groups[..8].iter().filter(|&&m| m != 0).count() >= MIXED_OCTANTS {
+                mixed += 1;
+                let all = mask & !groups[8];
+                assert_eq!(got[0].0, all, "every finite ray together");
+                assert_eq!(got[0].1, (all.count_ones() >= MIN_PACKET).then(Frustum::mixed));
+                assert_eq!(got[8], (groups[8], None), "zero components apart");
+                assert!(got[1..8].iter().all(|g| *g == (0, None)));
+                continue;
+            }
+            by_octant += 1;
             for o in 0..9 {
                 assert_eq!(got[o].0, groups[o], "octant {o}");
                 let want = (o < 8 && groups[o].count_ones() >= MIN_PACKET)
@@ -1115,6 +1200,7 @@ mod tests {
                 assert_eq!(got[o].1, want, "octant {o}");
             }
         }
+        assert!(by_octant > 100 && mixed > 100, "{by_octant} by octant, {mixed} mixed");
     }
 
     /// A node of eight random boxes in `[-5, 5]³`, lane `k`'s child
@@ -1161,7 +1247,7 @@ mod tests {
                     Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
                 let n = fr.hits(&node, f32::INFINITY, &mut out);
                 let entered: Vec<u8> = out.lane[..n].to_vec();
-                let soa = Soa::<PACKET>::new(&br, m);
+                let soa = Soa::<PACKET>::new(&br, m, false);
                 for lane in 0..WIDTH {
                     let meet = soa.meet(Portable, &fr, &node, lane, u64::MAX);
                     assert_eq!(meet & !m, 0, "only the packet's rays");
@@ -1174,9 +1260,13 @@ mod tests {
                         );
                     }
                     for k in bits(m) {
-                        let alone =
-                            Soa::<SMALL_PACKET>::new(&br, 1 << k).meet(Portable, &fr, &node, lane, 1 << k)
-                                != 0;
+                        let alone = Soa::<SMALL_PACKET>::new(&br, 1 << k, false).meet(
+                            Portable,
+                            &fr,
+                            &node,
+                            lane,
+                            1 << k,
+                        ) != 0;
                         assert_eq!(
                             meet >> k & 1 == 1,
                             alone,
@@ -1220,7 +1310,7 @@ mod tests {
                 let Some(&m) = g[..8].iter().max_by_key(|m| m.count_ones()) else { continue };
                 let Some(fr) = Frustum::new(&br, m) else { panic!("one octant") };
                 let node = random_node(&mut rng, 100);
-                let mut soa = Soa::<PACKET>::new(&br, m);
+                let mut soa = Soa::<PACKET>::new(&br, m, false);
                 // Some rays out of the walk, as after an occluded leaf.
                 let mut active = m;
                 for k in bits(m) {
