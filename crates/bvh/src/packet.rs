@@ -83,7 +83,7 @@ const PER_RAY: u32 = 16;
 
 /// A packet whose rays run into at least this many octants walks as one
 /// mixed packet ([`Frustum::mixed`]), not octant by octant. Incoherent
-/// packets measured 11-23 % faster so; 2, 3 and 5 measured alike
+/// packets measured 10-22 % faster so; 2, 3 and 5 measured alike
 /// (docs/benchmarks.md, "Incoherent packets walked whole").
 const MIXED_OCTANTS: usize = 3;
 
