@@ -633,9 +633,8 @@ impl Frustum {
 
     /// For the rays of a packet that run into several octants, walked
     /// together: every node is tested ray by ray ([`Soa::per_ray`]) with
-    /// each ray's own rows, so nothing of the frustum is read. Its bounds
-    /// are empty, so that a frustum test with it would keep nothing (and
-    /// the tests comparing packets with single rays would fail).
+    /// each ray's own rows, so nothing of the frustum is read; its bounds
+    /// are left empty (inverted, infinite), bounding no ray.
     #[inline(always)]
     fn mixed() -> Self {
         let none = [Vec3A::INFINITY, Vec3A::NEG_INFINITY];
