@@ -1370,6 +1370,78 @@ mod tests {
         }
     }
 
+    /// In a mixed walk ([`Frustum::mixed`]), the per-ray node test keeps
+    /// for each child exactly the rays whose own single-ray node test
+    /// (their own octant's planes) meets it, and as its entry bound the
+    /// nearest of their entry distances: rays of every octant, some out of
+    /// the walk; the portable and AVX2 lanes.
+    #[test]
+    fn mixed_per_ray_node_test_is_each_rays_own() {
+        fn check(lanes: impl Lanes, seed: u64) {
+            let mut r = prism_testkit::Rng::new(seed);
+            let mut rng = move || r.f32();
+            let (mut octants_seen, mut kept_some) = (0u8, false);
+            for _ in 0..2000 {
+                let shared = Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0;
+                let rays: Vec<Ray> = (0..PACKET)
+                    .map(|_| {
+                        let o = if rng() < 0.5 { shared } else { Vec3::new(rng(), rng(), rng()) * 4.0 - 2.0 };
+                        let d = Vec3::new(rng() - 0.5, rng() - 0.5, rng() - 0.5);
+                        let d = if d.min_element().abs() < 1e-3 { Vec3::new(0.3, -0.2, 0.1) } else { d };
+                        Ray::with_interval(
+                            o,
+                            d,
+                            rng() * 0.1,
+                            if rng() < 0.3 { rng() * 6.0 } else { f32::INFINITY },
+                        )
+                    })
+                    .collect();
+                let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+                let node = random_node(&mut rng, 100);
+                let mut soa = Soa::<PACKET>::new(&br, u64::MAX, true);
+                let mut want = 0u64;
+                for (k, b) in br.iter().enumerate() {
+                    if rng() < 0.2 {
+                        soa.reach[k] = f32::NEG_INFINITY;
+                    } else if rng() < 0.5 {
+                        want |= 1 << k;
+                        octants_seen |= 1 << octant(b);
+                    }
+                }
+                let mut expect = [(0u64, f32::INFINITY); WIDTH];
+                for k in bits(want) {
+                    let mut t_near = [0.0; WIDTH];
+                    let hit = Portable.node(&node, &WideRay::new(&br[k]), soa.reach[k], &mut t_near);
+                    for (c, e) in expect.iter_mut().enumerate() {
+                        if hit >> c & 1 == 1 {
+                            *e = (e.0 | 1 << k, e.1.min(t_near[c]));
+                        }
+                    }
+                }
+                let expect: Vec<(u32, u64, u32)> = (0..WIDTH)
+                    .filter(|&c| expect[c].0 != 0)
+                    .map(|c| (100 + c as u32, expect[c].0, expect[c].1.to_bits()))
+                    .collect();
+                let mut out =
+                    Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
+                let kept = soa.per_ray(lanes, &Frustum::mixed(), &node, want, &mut out);
+                let got: Vec<(u32, u64, u32)> =
+                    (0..kept).map(|c| (out.child[c], out.rays[c], out.near[c].to_bits())).collect();
+                assert_eq!(got, expect, "want {want:b}");
+                kept_some |= kept > 0;
+            }
+            assert!(octants_seen == 0xff && kept_some, "octants {octants_seen:b}");
+        }
+        check(Portable, 5);
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") {
+            // SAFETY: checked just above.
+            check(unsafe { x86::Avx2::new() }, 6);
+        } else {
+            prism_testkit::skip("this CPU lacks AVX2 (its lanes not checked)");
+        }
+    }
+
     /// The AVX2 merge of a ray's node test leaves `near` and `met` bit for
     /// bit as the portable one does: random masks and ray slots, entry
     /// distances with ties, signed zeros, infinities and `NaN`s.
