@@ -5,7 +5,7 @@
 //! Every triangle is tested by prism-geometry's [`TriangleRay`], the one
 //! watertight ray/triangle test.
 
-use crate::packet::{self, Lanes, Leaf, bits};
+use crate::packet::{self, Lanes, Leaf, Soa, bits};
 use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
 use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
@@ -250,8 +250,8 @@ impl Blas {
             }
             return;
         };
-        let mut br = [BoxRay::NONE; N];
-        packet::set_rays(&mut br, rays, mask);
+        let mut soa = Soa::<N>::empty(mask);
+        soa.fill(rays, mask);
         let mut v = ClosestTriangles {
             lanes,
             tris: &self.tris,
@@ -260,9 +260,9 @@ impl Blas {
             pr: PacketRays::new(),
             found: [None; N],
         };
-        for &(m, fr) in &packet::plan(&br, mask) {
+        for &(m, fr) in &packet::plan(&soa, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
+                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
                 None => {
                     for k in bits(m) {
                         // A ray of no frustum reaches no packet leaf.
@@ -273,7 +273,7 @@ impl Blas {
                             tr,
                             found: v.found[k],
                         };
-                        self.walk(&mut br[k], &mut c);
+                        self.walk(&mut soa.box_ray(k), &mut c);
                         v.found[k] = c.found;
                     }
                 }
@@ -291,8 +291,8 @@ impl Blas {
         let Nodes::Wide(tree) = &self.nodes else {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
-        let mut br = [BoxRay::NONE; N];
-        packet::set_rays(&mut br, rays, mask);
+        let mut soa = Soa::<N>::empty(mask);
+        soa.fill(rays, mask);
         let mut v = AnyTriangles {
             lanes,
             tris: &self.tris,
@@ -301,14 +301,14 @@ impl Blas {
             pr: PacketRays::new(),
             hit: 0,
         };
-        for &(m, fr) in &packet::plan(&br, mask) {
+        for &(m, fr) in &packet::plan(&soa, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut br, m, &mut v),
+                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
                 None => {
                     for k in bits(m) {
                         let tr = TriangleRay::new(&rays[k]);
                         let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
-                        self.walk(&mut br[k], &mut c);
+                        self.walk(&mut soa.box_ray(k), &mut c);
                         v.hit |= u64::from(c.hit) << k;
                     }
                 }
@@ -434,7 +434,7 @@ struct ClosestTriangles<'a, const N: usize, L> {
 
 impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, reach: &mut [f32]) -> u64 {
         self.pr.prepare(self.rays, meet);
         if let Some(block) = self.blocks.get(first as usize / 4)
             && meet.count_ones() >= GROUP_MIN
@@ -447,9 +447,9 @@ impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
                 for i in bits(u64::from(nearest.lanes)) {
                     let Some((j, t, b1, b2)) = nearest.get(i) else { continue };
                     let k = usize::from(lane[i & 7]);
-                    if let (Some(found), Some(b)) = (self.found.get_mut(k), br.get_mut(k)) {
+                    if let Some(found) = self.found.get_mut(k) {
                         self.pr.set_t_max(k, t);
-                        b.set_t_max(t);
+                        packet::narrow(reach, k, t);
                         *found = Some((first + j as u32, t, b1, b2));
                     }
                 }
@@ -457,9 +457,10 @@ impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
             return 0;
         }
         for k in bits(meet) {
-            if let (Some(found), Some(b)) = (self.found.get_mut(k), br.get_mut(k)) {
+            if let Some(found) = self.found.get_mut(k) {
                 let mut tr = self.pr.ray(k);
-                closest_in_leaf::<false>(self.tris, self.blocks, &mut tr, found, first, count, b);
+                let Some(r) = reach.get_mut(k) else { continue };
+                closest_in_leaf::<false>(self.tris, self.blocks, &mut tr, found, first, count, r);
                 // The ray's interval ends at its nearest hit so far (set
                 // again, unchanged, where this leaf held none nearer).
                 if let Some((_, t, _, _)) = *found {
@@ -485,7 +486,7 @@ struct AnyTriangles<'a, const N: usize, L> {
 
 impl<const N: usize, L: Lanes> Leaf for &mut AnyTriangles<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [f32]) -> u64 {
         let mut done = 0u64;
         self.pr.prepare(self.rays, meet);
         match self.blocks.get(first as usize / 4) {
@@ -518,8 +519,9 @@ const GROUP_MIN: u32 = 5;
 /// The nearest hit of `tr` among the leaf's slots `first..first + count`
 /// (a wide leaf's block at once, [`TriangleRay::intersect4`] or, with
 /// `BRANCHLESS`, [`TriangleRay::intersect4_branchless`], the same hit; else
-/// slot by slot in order): narrows `tr` and `br` and records it in
-/// `found`. Single rays take the branchless pick, packets the loop (see
+/// slot by slot in order): narrows `tr` and the box test's `reach` (a
+/// [`BoxRay`]'s or a packet lane's, see [`traverse::reach_of`]) and
+/// records it in `found`. Single rays take the branchless pick, packets the loop (see
 /// `intersect4_branchless`).
 #[inline(always)]
 fn closest_in_leaf<const BRANCHLESS: bool>(
@@ -529,35 +531,35 @@ fn closest_in_leaf<const BRANCHLESS: bool>(
     found: &mut Option<(u32, f32, f32, f32)>,
     first: u32,
     count: u32,
-    br: &mut BoxRay,
+    reach: &mut f32,
 ) {
     let Some(block) = blocks.get(first as usize / 4) else {
         for slot in first..first + count {
-            closest_in_slot(tris, tr, found, slot, br);
+            closest_in_slot(tris, tr, found, slot, reach);
         }
         return;
     };
     let hit = if BRANCHLESS { tr.intersect4_branchless(block) } else { tr.intersect4(block) };
     if let Some((lane, t, b1, b2)) = hit {
         tr.set_t_max(t);
-        br.set_t_max(t);
+        *reach = traverse::reach_of(t);
         *found = Some((first + lane as u32, t, b1, b2));
     }
 }
 
-/// The hit of `tr` on slot `slot`, if nearer: narrows `tr` and `br` and
-/// records it in `found`.
+/// The hit of `tr` on slot `slot`, if nearer: narrows `tr` and `reach`
+/// (as [`closest_in_leaf`]) and records it in `found`.
 #[inline(always)]
 fn closest_in_slot(
     tris: &[[Vec3; 3]],
     tr: &mut TriangleRay,
     found: &mut Option<(u32, f32, f32, f32)>,
     slot: u32,
-    br: &mut BoxRay,
+    reach: &mut f32,
 ) {
     if let Some((t, b1, b2)) = tris.get(slot as usize).and_then(|v| tr.intersect(v)) {
         tr.set_t_max(t);
-        br.set_t_max(t);
+        *reach = traverse::reach_of(t);
         *found = Some((slot, t, b1, b2));
     }
 }
@@ -590,7 +592,7 @@ struct ClosestTriangle<'a, const BRANCHLESS: bool> {
 impl<const BRANCHLESS: bool> Visit for &mut ClosestTriangle<'_, BRANCHLESS> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
-        closest_in_slot(self.tris, &mut self.tr, &mut self.found, slot, br);
+        closest_in_slot(self.tris, &mut self.tr, &mut self.found, slot, br.reach_mut());
         true
     }
 
@@ -605,7 +607,7 @@ impl<const BRANCHLESS: bool> Visit for &mut ClosestTriangle<'_, BRANCHLESS> {
             &mut self.found,
             first,
             count,
-            br,
+            br.reach_mut(),
         );
         true
     }

@@ -107,7 +107,7 @@ mod wide;
 
 use blas::{Blas, MeshPackets};
 use obvhs::BvhBuildParams;
-use packet::{Leaf, MIN_PACKET, SMALL_PACKET, bits};
+use packet::{Leaf, MIN_PACKET, SMALL_PACKET, Soa, bits};
 use prism_geometry::glam::{Vec3, Vec4};
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
@@ -446,12 +446,13 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     /// keeps each hit (nearer than the ray's best, as the walk was bounded
     /// by its `t_max`).
     #[inline(always)]
-    fn mesh_hits<const M: usize>(&mut self, i: u32, blas: &Blas, dense: &Dense<M>, br: &mut [BoxRay]) {
-        dense.closest(self.lanes, blas, |k, hit, dir| self.keep(i, k, hit, dir, br));
+    fn mesh_hits<const M: usize>(&mut self, i: u32, blas: &Blas, dense: &Dense<M>, reach: &mut [f32]) {
+        dense.closest(self.lanes, blas, |k, hit, dir| self.keep(i, k, hit, dir, reach));
     }
 
     /// Makes ray `k`'s mesh hit `(face, t, b1, b2)` on object `i` (its
-    /// object-space direction `dir`) its best, and shortens its reach.
+    /// object-space direction `dir`) its best, and shortens its reach (in
+    /// the top level's walk: `reach` is its row, see [`packet::narrow`]).
     #[inline(always)]
     fn keep(
         &mut self,
@@ -459,23 +460,21 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
         k: usize,
         (face, t, b1, b2): (u32, f32, f32, f32),
         dir: Vec3,
-        br: &mut [BoxRay],
+        reach: &mut [f32],
     ) {
         if let (Some(r), Some(best)) = (self.rays.get_mut(k), self.best.get_mut(k)) {
             r.t_max = t;
             *best = Best::Mesh { object: i, face, t, b1, b2, dir };
-            if let Some(b) = br.get_mut(k) {
-                b.set_t_max(t);
-            }
+            packet::narrow(reach, k, t);
         }
     }
 
     /// Tests object `i` against the rays of `meet`: a mesh instance met
     /// by several rays as a packet, anything else ray by ray. Each closer
-    /// hit becomes its ray's best and shortens the ray and its box ray in
-    /// `br` (when `br` has one: the top level's walk).
+    /// hit becomes its ray's best and shortens the ray and its reach in
+    /// `reach` (when `reach` has it: the top level's walk).
     #[inline(always)]
-    fn object(&mut self, i: u32, meet: u64, br: &mut [BoxRay]) {
+    fn object(&mut self, i: u32, meet: u64, reach: &mut [f32]) {
         let accel = self.accel;
         if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
             && meet.count_ones() >= MIN_PACKET
@@ -486,7 +485,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
                 self.lanes.closest(blas, self.rays, meet, &mut found);
                 for (k, hit) in found.into_iter().enumerate() {
                     if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
-                        self.keep(i, k, hit, dir, br);
+                        self.keep(i, k, hit, dir, reach);
                     }
                 }
                 return;
@@ -495,18 +494,19 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             let ray = |k: usize| rays.get(k).copied();
             if fits_small::<N>(meet) {
                 let dense = Dense::<SMALL_PACKET>::new(transform, meet, ray);
-                self.mesh_hits(i, blas, &dense, br);
+                self.mesh_hits(i, blas, &dense, reach);
             } else {
                 let dense = Dense::<N>::new(transform, meet, ray);
-                self.mesh_hits(i, blas, &dense, br);
+                self.mesh_hits(i, blas, &dense, reach);
             }
             return;
         }
         for k in bits(meet) {
             if let (Some(r), Some(best)) = (self.rays.get_mut(k), self.best.get_mut(k)) {
-                match br.get_mut(k) {
-                    Some(b) => accel.closest_object_walked::<false>(i, r, best, b),
-                    None => accel.closest_object::<false>(i, r, best),
+                let t_max = r.t_max;
+                accel.closest_object::<false>(i, r, best);
+                if r.t_max != t_max {
+                    packet::narrow(reach, k, r.t_max);
                 }
             }
         }
@@ -515,9 +515,9 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
 
 impl<const N: usize, L: MeshPackets> Leaf for ClosestObjects<'_, '_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, reach: &mut [f32]) -> u64 {
         for slot in first..first + count {
-            self.object(self.accel.tlas_objects[slot as usize], meet, br);
+            self.object(self.accel.tlas_objects[slot as usize], meet, reach);
         }
         0
     }
@@ -652,7 +652,7 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
 
 impl<const N: usize, L: MeshPackets> Leaf for &mut AnyObjects<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [BoxRay]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [f32]) -> u64 {
         let mut hit = 0u64;
         for slot in first..first + count {
             hit |= self.object(self.accel.tlas_objects[slot as usize], meet & !hit);
@@ -1324,22 +1324,22 @@ impl Accel {
         best: &mut [Best; N],
         mask: u64,
     ) {
-        let mut br = [BoxRay::NONE; N];
-        packet::set_rays(&mut br, &live[..], mask);
-        for &(m, fr) in &packet::plan(&br, mask) {
+        let mut soa = Soa::<N>::empty(mask);
+        soa.fill(&live[..], mask);
+        for &(m, fr) in &packet::plan(&soa, mask) {
             match fr {
                 Some(fr) => self.tlas.walk_packet::<false, N>(
                     lanes,
                     self.tlas_depth,
                     &fr,
-                    &mut br,
+                    &mut soa,
                     m,
                     ClosestObjects { accel: self, lanes, rays: live, best },
                 ),
                 None => {
                     for k in bits(m) {
                         let mut c = ClosestObject::<false> { accel: self, ray: live[k], best: best[k] };
-                        walk_any(&self.tlas, self.tlas_depth, &mut br[k], &mut c);
+                        walk_any(&self.tlas, self.tlas_depth, &mut soa.box_ray(k), &mut c);
                         (live[k], best[k]) = (c.ray, c.best);
                     }
                 }
@@ -1426,19 +1426,19 @@ impl Accel {
     #[inline(always)]
     fn occluded_packet_walk<const N: usize>(&self, lanes: impl MeshPackets, rays: &[Ray], live: u64) -> u64 {
         let mut done = 0u64;
-        let mut br = [BoxRay::NONE; N];
-        packet::set_rays(&mut br, rays, live);
-        for &(m, fr) in &packet::plan(&br, live) {
+        let mut soa = Soa::<N>::empty(live);
+        soa.fill(rays, live);
+        for &(m, fr) in &packet::plan(&soa, live) {
             match fr {
                 Some(fr) => {
                     let mut leaf = AnyObjects::<N, _> { accel: self, lanes, rays, done: 0 };
-                    self.tlas.walk_packet::<true, N>(lanes, self.tlas_depth, &fr, &mut br, m, &mut leaf);
+                    self.tlas.walk_packet::<true, N>(lanes, self.tlas_depth, &fr, &mut soa, m, &mut leaf);
                     done |= leaf.done;
                 }
                 None => {
                     for k in bits(m) {
                         let mut v = AnyObject { accel: self, ray: &rays[k], hit: false };
-                        walk_any(&self.tlas, self.tlas_depth, &mut br[k], &mut v);
+                        walk_any(&self.tlas, self.tlas_depth, &mut soa.box_ray(k), &mut v);
                         done |= u64::from(v.hit) << k;
                     }
                 }

@@ -50,7 +50,7 @@
 //! is infinite) and octants (or a mixed packet) holding fewer than
 //! [`MIN_PACKET`] rays walk alone.
 
-use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack};
+use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack, reach_of};
 use crate::wide::{FIRST_BITS, LEAF, Node, NodeTest, ROWS, WIDTH, WideBvh, WideRay, max_ps, min_ps};
 use prism_geometry::glam::Vec3A;
 use prism_geometry::{Nearest8, Ray, TriangleRays8, Triangles4};
@@ -64,12 +64,22 @@ pub(crate) const SMALL_PACKET: usize = 16;
 
 /// What a packet walk calls at each leaf it reaches, with the active rays
 /// that meet the leaf's box (`meet`): tests them against the leaf's
-/// primitives `first..first + count`, may shrink their reach in `br`, and
-/// returns those that are done (an occlusion query's occluded rays).
+/// primitives `first..first + count`, may shrink their reach in `reach`
+/// (the walk's [`Soa`] row, see [`narrow`]), and returns those that are
+/// done (an occlusion query's occluded rays).
 /// Named types rather than closures, so that the call is compiled into a
 /// `#[target_feature]` caller (see [`crate::traverse::Visit`]).
 pub(crate) trait Leaf {
-    fn visit(&mut self, first: u32, count: u32, meet: u64, br: &mut [BoxRay]) -> u64;
+    fn visit(&mut self, first: u32, count: u32, meet: u64, reach: &mut [f32]) -> u64;
+}
+
+/// Ray `k`'s interval now ends at `t_max`: its reach in a walk's
+/// [`Soa::reach`] row, as [`BoxRay::set_t_max`] sets a single ray's.
+#[inline(always)]
+pub(crate) fn narrow(reach: &mut [f32], k: usize, t_max: f32) {
+    if let Some(r) = reach.get_mut(k) {
+        *r = reach_of(t_max);
+    }
 }
 
 /// Fewer rays of one octant than this walk one by one.
@@ -475,23 +485,6 @@ pub(crate) mod x86 {
     }
 }
 
-/// Sets the slots of `br` for the rays of `mask` among `rays` to their box
-/// rays; the others keep theirs (the caller's [`BoxRay::NONE`]: meets
-/// nothing).
-///
-/// Fills the caller's array in place. Built aside and returned, by
-/// `std::array::from_fn` or by a loop into a local array, the array was
-/// copied to the caller (`memcpy`: about 2 % of a packet's instructions
-/// on the 216-bunny grid, 1.5 % on a kitchen camera packet).
-#[inline(always)]
-pub(crate) fn set_rays<const N: usize>(br: &mut [BoxRay; N], rays: &[Ray], mask: u64) {
-    for (k, (b, r)) in br.iter_mut().zip(rays).enumerate() {
-        if mask >> k & 1 == 1 {
-            *b = BoxRay::new(r);
-        }
-    }
-}
-
 /// The rays of `mask`, lowest first.
 #[inline(always)]
 pub(crate) fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
@@ -525,37 +518,25 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
 /// at least [`MIN_PACKET`] of them, their frustum (`None`: one by one);
 /// or, when they run into [`MIXED_OCTANTS`] or more octants, all of them
 /// in entry 0 with [`Frustum::mixed`] (entry 8, as always, holding those
-/// with a zero direction component, which walk alone).
-/// One pass over the rays sorts them into `octants` (a test-only
-/// reference) and bounds those in the first ray's octant; any other octant
-/// big enough for a packet is bounded by [`Frustum::new`] (the tests
-/// compare the two).
+/// with a zero direction component, which walk alone). The octants are
+/// the ones [`Soa::fill`] made; `octants` (a test-only reference from the
+/// box rays) and [`Frustum::new`] are what the tests compare this with.
 ///
 /// Compiled into each caller (`inline(always)`): as a function of its own
 /// it was built without the packet queries' AVX2, and its one pass took
 /// 4-9 % of a kitchen primary-packet run (perf).
 #[inline(always)]
-pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
+pub(crate) fn plan<const N: usize>(soa: &Soa<N>, mask: u64) -> [(u64, Option<Frustum>); 9] {
     let mut groups = [0u64; 9];
-    // The bounds of the rays in the first ray's octant, `first` (most
-    // packets hold one octant); other octants are bounded afterwards.
-    let first = br.get(mask.trailing_zeros() as usize).map_or(8, octant);
-    let (mut o_lo, mut o_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-    let (mut inv_lo, mut inv_hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-    let mut t_min = f32::INFINITY;
-    let mut m = mask;
-    while m != 0 {
-        let k = m.trailing_zeros() as usize;
-        m &= m - 1;
-        let Some(b) = br.get(k) else { continue };
-        let o = octant(b);
-        groups[o] |= 1 << k;
-        if o == first {
-            o_lo = o_lo.min(b.origin);
-            o_hi = o_hi.max(b.origin);
-            inv_lo = inv_lo.min(b.inv);
-            inv_hi = inv_hi.max(b.inv);
-            t_min = t_min.min(b.t_min);
+    let first = soa.oct.get(mask.trailing_zeros() as usize).copied().unwrap_or(8);
+    if soa.all_in(mask, first) {
+        // Most packets: one octant, found eight lanes at a time.
+        groups[usize::from(first).min(8)] = mask;
+    } else {
+        for k in bits(mask) {
+            if let Some(&o) = soa.oct.get(k) {
+                groups[usize::from(o).min(8)] |= 1 << k;
+            }
         }
     }
     let mut out = [(0u64, None); 9];
@@ -571,10 +552,8 @@ pub(crate) fn plan(br: &[BoxRay], mask: u64) -> [(u64, Option<Frustum>); 9] {
     for (o, (slot, &m)) in out.iter_mut().zip(&groups).enumerate() {
         *slot = if o == 8 || m.count_ones() < MIN_PACKET {
             (m, None)
-        } else if o == first {
-            (m, Some(Frustum::from_bounds(o as u32, [o_lo, o_hi], [inv_lo, inv_hi], t_min)))
         } else {
-            (m, Frustum::new(br, m))
+            (m, Some(soa.frustum(o as u32, m)))
         };
     }
     out
@@ -608,7 +587,9 @@ pub(crate) struct Frustum {
 }
 
 impl Frustum {
-    /// Over the rays of `mask`, which `octants` puts in one octant.
+    /// Over the rays of `mask`, which `octants` puts in one octant: the
+    /// reference that [`Soa::frustum`] is tested against.
+    #[cfg(test)]
     pub fn new(br: &[BoxRay], mask: u64) -> Option<Self> {
         let first = br.get(mask.trailing_zeros() as usize)?.inv;
         let signs = first.cmplt(Vec3A::ZERO).bitmask();
@@ -722,47 +703,201 @@ struct Hits {
     rays: [u64; WIDTH],
 }
 
-/// The packet's rays in SoA form, so that a leaf's box is tested against
-/// eight of them at a time.
-struct Soa<const N: usize> {
+/// A packet's rays as its walks read them, in SoA rows (lane `k` ray
+/// `k`), so that a box is tested against eight of them at a time: what
+/// [`BoxRay::new`] makes of each ray, and its octant. Made from the rays
+/// eight at a time ([`Soa::fill`]); one packet's walks (one per octant, see
+/// [`plan`]) share it, each reading only its own rays' lanes.
+pub(crate) struct Soa<const N: usize> {
     origin: [[f32; N]; 3],
     inv: [[f32; N]; 3],
     t_min: [f32; N],
     /// `-inf` for a ray not (or no longer) in the walk.
     reach: [f32; N],
-    /// Lanes to test: the highest active ray's, rounded up to eight.
+    /// Lanes to test: the highest ray's, rounded up to eight.
     len: usize,
-    /// Each ray's octant (bit `a` set when axis `a` runs negative), for
-    /// the rows of a [`Frustum::mixed`] walk.
+    /// Each ray's octant (bit `a` set when axis `a` runs negative), 8 for
+    /// a ray with a zero direction component (see `octants`); the rows of
+    /// a [`Frustum::mixed`] walk.
     oct: [u8; N],
 }
 
 impl<const N: usize> Soa<N> {
-    /// `mixed`: also each ray's octant (for a [`Frustum::mixed`] walk).
+    /// Makes the rays of `mask` among `rays` (ray `k` from `rays[k]`, as
+    /// many as both hold, at most `N`). The other lanes meet nothing (reach
+    /// `-inf`). Whole blocks of eight rays are made at once, by selects and
+    /// vector divisions that the packet queries' AVX2 builds run eight
+    /// lanes wide: the same values as [`BoxRay::new`] per ray, bit for
+    /// bit (a test compares them). Made ray by ray into an array of box
+    /// rays and then copied into rows, a packet's set-up took about a sixth
+    /// of a kitchen packet query (docs/benchmarks.md).
+    ///
+    /// In two steps, [`Soa::empty`] and then this, so that the rows are
+    /// made where they stay: made in one and returned, they were copied
+    /// (a `memcpy` of 2 KB a packet).
     #[inline(always)]
-    fn new(br: &[BoxRay], active: u64, mixed: bool) -> Self {
-        let mut s = Self {
+    pub(crate) fn fill(&mut self, rays: &[Ray], mask: u64) {
+        for c in 0..N / 8 {
+            let live = (mask >> (8 * c)) as u8;
+            if live == 0 {
+                continue;
+            }
+            let base = 8 * c;
+            match rays.get(base..base + 8) {
+                Some(block) => self.set8(block, base, live),
+                None => {
+                    for k in bits(u64::from(live) << base) {
+                        if let Some(r) = rays.get(k) {
+                            self.set1(k, &BoxRay::new(r));
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// No ray yet (every lane meets nothing), with lanes for the rays of
+    /// `mask`: see [`Soa::fill`].
+    #[inline(always)]
+    pub(crate) fn empty(mask: u64) -> Self {
+        Self {
             origin: [[0.0; N]; 3],
             inv: [[1.0; N]; 3],
             t_min: [f32::INFINITY; N],
             reach: [f32::NEG_INFINITY; N],
-            len: ((64 - active.leading_zeros() as usize).div_ceil(8) * 8).min(N),
-            oct: [0; N],
-        };
-        for k in bits(active) {
-            let Some(b) = br.get(k) else { continue };
-            let (o, inv) = (b.origin.to_array(), b.inv.to_array());
+            len: ((64 - mask.leading_zeros() as usize).div_ceil(8) * 8).min(N),
+            oct: [8; N],
+        }
+    }
+
+    /// [`Soa::empty`] and [`Soa::fill`] at once.
+    #[cfg(test)]
+    fn new(rays: &[Ray], mask: u64) -> Self {
+        let mut s = Self::empty(mask);
+        s.fill(rays, mask);
+        s
+    }
+
+    /// Lanes `base..base + 8` from `block`, those of `live` (bit `i`:
+    /// lane `base + i`); the others keep their nothing-meeting values.
+    #[inline(always)]
+    fn set8(&mut self, block: &[Ray], base: usize, live: u8) {
+        let mut o = [[0.0f32; 8]; 3];
+        let mut d = [[0.0f32; 8]; 3];
+        let (mut t0, mut t1) = ([0.0f32; 8], [0.0f32; 8]);
+        for (i, r) in block.iter().take(8).enumerate() {
+            let (ro, rd) = (r.origin.to_array(), r.dir.to_array());
             for a in 0..3 {
-                s.origin[a][k] = o[a];
-                s.inv[a][k] = inv[a];
+                o[a][i] = ro[a];
+                d[a][i] = rd[a];
             }
-            s.t_min[k] = b.t_min;
-            s.reach[k] = b.reach();
-            if mixed {
-                s.oct[k] = (b.inv.cmplt(Vec3A::ZERO).bitmask() & 7) as u8;
+            (t0[i], t1[i]) = (r.t_min, r.t_max);
+        }
+        // As `BoxRay::new`: `1/d`, `+inf` for either zero.
+        let inv: [[f32; 8]; 3] = std::array::from_fn(|a| {
+            std::array::from_fn(|i| if d[a][i] == 0.0 { f32::INFINITY } else { 1.0 / d[a][i] })
+        });
+        // The octant, 8 where it fits no frustum. Every lane is made, then
+        // the lanes not in `live` are put out of the walk: selects per lane
+        // on the bits of `live` compiled to a branch and a scalar store
+        // each.
+        let oct: [u8; 8] = std::array::from_fn(|i| {
+            let finite = inv[0][i].is_finite() & inv[1][i].is_finite() & inv[2][i].is_finite();
+            let neg =
+                u8::from(inv[0][i] < 0.0) | u8::from(inv[1][i] < 0.0) << 1 | u8::from(inv[2][i] < 0.0) << 2;
+            if finite { neg } else { 8 }
+        });
+        let reach: [f32; 8] = std::array::from_fn(|i| reach_of(t1[i]));
+        let lanes = base..base + 8;
+        let (Some(o_rows), Some(inv_rows)) = (self.origin.get_mut(0..3), self.inv.get_mut(0..3)) else {
+            return;
+        };
+        for a in 0..3 {
+            if let (Some(x), Some(y)) = (o_rows[a].get_mut(lanes.clone()), inv_rows[a].get_mut(lanes.clone()))
+            {
+                x.copy_from_slice(&o[a]);
+                y.copy_from_slice(&inv[a]);
             }
         }
-        s
+        if let (Some(t), Some(r), Some(c)) =
+            (self.t_min.get_mut(lanes.clone()), self.reach.get_mut(lanes.clone()), self.oct.get_mut(lanes))
+        {
+            t.copy_from_slice(&t0);
+            r.copy_from_slice(&reach);
+            c.copy_from_slice(&oct);
+        }
+        for k in bits(u64::from(!live) << base) {
+            if let (Some(r), Some(c)) = (self.reach.get_mut(k), self.oct.get_mut(k)) {
+                (*r, *c) = (f32::NEG_INFINITY, 8);
+            }
+        }
+    }
+
+    /// Lane `k` from the box ray `b` (a packet's last, partial block).
+    #[inline(always)]
+    fn set1(&mut self, k: usize, b: &BoxRay) {
+        if k >= N {
+            return;
+        }
+        let (o, inv) = (b.origin.to_array(), b.inv.to_array());
+        for a in 0..3 {
+            self.origin[a][k] = o[a];
+            self.inv[a][k] = inv[a];
+        }
+        self.t_min[k] = b.t_min;
+        self.reach[k] = b.reach();
+        self.oct[k] = octant(b) as u8;
+    }
+
+    /// Whether every ray of `mask` has the octant code `oct`: eight lanes'
+    /// codes at a time, as the bytes of a word. (Sorted into groups ray by
+    /// ray, each step waited for the last one's store.)
+    #[inline(always)]
+    fn all_in(&self, mask: u64, oct: u8) -> bool {
+        let pattern = u64::from(oct) * 0x0101_0101_0101_0101;
+        for c in 0..N / 8 {
+            let live = (mask >> (8 * c)) as u8;
+            if live == 0 {
+                continue;
+            }
+            let Some(codes) = self.oct.get(8 * c..).and_then(<[u8]>::first_chunk::<8>) else { return false };
+            let lanes = if live == 0xff {
+                u64::MAX
+            } else {
+                u64::from_le_bytes(std::array::from_fn(|i| if live >> i & 1 == 1 { 0xff } else { 0 }))
+            };
+            if (u64::from_le_bytes(*codes) ^ pattern) & lanes != 0 {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Ray `k`'s box ray as it stands (its reach narrowed by any hit so
+    /// far), for a ray that walks alone.
+    #[inline(always)]
+    pub(crate) fn box_ray(&self, k: usize) -> BoxRay {
+        let k = k.min(N - 1);
+        BoxRay::from_parts(
+            Vec3A::new(self.origin[0][k], self.origin[1][k], self.origin[2][k]),
+            Vec3A::new(self.inv[0][k], self.inv[1][k], self.inv[2][k]),
+            self.t_min[k],
+            self.reach[k],
+        )
+    }
+
+    /// The frustum of the rays of `m`, all of the octant `signs` (as
+    /// [`plan`] groups them): their bounds taken eight lanes at a time.
+    #[inline(always)]
+    fn frustum(&self, signs: u32, m: u64) -> Frustum {
+        let [(ox_lo, ox_hi), (oy_lo, oy_hi), (oz_lo, oz_hi)] = self.origin.each_ref().map(|r| bounds(r, m));
+        let [(ix_lo, ix_hi), (iy_lo, iy_hi), (iz_lo, iz_hi)] = self.inv.each_ref().map(|r| bounds(r, m));
+        Frustum::from_bounds(
+            signs,
+            [Vec3A::new(ox_lo, oy_lo, oz_lo), Vec3A::new(ox_hi, oy_hi, oz_hi)],
+            [Vec3A::new(ix_lo, iy_lo, iz_lo), Vec3A::new(ix_hi, iy_hi, iz_hi)],
+            bounds(&self.t_min, m).0,
+        )
     }
 
     /// The rays that meet lane `lane` of `node` within their own `[t_min,
@@ -880,21 +1015,63 @@ impl<const N: usize> Soa<N> {
     /// one per lane of an eight-ray group, then combined. A fold over the
     /// rays one by one compiled to a chain of scalar `maxss`, a twentieth
     /// of a grid packet's time (perf); this form compiles to whole-vector
-    /// `maxps`. Either way the result is the largest reach: `max_ps`
-    /// keeps its second operand when the first is `NaN`, so a `NaN` never
-    /// enters a maximum, and the order of the others changes nothing.
+    /// `maxps`. Either way the result is the largest reach: `max_ps` keeps
+    /// its second operand when the first is `NaN`, so a `NaN` never enters
+    /// a maximum, and the order of the others changes nothing. Every lane
+    /// counts: in a packet walked octant by octant, another octant's rays
+    /// (walked apart) widen the bound, which costs box tests, never an
+    /// answer (such packets are few: camera rays across the middle of the
+    /// image, where a direction component changes sign).
     #[inline(always)]
     fn max_reach(&self) -> f32 {
         let mut m = [f32::NEG_INFINITY; 8];
-        let groups = self.reach[..self.len.min(N)].chunks_exact(8);
-        // `len` is a multiple of eight, so this is empty.
-        let rest = groups.remainder().iter().fold(f32::NEG_INFINITY, |r, &x| max_ps(x, r));
-        for group in groups {
-            m = std::array::from_fn(|j| max_ps(group[j], m[j]));
+        for group in self.reach[..self.len.min(N)].chunks_exact(8) {
+            let Some(x) = group.first_chunk::<8>() else { continue };
+            m = std::array::from_fn(|j| max_ps(x[j], m[j]));
         }
         let m: [f32; 4] = std::array::from_fn(|j| max_ps(m[j], m[j + 4]));
-        max_ps(max_ps(max_ps(m[0], m[2]), max_ps(m[1], m[3])), rest)
+        max_ps(max_ps(m[0], m[2]), max_ps(m[1], m[3]))
     }
+}
+
+/// The lanes of `live` of eight, the others replaced by `+inf` (first)
+/// and by `-inf` (second), for a minimum and a maximum over them. The
+/// accumulators of such folds stay in registers only while no lane of
+/// them is selected by a bit of `live`: selected, they compiled to masked
+/// stores (`vmaskmovps`), which made a packet's set-up several times
+/// slower.
+#[inline(always)]
+fn eight_of(x: &[f32; 8], live: u8) -> ([f32; 8], [f32; 8]) {
+    if live == 0xff {
+        return (*x, *x);
+    }
+    let (mut lo, mut hi) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8]);
+    for i in bits(u64::from(live)) {
+        let i = i & 7;
+        (lo[i], hi[i]) = (x[i], x[i]);
+    }
+    (lo, hi)
+}
+
+/// The smallest and the largest of `row`'s lanes of `m`, eight lanes at a
+/// time (as `min_ps` and `max_ps` fold them).
+#[inline(always)]
+fn bounds<const N: usize>(row: &[f32; N], m: u64) -> (f32, f32) {
+    let (mut lo, mut hi) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8]);
+    for c in 0..N / 8 {
+        let live = (m >> (8 * c).min(63)) as u8;
+        let Some(x) = row.get(8 * c..).and_then(<[f32]>::first_chunk::<8>) else { continue };
+        if live == 0 {
+            continue;
+        }
+        let (xl, xh) = eight_of(x, live);
+        lo = std::array::from_fn(|i| min_ps(lo[i], xl[i]));
+        hi = std::array::from_fn(|i| max_ps(hi[i], xh[i]));
+    }
+    (
+        lo.iter().fold(f32::INFINITY, |m, &x| min_ps(m, x)),
+        hi.iter().fold(f32::NEG_INFINITY, |m, &x| max_ps(m, x)),
+    )
 }
 
 /// A stack entry: a child's reference, the packet's entry bound, and the
@@ -902,10 +1079,9 @@ impl<const N: usize> Soa<N> {
 pub(crate) type Entry = (u32, f32, u64);
 
 impl WideBvh {
-    /// Walks the packet of rays `br` (those of `active`, bounded by `fr`)
+    /// Walks the packet's rays of `active` (in `soa`, bounded by `fr`)
     /// through the tree: calls `leaf` ([`Leaf`]) for each leaf with the
-    /// active rays that meet its box. `N` is the packet's capacity (the
-    /// rays of `active` lie below it). `ANY` skips the front-to-back ordering. `need` is
+    /// active rays that meet its box. `N` is the packet's capacity. `ANY` skips the front-to-back ordering. `need` is
     /// [`WideBvh::stack_need`] (kept by the owner: computing it walks the
     /// tree). `lanes` tests a box against eight rays at once.
     #[inline(always)]
@@ -914,7 +1090,7 @@ impl WideBvh {
         lanes: impl Lanes,
         need: usize,
         fr: &Frustum,
-        br: &mut [BoxRay],
+        soa: &mut Soa<N>,
         active: u64,
         leaf: impl Leaf,
     ) {
@@ -923,12 +1099,12 @@ impl WideBvh {
                 lanes,
                 &mut InlineStack::<Entry, INLINE_STACK>::new(),
                 fr,
-                br,
+                soa,
                 active,
                 leaf,
             );
         } else {
-            self.walk_packet_in::<ANY, N, _>(lanes, &mut Vec::with_capacity(need), fr, br, active, leaf);
+            self.walk_packet_in::<ANY, N, _>(lanes, &mut Vec::with_capacity(need), fr, soa, active, leaf);
         }
     }
 
@@ -938,7 +1114,7 @@ impl WideBvh {
         lanes: impl Lanes,
         stack: &mut S,
         fr: &Frustum,
-        br: &mut [BoxRay],
+        soa: &mut Soa<N>,
         mut active: u64,
         mut leaf: impl Leaf,
     ) {
@@ -946,7 +1122,6 @@ impl WideBvh {
         if nodes.is_empty() || active == 0 {
             return;
         }
-        let mut soa = Soa::<N>::new(br, active & (u64::MAX >> (64 - N.min(64))), fr.mixed);
         let mut reach = soa.max_reach();
         // A mixed walk tests every node ray by ray.
         let per_ray = if fr.mixed { u64::BITS } else { PER_RAY };
@@ -991,15 +1166,10 @@ impl WideBvh {
                 let count = ((cur & !LEAF) >> FIRST_BITS) + 1;
                 let meet = rays & active;
                 if meet != 0 {
-                    let done = leaf.visit(first, count, meet, br);
-                    for k in bits(meet) {
-                        let r = if done >> k & 1 == 1 {
-                            f32::NEG_INFINITY
-                        } else {
-                            br.get(k).map_or(f32::NEG_INFINITY, BoxRay::reach)
-                        };
+                    let done = leaf.visit(first, count, meet, &mut soa.reach);
+                    for k in bits(done) {
                         if let Some(x) = soa.reach.get_mut(k) {
-                            *x = r;
+                            *x = f32::NEG_INFINITY;
                         }
                     }
                     active &= !done;
@@ -1151,6 +1321,82 @@ mod tests {
         }
     }
 
+    /// A packet's lanes, made eight at a time, are each ray's box ray bit
+    /// for bit (origin, reciprocals, `t_min`, reach) and its octant, and
+    /// the lanes of rays not asked for meet nothing: random rays with
+    /// zero components of either sign, tiny and huge components,
+    /// infinite `t_max`, partial masks, and slices ending inside a block
+    /// of eight.
+    #[test]
+    fn lanes_are_each_rays_box_ray() {
+        let mut r = prism_testkit::Rng::new(23);
+        let mut rng = move || r.f32();
+        let component = |x: f32| match (x * 20.0) as u32 {
+            0 => 0.0,
+            1 => -0.0,
+            2 => 1e-30,
+            3 => -3e30,
+            _ => x - 0.5,
+        };
+        let (mut uniform, mut mixed, mut zero) = (0, 0, 0);
+        for i in 0..3000 {
+            let rays: Vec<Ray> = (0..PACKET)
+                .map(|_| {
+                    let o = Vec3::new(rng(), rng(), rng()) * 8.0 - 4.0;
+                    let d = Vec3::new(component(rng()), component(rng()), component(rng()));
+                    let t_max = if rng() < 0.3 { f32::INFINITY } else { rng() * 50.0 };
+                    Ray { origin: o, t_min: rng() * 0.01, dir: d, t_max }
+                })
+                .collect();
+            let len = if i % 3 == 0 { 1 + (rng() * 63.0) as usize } else { PACKET };
+            // Every third packet of one direction's signs.
+            let rays: Vec<Ray> = if i % 3 == 1 {
+                rays.iter().map(|r| Ray { dir: r.dir.abs().max(Vec3::splat(1e-3)), ..*r }).collect()
+            } else {
+                rays
+            };
+            let mask = match i % 4 {
+                0 => u64::MAX,
+                _ => u64::from(rng().to_bits()) << 32 | u64::from(rng().to_bits()),
+            };
+            let soa = Soa::<PACKET>::new(&rays[..len], mask);
+            for (k, ray) in rays.iter().enumerate() {
+                if mask >> k & 1 == 0 || k >= len {
+                    assert_eq!(soa.reach[k], f32::NEG_INFINITY, "lane {k} not asked for meets nothing");
+                    continue;
+                }
+                let want = BoxRay::new(ray);
+                let got = soa.box_ray(k);
+                let parts = |b: &BoxRay| {
+                    (
+                        b.origin.to_array().map(f32::to_bits),
+                        b.inv.to_array().map(f32::to_bits),
+                        b.t_min.to_bits(),
+                        b.reach().to_bits(),
+                    )
+                };
+                assert_eq!(parts(&got), parts(&want), "ray {k}: {ray:?}");
+                assert_eq!(usize::from(soa.oct[k]), octant(&want), "ray {k}: {ray:?}");
+                zero += usize::from(soa.oct[k] == 8);
+            }
+            let live = if len >= 64 { mask } else { mask & ((1 << len) - 1) };
+            if live != 0 {
+                let first = soa.oct[live.trailing_zeros() as usize];
+                let same = bits(live).all(|k| soa.oct[k] == first);
+                assert_eq!(soa.all_in(live, first), same);
+                if same {
+                    uniform += 1;
+                } else {
+                    mixed += 1;
+                }
+            }
+        }
+        assert!(
+            zero > 100 && uniform > 100 && mixed > 100,
+            "{zero} rays of no octant, {uniform} / {mixed} packets of one / several"
+        );
+    }
+
     /// `plan`'s one pass gives the reference's groups and frustums: rays
     /// of mixed octants, zero direction components, partial masks; and
     /// rays of at least [`MIXED_OCTANTS`] octants go together, with the
@@ -1179,7 +1425,7 @@ mod tests {
                 .collect();
             let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
             let mask = (u64::from(rng().to_bits()) << 32 | u64::from(rng().to_bits())) | 1;
-            let got = plan(&br, mask);
+            let got = plan(&Soa::<PACKET>::new(&rays, mask), mask);
             let groups = octants(&br, mask);
             if groups[..8].iter().filter(|&&m| m != 0).count() >= MIXED_OCTANTS {
                 mixed += 1;
@@ -1246,7 +1492,7 @@ mod tests {
                     Hits { near: [0.0; WIDTH], child: [0; WIDTH], lane: [0; WIDTH], rays: [0; WIDTH] };
                 let n = fr.hits(&node, f32::INFINITY, &mut out);
                 let entered: Vec<u8> = out.lane[..n].to_vec();
-                let soa = Soa::<PACKET>::new(&br, m, false);
+                let soa = Soa::<PACKET>::new(&rays, m);
                 for lane in 0..WIDTH {
                     let meet = soa.meet(Portable, &fr, &node, lane, u64::MAX);
                     assert_eq!(meet & !m, 0, "only the packet's rays");
@@ -1259,13 +1505,9 @@ mod tests {
                         );
                     }
                     for k in bits(m) {
-                        let alone = Soa::<SMALL_PACKET>::new(&br, 1 << k, false).meet(
-                            Portable,
-                            &fr,
-                            &node,
-                            lane,
-                            1 << k,
-                        ) != 0;
+                        let alone =
+                            Soa::<SMALL_PACKET>::new(&rays, 1 << k).meet(Portable, &fr, &node, lane, 1 << k)
+                                != 0;
                         assert_eq!(
                             meet >> k & 1 == 1,
                             alone,
@@ -1309,7 +1551,7 @@ mod tests {
                 let Some(&m) = g[..8].iter().max_by_key(|m| m.count_ones()) else { continue };
                 let Some(fr) = Frustum::new(&br, m) else { panic!("one octant") };
                 let node = random_node(&mut rng, 100);
-                let mut soa = Soa::<PACKET>::new(&br, m, false);
+                let mut soa = Soa::<PACKET>::new(&rays, m);
                 // Some rays out of the walk, as after an occluded leaf.
                 let mut active = m;
                 for k in bits(m) {
@@ -1398,7 +1640,7 @@ mod tests {
                     .collect();
                 let br: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
                 let node = random_node(&mut rng, 100);
-                let mut soa = Soa::<PACKET>::new(&br, u64::MAX, true);
+                let mut soa = Soa::<PACKET>::new(&rays, u64::MAX);
                 let mut want = 0u64;
                 for (k, b) in br.iter().enumerate() {
                     if rng() < 0.2 {

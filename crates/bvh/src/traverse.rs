@@ -22,11 +22,14 @@ pub(crate) struct BoxRay {
 /// Traversal" (JCGT 2013), which bounds the rounding of a slab distance.
 pub(crate) const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
-impl BoxRay {
-    /// A ray that meets nothing (an unused packet slot).
-    pub const NONE: Self =
-        Self { origin: Vec3A::ZERO, inv: Vec3A::INFINITY, t_min: f32::INFINITY, reach: f32::NEG_INFINITY };
+/// How far the box tests look for a ray whose interval ends at `t_max`:
+/// see [`BoxRay::reach`].
+#[inline(always)]
+pub(crate) fn reach_of(t_max: f32) -> f32 {
+    t_max * FAR_SCALE
+}
 
+impl BoxRay {
     /// `inv` is `1/d` per axis with `+inf` for both zeros (slab order uses
     /// `d < 0`): one vector division, whose quotients are those of three
     /// scalar ones bit for bit, with the zeros' then replaced.
@@ -40,7 +43,7 @@ impl BoxRay {
         let (o, d) = halves(ray);
         let (o, d) = (Vec3A::from_vec4(o), Vec3A::from_vec4(d));
         let inv = Vec3A::select(d.cmpeq(Vec3A::ZERO), Vec3A::INFINITY, Vec3A::ONE / d);
-        Self { origin: o, inv, t_min: ray.t_min, reach: ray.t_max * FAR_SCALE }
+        Self { origin: o, inv, t_min: ray.t_min, reach: reach_of(ray.t_max) }
     }
 }
 
@@ -65,6 +68,13 @@ impl BoxRay {
         ((pos & 1) << 2 | (pos & 2) | pos >> 2) * 0x0101_0101
     }
 
+    /// A box ray from its parts (a packet's lanes, see
+    /// [`crate::packet::Soa::box_ray`]); `reach` as [`BoxRay::reach`].
+    #[inline(always)]
+    pub(crate) fn from_parts(origin: Vec3A, inv: Vec3A, t_min: f32, reach: f32) -> Self {
+        Self { origin, inv, t_min, reach }
+    }
+
     /// How far the box tests look: `t_max` widened by [`FAR_SCALE`]. A
     /// box's entry distance may round a few ULPs past the `t` the triangle
     /// test computes for a triangle lying on the box's face; compared with
@@ -81,7 +91,14 @@ impl BoxRay {
     /// Narrows the interval to `t_max` (after a closer hit).
     #[inline(always)]
     pub fn set_t_max(&mut self, t_max: f32) {
-        self.reach = t_max * FAR_SCALE;
+        self.reach = reach_of(t_max);
+    }
+
+    /// The reach itself, for a leaf test that narrows it
+    /// ([`reach_of`] the new `t_max`).
+    #[inline(always)]
+    pub(crate) fn reach_mut(&mut self) -> &mut f32 {
+        &mut self.reach
     }
 }
 
