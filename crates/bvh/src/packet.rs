@@ -520,7 +520,7 @@ pub(crate) fn octants(br: &[BoxRay], mask: u64) -> [u64; 9] {
 /// in entry 0 with [`Frustum::mixed`] (entry 8, as always, holding those
 /// with a zero direction component, which walk alone). The octants are
 /// the ones [`Soa::fill`] made; `octants` (a test-only reference from the
-/// box rays) and [`Frustum::new`] are what the tests compare this with.
+/// box rays) and `Frustum::new` are what the tests compare this with.
 ///
 /// Compiled into each caller (`inline(always)`): as a function of its own
 /// it was built without the packet queries' AVX2, and its one pass took
