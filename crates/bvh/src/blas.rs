@@ -521,8 +521,8 @@ const GROUP_MIN: u32 = 5;
 /// `BRANCHLESS`, [`TriangleRay::intersect4_branchless`], the same hit; else
 /// slot by slot in order): narrows `tr` and the box test's `reach` (a
 /// [`BoxRay`]'s or a packet lane's, see [`traverse::reach_of`]) and
-/// records it in `found`. Single rays take the branchless pick, packets the loop (see
-/// `intersect4_branchless`).
+/// records it in `found`. Single rays take the branchless pick, packets
+/// the loop (see `intersect4_branchless`).
 #[inline(always)]
 fn closest_in_leaf<const BRANCHLESS: bool>(
     tris: &[[Vec3; 3]],

@@ -888,6 +888,10 @@ impl<const N: usize> Soa<N> {
 
     /// The frustum of the rays of `m`, all of the octant `signs` (as
     /// [`plan`] groups them): their bounds taken eight lanes at a time.
+    /// Through `<[_; 3]>::map`, whose closures the compiler leaves out of
+    /// line: the six calls written out (inlined) made kitchen shadow
+    /// packets 8 % slower, and this function out of line (`inline(never)`)
+    /// 20 % (docs/benchmarks.md).
     #[inline(always)]
     fn frustum(&self, signs: u32, m: u64) -> Frustum {
         let [(ox_lo, ox_hi), (oy_lo, oy_hi), (oz_lo, oz_hi)] = self.origin.each_ref().map(|r| bounds(r, m));
