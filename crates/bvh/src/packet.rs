@@ -707,7 +707,8 @@ struct Hits {
 /// `k`), so that a box is tested against eight of them at a time: what
 /// [`BoxRay::new`] makes of each ray, and its octant. Made from the rays
 /// eight at a time ([`Soa::fill`]); one packet's walks (one per octant, see
-/// [`plan`]) share it, each reading only its own rays' lanes.
+/// [`plan`]) share it, each testing only its own rays (its farthest reach
+/// is taken over every lane: see `max_reach`).
 pub(crate) struct Soa<const N: usize> {
     origin: [[f32; N]; 3],
     inv: [[f32; N]; 3],
@@ -809,6 +810,8 @@ impl<const N: usize> Soa<N> {
         });
         let reach: [f32; 8] = std::array::from_fn(|i| reach_of(t1[i]));
         let lanes = base..base + 8;
+        // The rows as slices, indexed: zipped row iterators compiled to
+        // 1-11 % more instructions in the packet queries (callgrind).
         let (Some(o_rows), Some(inv_rows)) = (self.origin.get_mut(0..3), self.inv.get_mut(0..3)) else {
             return;
         };
