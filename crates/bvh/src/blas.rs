@@ -41,6 +41,17 @@ impl std::fmt::Debug for Nodes {
 /// [`Blas::closest`] gives it.
 pub(crate) type Found<const N: usize> = [Option<(u32, f32, f32, f32)>; N];
 
+/// `ray` moved by `offset` where it is `Some`, as
+/// [`prism_geometry::Transform::ray_to_object`] moves a ray under a
+/// translation alone.
+#[inline(always)]
+fn moved(ray: &Ray, offset: Option<Vec3>) -> Ray {
+    match offset {
+        Some(offset) => Ray { origin: ray.origin + offset, ..*ray },
+        None => *ray,
+    }
+}
+
 /// One mesh's own hierarchy, with its triangles copied in leaf order.
 #[derive(Debug)]
 pub(crate) struct Blas {
@@ -252,21 +263,67 @@ impl Blas {
         };
         let mut soa = Soa::<N>::empty(mask);
         soa.fill(rays, mask);
+        self.closest_packet_in(tree, lanes, &mut soa, rays, None, mask, found);
+    }
+
+    /// [`Blas::closest_packet`] for the world-space rays `rays[k]` of
+    /// `mask` (in `world`, a top-level walk's rows) on an instance placed
+    /// by a translation alone, whose map to object space adds `offset`
+    /// ([`prism_geometry::Transform::object_offset`]): the rays are moved
+    /// as [`prism_geometry::Transform::ray_to_object`] moves them, lane by
+    /// lane, and neither gathered nor made again.
+    #[inline(always)]
+    pub fn closest_packet_moved<const N: usize>(
+        &self,
+        lanes: impl Lanes,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+        found: &mut Found<N>,
+    ) {
+        let Nodes::Wide(tree) = &self.nodes else {
+            for k in bits(mask) {
+                found[k] = self.closest::<false>(&moved(&rays[k], Some(offset)));
+            }
+            return;
+        };
+        let mut soa = Soa::<N>::empty(mask);
+        soa.fill_moved(world, offset, mask);
+        self.closest_packet_in(tree, lanes, &mut soa, rays, Some(offset), mask, found);
+    }
+
+    /// The walk of [`Blas::closest_packet`] and
+    /// [`Blas::closest_packet_moved`] over `soa`, the rays `rays` moved by
+    /// `offset`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn closest_packet_in<const N: usize>(
+        &self,
+        tree: &WideBvh,
+        lanes: impl Lanes,
+        soa: &mut Soa<N>,
+        rays: &[Ray; N],
+        offset: Option<Vec3>,
+        mask: u64,
+        found: &mut Found<N>,
+    ) {
         let mut v = ClosestTriangles {
             lanes,
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
+            offset,
             pr: PacketRays::new(),
             found: [None; N],
         };
-        for &(m, fr) in &packet::plan(&soa, mask) {
+        for &(m, fr) in &packet::plan(soa, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
+                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, soa, m, &mut v),
                 None => {
                     for k in bits(m) {
                         // A ray of no frustum reaches no packet leaf.
-                        let tr = TriangleRay::new(&rays[k]);
+                        let tr = TriangleRay::new(&moved(&rays[k], offset));
                         let mut c = ClosestTriangle::<false> {
                             tris: v.tris,
                             blocks: v.blocks,
@@ -293,20 +350,57 @@ impl Blas {
         };
         let mut soa = Soa::<N>::empty(mask);
         soa.fill(rays, mask);
+        self.occluded_packet_in(tree, lanes, &mut soa, rays, None, mask)
+    }
+
+    /// [`Blas::occluded_packet`] for world-space rays on an instance placed
+    /// by a translation alone, as [`Blas::closest_packet_moved`].
+    #[inline(always)]
+    pub fn occluded_packet_moved<const N: usize>(
+        &self,
+        lanes: impl Lanes,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+    ) -> u64 {
+        let Nodes::Wide(tree) = &self.nodes else {
+            return bits(mask)
+                .filter(|&k| self.occluded(&moved(&rays[k], Some(offset))))
+                .fold(0, |m, k| m | 1 << k);
+        };
+        let mut soa = Soa::<N>::empty(mask);
+        soa.fill_moved(world, offset, mask);
+        self.occluded_packet_in(tree, lanes, &mut soa, rays, Some(offset), mask)
+    }
+
+    /// The walk of [`Blas::occluded_packet`] and
+    /// [`Blas::occluded_packet_moved`], as [`Blas::closest_packet_in`].
+    #[inline(always)]
+    fn occluded_packet_in<const N: usize>(
+        &self,
+        tree: &WideBvh,
+        lanes: impl Lanes,
+        soa: &mut Soa<N>,
+        rays: &[Ray; N],
+        offset: Option<Vec3>,
+        mask: u64,
+    ) -> u64 {
         let mut v = AnyTriangles {
             lanes,
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
+            offset,
             pr: PacketRays::new(),
             hit: 0,
         };
-        for &(m, fr) in &packet::plan(&soa, mask) {
+        for &(m, fr) in &packet::plan(soa, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
+                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, soa, m, &mut v),
                 None => {
                     for k in bits(m) {
-                        let tr = TriangleRay::new(&rays[k]);
+                        let tr = TriangleRay::new(&moved(&rays[k], offset));
                         let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
                         self.walk(&mut soa.box_ray(k), &mut c);
                         v.hit |= u64::from(c.hit) << k;
@@ -365,6 +459,27 @@ pub(crate) trait MeshPackets: Lanes {
 
     /// [`Blas::occluded_packet`] with these lanes.
     fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64;
+
+    /// [`Blas::closest_packet_moved`] with these lanes.
+    fn closest_moved<const N: usize>(
+        self,
+        blas: &Blas,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+        found: &mut Found<N>,
+    );
+
+    /// [`Blas::occluded_packet_moved`] with these lanes.
+    fn occluded_moved<const N: usize>(
+        self,
+        blas: &Blas,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+    ) -> u64;
 }
 
 impl MeshPackets for packet::Portable {
@@ -377,14 +492,41 @@ impl MeshPackets for packet::Portable {
     fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
         blas.occluded_packet(self, rays, mask)
     }
+
+    #[inline(never)]
+    fn closest_moved<const N: usize>(
+        self,
+        blas: &Blas,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+        found: &mut Found<N>,
+    ) {
+        blas.closest_packet_moved(self, world, rays, offset, mask, found);
+    }
+
+    #[inline(never)]
+    fn occluded_moved<const N: usize>(
+        self,
+        blas: &Blas,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+    ) -> u64 {
+        blas.occluded_packet_moved(self, world, rays, offset, mask)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     //! The mesh packet walks compiled for AVX2.
     use super::{Blas, Found, MeshPackets};
+    use crate::packet::Soa;
     use crate::packet::x86::Avx2;
     use prism_geometry::Ray;
+    use prism_geometry::glam::Vec3;
 
     impl MeshPackets for Avx2 {
         #[inline(always)]
@@ -399,6 +541,33 @@ mod x86 {
         fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
             // SAFETY: as in `closest` above.
             unsafe { occluded(self, blas, rays, mask) }
+        }
+
+        #[inline(always)]
+        fn closest_moved<const N: usize>(
+            self,
+            blas: &Blas,
+            world: &Soa<N>,
+            rays: &[Ray; N],
+            offset: Vec3,
+            mask: u64,
+            found: &mut Found<N>,
+        ) {
+            // SAFETY: as in `closest` above.
+            unsafe { closest_moved(self, blas, world, rays, offset, mask, found) }
+        }
+
+        #[inline(always)]
+        fn occluded_moved<const N: usize>(
+            self,
+            blas: &Blas,
+            world: &Soa<N>,
+            rays: &[Ray; N],
+            offset: Vec3,
+            mask: u64,
+        ) -> u64 {
+            // SAFETY: as in `closest` above.
+            unsafe { occluded_moved(self, blas, world, rays, offset, mask) }
         }
     }
 
@@ -416,6 +585,35 @@ mod x86 {
     fn occluded<const N: usize>(lanes: Avx2, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
         blas.occluded_packet(lanes, rays, mask)
     }
+
+    /// [`Blas::closest_packet_moved`] compiled for AVX2.
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    #[inline(never)]
+    fn closest_moved<const N: usize>(
+        lanes: Avx2,
+        blas: &Blas,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+        found: &mut Found<N>,
+    ) {
+        blas.closest_packet_moved(lanes, world, rays, offset, mask, found);
+    }
+
+    /// [`Blas::occluded_packet_moved`] compiled for AVX2.
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    #[inline(never)]
+    fn occluded_moved<const N: usize>(
+        lanes: Avx2,
+        blas: &Blas,
+        world: &Soa<N>,
+        rays: &[Ray; N],
+        offset: Vec3,
+        mask: u64,
+    ) -> u64 {
+        blas.occluded_packet_moved(lanes, world, rays, offset, mask)
+    }
 }
 
 /// A packet's closest-hit walk over one mesh's triangles: each ray that
@@ -428,14 +626,18 @@ struct ClosestTriangles<'a, const N: usize, L> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
+    /// Where `rays` are world-space rays on an instance placed by a
+    /// translation alone: what moves them into object space.
+    offset: Option<Vec3>,
     pr: PacketRays<N>,
     found: [Option<(u32, f32, f32, f32)>; N],
 }
 
-impl<const N: usize, L: Lanes> Leaf for &mut ClosestTriangles<'_, N, L> {
+impl<const N: usize, L: Lanes> Leaf<N> for &mut ClosestTriangles<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, reach: &mut [f32]) -> u64 {
-        self.pr.prepare(self.rays, meet);
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64 {
+        let reach = soa.reach_mut();
+        self.pr.prepare_moved(self.rays, meet, self.offset);
         if let Some(block) = self.blocks.get(first as usize / 4)
             && meet.count_ones() >= GROUP_MIN
         {
@@ -480,15 +682,18 @@ struct AnyTriangles<'a, const N: usize, L> {
     tris: &'a [[Vec3; 3]],
     blocks: &'a [Triangles4],
     rays: &'a [Ray; N],
+    /// Where `rays` are world-space rays on an instance placed by a
+    /// translation alone: what moves them into object space.
+    offset: Option<Vec3>,
     pr: PacketRays<N>,
     hit: u64,
 }
 
-impl<const N: usize, L: Lanes> Leaf for &mut AnyTriangles<'_, N, L> {
+impl<const N: usize, L: Lanes> Leaf<N> for &mut AnyTriangles<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [f32]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut Soa<N>) -> u64 {
         let mut done = 0u64;
-        self.pr.prepare(self.rays, meet);
+        self.pr.prepare_moved(self.rays, meet, self.offset);
         match self.blocks.get(first as usize / 4) {
             Some(block) if meet.count_ones() >= GROUP_MIN => {
                 let (mut g, mut lane) = (TriangleRays8::empty(), [0u8; 8]);

@@ -472,14 +472,33 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     /// Tests object `i` against the rays of `meet`: a mesh instance met
     /// by several rays as a packet, anything else ray by ray. Each closer
     /// hit becomes its ray's best and shortens the ray and its reach in
-    /// `reach` (when `reach` has it: the top level's walk).
+    /// `world` (the top level's walk, when there is one: its rows).
     #[inline(always)]
-    fn object(&mut self, i: u32, meet: u64, reach: &mut [f32]) {
+    fn object(&mut self, i: u32, meet: u64, mut world: Option<&mut Soa<N>>) {
         let accel = self.accel;
         if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
             && meet.count_ones() >= MIN_PACKET
         {
             let blas = &accel.blas[*mesh as usize];
+            if let Some(offset) = transform.object_offset()
+                && !fits_small::<N>(meet)
+                && let Some(world) = world.as_deref_mut()
+            {
+                // Placed by a translation alone: the walk's own rows,
+                // moved (no gather, no reciprocals made again).
+                let mut found = [None; N];
+                self.lanes.closest_moved(blas, world, self.rays, offset, meet, &mut found);
+                for (k, hit) in found.into_iter().enumerate() {
+                    if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
+                        self.keep(i, k, hit, dir, world.reach_mut());
+                    }
+                }
+                return;
+            }
+            let reach: &mut [f32] = match world {
+                Some(w) => w.reach_mut(),
+                None => &mut [],
+            };
             if whole::<N>(transform, meet) {
                 let mut found = [None; N];
                 self.lanes.closest(blas, self.rays, meet, &mut found);
@@ -501,6 +520,10 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             }
             return;
         }
+        let reach: &mut [f32] = match world {
+            Some(w) => w.reach_mut(),
+            None => &mut [],
+        };
         for k in bits(meet) {
             if let (Some(r), Some(best)) = (self.rays.get_mut(k), self.best.get_mut(k)) {
                 let t_max = r.t_max;
@@ -513,11 +536,11 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     }
 }
 
-impl<const N: usize, L: MeshPackets> Leaf for ClosestObjects<'_, '_, N, L> {
+impl<const N: usize, L: MeshPackets> Leaf<N> for ClosestObjects<'_, '_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, reach: &mut [f32]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64 {
         for slot in first..first + count {
-            self.object(self.accel.tlas_objects[slot as usize], meet, reach);
+            self.object(self.accel.tlas_objects[slot as usize], meet, Some(soa));
         }
         0
     }
@@ -628,11 +651,17 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
     /// The rays of `meet` that object `i` occludes: a mesh instance met by
     /// several rays tests them as a packet, anything else ray by ray.
     #[inline(always)]
-    fn object(&self, i: u32, meet: u64) -> u64 {
+    fn object(&self, i: u32, meet: u64, world: Option<&Soa<N>>) -> u64 {
         let (accel, rays) = (self.accel, self.rays);
         match &accel.objects[i as usize] {
             Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
                 let blas = &accel.blas[*mesh as usize];
+                if let (Some(offset), false, Some(world), Ok(rays)) =
+                    (transform.object_offset(), fits_small::<N>(meet), world, <&[Ray; N]>::try_from(rays))
+                {
+                    // Placed by a translation alone: as `ClosestObjects`.
+                    return self.lanes.occluded_moved(blas, world, rays, offset, meet);
+                }
                 if let (true, Ok(rays)) = (whole::<N>(transform, meet), <&[Ray; N]>::try_from(rays)) {
                     return self.lanes.occluded(blas, rays, meet);
                 }
@@ -650,12 +679,12 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
     }
 }
 
-impl<const N: usize, L: MeshPackets> Leaf for &mut AnyObjects<'_, N, L> {
+impl<const N: usize, L: MeshPackets> Leaf<N> for &mut AnyObjects<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut [f32]) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64 {
         let mut hit = 0u64;
         for slot in first..first + count {
-            hit |= self.object(self.accel.tlas_objects[slot as usize], meet & !hit);
+            hit |= self.object(self.accel.tlas_objects[slot as usize], meet & !hit, Some(soa));
         }
         self.done |= hit;
         hit
@@ -1305,7 +1334,7 @@ impl Accel {
         if let Some(i) = self.sole {
             // One object on the top level: its walk would reach only it
             // (as `occluded_packet_impl` and the single-ray queries).
-            ClosestObjects { accel: self, lanes, rays: &mut live, best: &mut best }.object(i, mask, &mut []);
+            ClosestObjects { accel: self, lanes, rays: &mut live, best: &mut best }.object(i, mask, None);
         } else {
             self.closest_packet_walk(lanes, &mut live, &mut best, mask);
         }
@@ -1412,7 +1441,7 @@ impl Accel {
             }
         }
         if let Some(i) = self.sole {
-            done |= AnyObjects::<N, _> { accel: self, lanes, rays, done: 0 }.object(i, live);
+            done |= AnyObjects::<N, _> { accel: self, lanes, rays, done: 0 }.object(i, live, None);
         } else {
             done |= self.occluded_packet_walk::<N>(lanes, rays, live);
         }

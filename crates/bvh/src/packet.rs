@@ -52,7 +52,7 @@
 
 use crate::traverse::{BoxRay, INLINE_STACK, InlineStack, Stack, reach_of};
 use crate::wide::{FIRST_BITS, LEAF, Node, NodeTest, ROWS, WIDTH, WideBvh, WideRay, max_ps, min_ps};
-use prism_geometry::glam::Vec3A;
+use prism_geometry::glam::{Vec3, Vec3A};
 use prism_geometry::{Nearest8, Ray, TriangleRays8, Triangles4};
 
 /// Most rays in one packet (bits of its masks).
@@ -64,13 +64,13 @@ pub(crate) const SMALL_PACKET: usize = 16;
 
 /// What a packet walk calls at each leaf it reaches, with the active rays
 /// that meet the leaf's box (`meet`): tests them against the leaf's
-/// primitives `first..first + count`, may shrink their reach in `reach`
-/// (the walk's [`Soa`] row, see [`narrow`]), and returns those that are
-/// done (an occlusion query's occluded rays).
+/// primitives `first..first + count`, may shrink their reach in the walk's
+/// rows `soa` ([`Soa::reach_mut`], see [`narrow`]), and returns those that
+/// are done (an occlusion query's occluded rays).
 /// Named types rather than closures, so that the call is compiled into a
 /// `#[target_feature]` caller (see [`crate::traverse::Visit`]).
-pub(crate) trait Leaf {
-    fn visit(&mut self, first: u32, count: u32, meet: u64, reach: &mut [f32]) -> u64;
+pub(crate) trait Leaf<const N: usize> {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64;
 }
 
 /// Ray `k`'s interval now ends at `t_max`: its reach in a walk's
@@ -779,6 +779,65 @@ impl<const N: usize> Soa<N> {
         s
     }
 
+    /// The rays of `mask` in `world`'s rows, moved into the object space
+    /// of an instance placed by a translation alone: their origins plus
+    /// `offset` ([`Transform::object_offset`]), the rest as they are (a
+    /// translation keeps each direction, so its reciprocals and octant).
+    /// Lane for lane what [`Soa::fill`] makes of the rays that
+    /// [`Transform::ray_to_object`] gives (a test compares them), with
+    /// each ray's reach as narrowed so far; the other lanes of their
+    /// eights meet nothing. After [`Soa::empty`] with the same mask.
+    ///
+    /// [`Transform::object_offset`]: prism_geometry::Transform::object_offset
+    /// [`Transform::ray_to_object`]: prism_geometry::Transform::ray_to_object
+    #[inline(always)]
+    pub(crate) fn fill_moved(&mut self, world: &Soa<N>, offset: Vec3, mask: u64) {
+        let offset = offset.to_array();
+        for c in 0..N / 8 {
+            let live = (mask >> (8 * c)) as u8;
+            if live == 0 {
+                continue;
+            }
+            let lanes = 8 * c..8 * c + 8;
+            for (a, off) in offset.into_iter().enumerate() {
+                if let (Some(x), Some(w), Some(y), Some(v)) = (
+                    self.origin[a].get_mut(lanes.clone()),
+                    world.origin[a].get(lanes.clone()),
+                    self.inv[a].get_mut(lanes.clone()),
+                    world.inv[a].get(lanes.clone()),
+                ) {
+                    for (x, &w) in x.iter_mut().zip(w) {
+                        *x = w + off;
+                    }
+                    y.copy_from_slice(v);
+                }
+            }
+            if let (Some(t), Some(wt), Some(r), Some(wr), Some(o), Some(wo)) = (
+                self.t_min.get_mut(lanes.clone()),
+                world.t_min.get(lanes.clone()),
+                self.reach.get_mut(lanes.clone()),
+                world.reach.get(lanes.clone()),
+                self.oct.get_mut(lanes.clone()),
+                world.oct.get(lanes),
+            ) {
+                t.copy_from_slice(wt);
+                r.copy_from_slice(wr);
+                o.copy_from_slice(wo);
+            }
+            for k in bits(u64::from(!live) << (8 * c)) {
+                if let (Some(r), Some(o)) = (self.reach.get_mut(k), self.oct.get_mut(k)) {
+                    (*r, *o) = (f32::NEG_INFINITY, 8);
+                }
+            }
+        }
+    }
+
+    /// The reach row, which leaves narrow ([`narrow`]).
+    #[inline(always)]
+    pub(crate) fn reach_mut(&mut self) -> &mut [f32; N] {
+        &mut self.reach
+    }
+
     /// Lanes `base..base + 8` from `block`, those of `live` (bit `i`:
     /// lane `base + i`); the others keep their nothing-meeting values.
     #[inline(always)]
@@ -1099,7 +1158,7 @@ impl WideBvh {
         fr: &Frustum,
         soa: &mut Soa<N>,
         active: u64,
-        leaf: impl Leaf,
+        leaf: impl Leaf<N>,
     ) {
         if need <= INLINE_STACK {
             self.walk_packet_in::<ANY, N, _>(
@@ -1123,7 +1182,7 @@ impl WideBvh {
         fr: &Frustum,
         soa: &mut Soa<N>,
         mut active: u64,
-        mut leaf: impl Leaf,
+        mut leaf: impl Leaf<N>,
     ) {
         let nodes = self.nodes();
         if nodes.is_empty() || active == 0 {
@@ -1173,7 +1232,7 @@ impl WideBvh {
                 let count = ((cur & !LEAF) >> FIRST_BITS) + 1;
                 let meet = rays & active;
                 if meet != 0 {
-                    let done = leaf.visit(first, count, meet, &mut soa.reach);
+                    let done = leaf.visit(first, count, meet, soa);
                     for k in bits(done) {
                         if let Some(x) = soa.reach.get_mut(k) {
                             *x = f32::NEG_INFINITY;
@@ -1402,6 +1461,74 @@ mod tests {
             zero > 100 && uniform > 100 && mixed > 100,
             "{zero} rays of no octant, {uniform} / {mixed} packets of one / several"
         );
+    }
+
+    /// A translated instance's rows ([`Soa::fill_moved`]) are, lane for
+    /// lane, the rows [`Soa::fill`] makes of the rays that
+    /// `Transform::ray_to_object` gives, with the reaches narrowed so far;
+    /// lanes not asked for meet nothing.
+    #[test]
+    fn moved_lanes_are_the_object_space_rays_lanes() {
+        use prism_geometry::Transform;
+        let mut r = prism_testkit::Rng::new(31);
+        let mut rng = move || r.f32();
+        let component = |x: f32| match (x * 20.0) as u32 {
+            0 => 0.0,
+            1 => -0.0,
+            2 => 1e-30,
+            _ => x - 0.5,
+        };
+        let mut compared = 0;
+        for i in 0..500 {
+            let mut rays: Vec<Ray> = (0..PACKET)
+                .map(|_| {
+                    let o = Vec3::new(component(rng()), rng(), rng()) * 8.0 - Vec3::new(0.0, 4.0, 4.0);
+                    let d = Vec3::new(component(rng()), component(rng()), component(rng()));
+                    let t_max = if rng() < 0.3 { f32::INFINITY } else { rng() * 50.0 };
+                    Ray { origin: o, t_min: rng() * 0.01, dir: d, t_max }
+                })
+                .collect();
+            let mask = match i % 3 {
+                0 => u64::MAX,
+                _ => u64::from(rng().to_bits()) << 32 | u64::from(rng().to_bits()),
+            };
+            let offset = match i % 4 {
+                0 => Vec3::new(0.0, -0.0, 3.5),
+                _ => Vec3::new(rng(), rng(), rng()) * 20.0 - 10.0,
+            };
+            let t = Transform::translate(offset).unwrap();
+            let Some(moved_by) = t.object_offset() else { panic!("a translation has an offset") };
+            let mut world = Soa::<PACKET>::new(&rays, mask);
+            // Some rays have found a hit since the rows were made.
+            for (k, ray) in rays.iter_mut().enumerate() {
+                if rng() < 0.3 {
+                    ray.t_max = rng() * 10.0;
+                    narrow(&mut world.reach, k, ray.t_max);
+                }
+            }
+            let local: Vec<Ray> = rays.iter().map(|r| t.ray_to_object(r)).collect();
+            let want = Soa::<PACKET>::new(&local, mask);
+            let mut got = Soa::<PACKET>::empty(mask);
+            got.fill_moved(&world, moved_by, mask);
+            assert_eq!(got.len, want.len);
+            for (k, ray) in rays.iter().enumerate() {
+                if mask >> k & 1 == 0 {
+                    assert_eq!(got.reach[k], f32::NEG_INFINITY, "lane {k} not asked for meets nothing");
+                    continue;
+                }
+                let parts = |s: &Soa<PACKET>| {
+                    (
+                        [0, 1, 2].map(|a| (s.origin[a][k].to_bits(), s.inv[a][k].to_bits())),
+                        s.t_min[k].to_bits(),
+                        s.reach[k].to_bits(),
+                        s.oct[k],
+                    )
+                };
+                assert_eq!(parts(&got), parts(&want), "lane {k}: {ray:?} moved by {offset}");
+                compared += 1;
+            }
+        }
+        assert!(compared > 10_000, "{compared} lanes compared");
     }
 
     /// `plan`'s one pass gives the reference's groups and frustums: rays

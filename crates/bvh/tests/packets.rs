@@ -166,30 +166,42 @@ fn random_scenes_agree_with_single_rays() {
 }
 
 /// A mesh instanced many times (the top level's leaves then hold packets
-/// of mesh instances) under every node kernel this CPU runs.
+/// of mesh instances) under every node kernel this CPU runs: turned and
+/// moved, and moved alone (whose packets walk the top level's rows moved,
+/// see `Transform::object_offset`), and the two mixed.
 #[test]
 fn instance_grid_agrees_under_every_kernel() {
     let mut rng = Rng::new(5);
     let mesh = Arc::new(common::random_mesh(&mut rng, 400));
-    let mut objects = Vec::new();
-    for i in 0..4 {
-        for j in 0..4 {
-            let t = Transform::rotate_y(i as f32 + 0.3 * j as f32)
-                .then(&Transform::translate(Vec3::new(i as f32 * 3.0, 0.0, j as f32 * 3.0)).unwrap());
-            objects.push(Object::Mesh { mesh: 0, transform: t });
+    for placing in ["turned", "moved", "mixed"] {
+        let mut objects = Vec::new();
+        for i in 0..4 {
+            for j in 0..4 {
+                let turn = match placing {
+                    "turned" => true,
+                    "moved" => false,
+                    _ => (i + j) % 2 == 0,
+                };
+                let at =
+                    Transform::translate(Vec3::new(i as f32 * 3.0, 0.5 * j as f32, j as f32 * 3.0)).unwrap();
+                let t =
+                    if turn { Transform::rotate_y(i as f32 + 0.3 * j as f32 + 0.1).then(&at) } else { at };
+                assert_eq!(t.object_offset().is_some(), !turn && (i, j) != (0, 0));
+                objects.push(Object::Mesh { mesh: 0, transform: t });
+            }
         }
-    }
-    for kernel in [Kernel::Portable, Kernel::Avx2, Kernel::Avx512] {
-        let mut accel = Accel::build(vec![mesh.clone()], objects.clone()).unwrap();
-        if !accel.set_kernel(kernel) {
-            eprintln!("{} not run: this CPU lacks it", kernel.name());
-            continue;
+        for kernel in [Kernel::Portable, Kernel::Avx2, Kernel::Avx512] {
+            let mut accel = Accel::build(vec![mesh.clone()], objects.clone()).unwrap();
+            if !accel.set_kernel(kernel) {
+                eprintln!("{} not run: this CPU lacks it", kernel.name());
+                continue;
+            }
+            let mut hits = 0;
+            for _ in 0..40 {
+                hits += check_scene(&accel, &mut rng, &format!("{placing}, {}", kernel.name()));
+            }
+            assert!(hits > 500, "{placing}, {}: {hits} hits", kernel.name());
         }
-        let mut hits = 0;
-        for _ in 0..40 {
-            hits += check_scene(&accel, &mut rng, kernel.name());
-        }
-        assert!(hits > 500, "{}: {hits} hits", kernel.name());
     }
 }
 

@@ -25,6 +25,10 @@ pub struct Transform {
     /// A scene of one mesh placed as it is (the common case) then prepares
     /// its rays without a matrix product each.
     identity: bool,
+    /// `to_object` moves points and nothing else (its linear part is
+    /// exactly the identity) and is not the identity: `Some` of the offset
+    /// it adds (see [`Transform::object_offset`]).
+    offset: Option<Vec3>,
 }
 
 impl Default for Transform {
@@ -40,6 +44,7 @@ impl Transform {
         to_object: Affine3A::IDENTITY,
         normal: Mat3A::IDENTITY,
         identity: true,
+        offset: None,
     };
 
     /// Checks and wraps an affine map.
@@ -127,7 +132,10 @@ impl Transform {
 
     /// From the map, its inverse and its normal matrix.
     fn from_parts(to_world: Affine3A, to_object: Affine3A, normal: Mat3A) -> Self {
-        Self { to_world, to_object, normal, identity: to_object == Affine3A::IDENTITY }
+        let identity = to_object == Affine3A::IDENTITY;
+        let offset =
+            (!identity && to_object.matrix3 == Mat3A::IDENTITY).then(|| Vec3::from(to_object.translation));
+        Self { to_world, to_object, normal, identity, offset }
     }
 
     /// Non-uniform scale by `s`.
@@ -211,12 +219,32 @@ impl Transform {
         self.identity
     }
 
+    /// Where the map to object space is a translation and nothing else
+    /// (a model placed by `translate` alone): the offset it adds to a
+    /// point. [`Transform::ray_to_object`] then moves a ray's origin by it
+    /// and keeps its direction as it is, so that a ray's values that
+    /// depend on its direction alone (reciprocals, octant, a triangle
+    /// test's shear) hold in object space too. `None` for the identity and
+    /// for every map that turns, scales or shears.
+    #[inline]
+    #[must_use]
+    pub fn object_offset(&self) -> Option<Vec3> {
+        self.offset
+    }
+
     /// Maps a world-space ray into object space; `t` values are preserved.
+    /// Under a translation alone ([`Transform::object_offset`]) the origin
+    /// is `origin + offset`, per component, and the direction is kept: the
+    /// matrix product would give the same values but for the sign of a
+    /// zero component.
     #[inline]
     #[must_use]
     pub fn ray_to_object(&self, ray: &Ray) -> Ray {
         if self.identity {
             return *ray;
+        }
+        if let Some(offset) = self.offset {
+            return Ray { origin: ray.origin + offset, ..*ray };
         }
         Ray {
             origin: self.to_object.transform_point3(ray.origin),
@@ -299,6 +327,41 @@ mod tests {
         close3(m.point(Vec3::X), Vec3::new(0.0, 0.0, -6.0), 1e-5);
         // Directions ignore translation.
         close3(m.vector(Vec3::X), Vec3::new(0.0, 0.0, -1.0), 1e-6);
+    }
+
+    /// A translation alone has an offset, and maps rays as the matrix
+    /// product does (up to the sign of a zero); every other map, and the
+    /// identity, has none.
+    #[test]
+    fn translations_move_rays_by_their_offset() {
+        let m = t(Vec3::new(1.5, -2.0, 0.25)).then(&t(Vec3::new(0.5, 0.0, -3.0)));
+        assert_eq!(m.object_offset(), Some(Vec3::new(-2.0, 2.0, 2.75)));
+        let mut u = uniform(7);
+        for _ in 0..1000 {
+            let o = Vec3::new(u() * 50.0, u() * 50.0, u());
+            let d = Vec3::new(u(), 0.0, u());
+            let ray = Ray { origin: o, dir: d, t_min: 0.5, t_max: 9.0 };
+            let local = m.ray_to_object(&ray);
+            let product = Ray {
+                origin: m.inverse_matrix().transform_point3(o),
+                dir: m.inverse_matrix().transform_vector3(d),
+                ..ray
+            };
+            // Equal as numbers (a zero of either sign), bit for bit otherwise.
+            assert_eq!(local, product);
+            assert_eq!(local.dir.to_array().map(f32::to_bits), d.to_array().map(f32::to_bits));
+            assert_eq!(local.origin, o + Vec3::new(-2.0, 2.0, 2.75));
+        }
+        for other in [
+            Transform::IDENTITY,
+            t(Vec3::ZERO),
+            Transform::rotate_y(0.3).then(&t(Vec3::X)),
+            Transform::scale(Vec3::splat(2.0)).unwrap(),
+            Transform::shear(Shear { xy: 0.5, ..Shear::NONE }).unwrap(),
+            t(Vec3::X).then(&t(-Vec3::X)),
+        ] {
+            assert_eq!(other.object_offset(), None, "{other:?}");
+        }
     }
 
     #[test]

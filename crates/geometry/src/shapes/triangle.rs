@@ -728,20 +728,29 @@ impl<const N: usize> PacketRays<N> {
     /// lanes hold values no answer reads).
     #[inline(always)]
     pub fn prepare(&mut self, rays: &[Ray; N], want: u64) {
+        self.prepare_moved(rays, want, None);
+    }
+
+    /// [`PacketRays::prepare`] for the rays moved by `offset` where it is
+    /// `Some`: each origin `origin + offset`, per component, the rest as
+    /// it is (the rays that `Transform::ray_to_object` gives under a
+    /// translation alone, see `Transform::object_offset`).
+    #[inline(always)]
+    pub fn prepare_moved(&mut self, rays: &[Ray; N], want: u64, offset: Option<Vec3>) {
         let todo = want & !self.made;
         if todo == 0 {
             return;
         }
         for b in 0..Self::BLOCKS {
             if todo >> (8 * b) & 0xff != 0 {
-                self.prepare8(rays, b);
+                self.prepare8(rays, b, offset);
             }
         }
     }
 
-    /// Makes block `b` (rays `8b..8b + 8`).
+    /// Makes block `b` (rays `8b..8b + 8`), moved by `offset`.
     #[inline(always)]
-    fn prepare8(&mut self, rays: &[Ray; N], b: usize) {
+    fn prepare8(&mut self, rays: &[Ray; N], b: usize, offset: Option<Vec3>) {
         let base = 8 * b;
         let Some(block) = rays.get(base..base + 8) else { return };
         let mut o = [[0.0f32; 8]; 3];
@@ -754,6 +763,14 @@ impl<const N: usize> PacketRays<N> {
                 d[a][i] = rd[a];
             }
             (t0[i], t1[i]) = finite_interval(r.t_min, r.t_max);
+        }
+        if let Some(offset) = offset {
+            let offset = offset.to_array();
+            for (row, off) in o.iter_mut().zip(offset) {
+                for x in row {
+                    *x += off;
+                }
+            }
         }
         let mut code = [0u8; 8];
         let mut out = [[0.0f32; 8]; 6];
