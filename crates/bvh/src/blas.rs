@@ -5,7 +5,7 @@
 //! Every triangle is tested by prism-geometry's [`TriangleRay`], the one
 //! watertight ray/triangle test.
 
-use crate::packet::{self, Lanes, Leaf, Soa, bits};
+use crate::packet::{self, Frustum, Lanes, Leaf, Moved, Soa, bits};
 use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
 use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
@@ -45,7 +45,7 @@ pub(crate) type Found<const N: usize> = [Option<(u32, f32, f32, f32)>; N];
 /// [`prism_geometry::Transform::ray_to_object`] moves a ray under a
 /// translation alone.
 #[inline(always)]
-fn moved(ray: &Ray, offset: Option<Vec3>) -> Ray {
+fn moved_ray(ray: &Ray, offset: Option<Vec3>) -> Ray {
     match offset {
         Some(offset) => Ray { origin: ray.origin + offset, ..*ray },
         None => *ray,
@@ -263,67 +263,22 @@ impl Blas {
         };
         let mut soa = Soa::<N>::empty(mask);
         soa.fill(rays, mask);
-        self.closest_packet_in(tree, lanes, &mut soa, rays, None, mask, found);
-    }
-
-    /// [`Blas::closest_packet`] for the world-space rays `rays[k]` of
-    /// `mask` (in `world`, a top-level walk's rows) on an instance placed
-    /// by a translation alone, whose map to object space adds `offset`
-    /// ([`prism_geometry::Transform::object_offset`]): the rays are moved
-    /// as [`prism_geometry::Transform::ray_to_object`] moves them, lane by
-    /// lane, and neither gathered nor made again.
-    #[inline(always)]
-    pub fn closest_packet_moved<const N: usize>(
-        &self,
-        lanes: impl Lanes,
-        world: &Soa<N>,
-        rays: &[Ray; N],
-        offset: Vec3,
-        mask: u64,
-        found: &mut Found<N>,
-    ) {
-        let Nodes::Wide(tree) = &self.nodes else {
-            for k in bits(mask) {
-                found[k] = self.closest::<false>(&moved(&rays[k], Some(offset)));
-            }
-            return;
-        };
-        let mut soa = Soa::<N>::empty(mask);
-        soa.fill_moved(world, offset, mask);
-        self.closest_packet_in(tree, lanes, &mut soa, rays, Some(offset), mask, found);
-    }
-
-    /// The walk of [`Blas::closest_packet`] and
-    /// [`Blas::closest_packet_moved`] over `soa`, the rays `rays` moved by
-    /// `offset`.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn closest_packet_in<const N: usize>(
-        &self,
-        tree: &WideBvh,
-        lanes: impl Lanes,
-        soa: &mut Soa<N>,
-        rays: &[Ray; N],
-        offset: Option<Vec3>,
-        mask: u64,
-        found: &mut Found<N>,
-    ) {
         let mut v = ClosestTriangles {
             lanes,
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
-            offset,
+            offset: None,
             pr: PacketRays::new(),
             found: [None; N],
         };
-        for &(m, fr) in &packet::plan(soa, mask) {
+        for &(m, fr) in &packet::plan(&soa, mask) {
             match fr {
-                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, soa, m, &mut v),
+                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
                 None => {
                     for k in bits(m) {
                         // A ray of no frustum reaches no packet leaf.
-                        let tr = TriangleRay::new(&moved(&rays[k], offset));
+                        let tr = TriangleRay::new(&rays[k]);
                         let mut c = ClosestTriangle::<false> {
                             tris: v.tris,
                             blocks: v.blocks,
@@ -341,6 +296,51 @@ impl Blas {
         }
     }
 
+    /// [`Blas::closest_packet`] for the world-space rays `rays[k]` of
+    /// `mask` (in a top-level walk's rows, bounded by its frustum: see
+    /// [`Moved`]) on an instance placed by a translation alone, whose map
+    /// to object space adds the offset
+    /// ([`prism_geometry::Transform::object_offset`]): the rays are moved
+    /// as [`prism_geometry::Transform::ray_to_object`] moves them, lane by
+    /// lane, and neither gathered nor made again, and the frustum is moved
+    /// with them ([`Frustum::moved`]), not made again from the rows. All of
+    /// them walk together: the top-level walk holds rays of one octant (or
+    /// a mixed packet's, walked whole) with no zero direction component.
+    #[inline(always)]
+    pub fn closest_packet_moved<const N: usize>(
+        &self,
+        lanes: impl Lanes,
+        moved: Moved<'_, N>,
+        rays: &[Ray; N],
+        mask: u64,
+        found: &mut Found<N>,
+    ) {
+        let Moved { world, fr, offset } = moved;
+        let Nodes::Wide(tree) = &self.nodes else {
+            for k in bits(mask) {
+                found[k] = self.closest::<false>(&moved_ray(&rays[k], Some(offset)));
+            }
+            return;
+        };
+        let mut soa = Soa::<N>::empty(mask);
+        soa.fill_moved(world, offset, mask);
+        let mut v = ClosestTriangles {
+            lanes,
+            tris: &self.tris,
+            blocks: &self.blocks,
+            rays,
+            offset: Some(offset),
+            pr: PacketRays::new(),
+            found: [None; N],
+        };
+        // The rays of one walk of the top level: its frustum, moved, bounds
+        // them (no plan to make).
+        tree.walk_packet::<false, N>(lanes, self.depth, &fr.moved(offset), &mut soa, mask, &mut v);
+        for k in bits(mask) {
+            found[k] = v.found[k].map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
+        }
+    }
+
     /// [`Blas::occluded`] for each object-space ray `rays[k]` of `mask`,
     /// walked together where the layout is wide; returns the occluded rays.
     #[inline(always)]
@@ -350,7 +350,29 @@ impl Blas {
         };
         let mut soa = Soa::<N>::empty(mask);
         soa.fill(rays, mask);
-        self.occluded_packet_in(tree, lanes, &mut soa, rays, None, mask)
+        let mut v = AnyTriangles {
+            lanes,
+            tris: &self.tris,
+            blocks: &self.blocks,
+            rays,
+            offset: None,
+            pr: PacketRays::new(),
+            hit: 0,
+        };
+        for &(m, fr) in &packet::plan(&soa, mask) {
+            match fr {
+                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
+                None => {
+                    for k in bits(m) {
+                        let tr = TriangleRay::new(&rays[k]);
+                        let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
+                        self.walk(&mut soa.box_ray(k), &mut c);
+                        v.hit |= u64::from(c.hit) << k;
+                    }
+                }
+            }
+        }
+        v.hit & mask
     }
 
     /// [`Blas::occluded_packet`] for world-space rays on an instance placed
@@ -359,55 +381,29 @@ impl Blas {
     pub fn occluded_packet_moved<const N: usize>(
         &self,
         lanes: impl Lanes,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
     ) -> u64 {
+        let Moved { world, fr, offset } = moved;
         let Nodes::Wide(tree) = &self.nodes else {
             return bits(mask)
-                .filter(|&k| self.occluded(&moved(&rays[k], Some(offset))))
+                .filter(|&k| self.occluded(&moved_ray(&rays[k], Some(offset))))
                 .fold(0, |m, k| m | 1 << k);
         };
         let mut soa = Soa::<N>::empty(mask);
         soa.fill_moved(world, offset, mask);
-        self.occluded_packet_in(tree, lanes, &mut soa, rays, Some(offset), mask)
-    }
-
-    /// The walk of [`Blas::occluded_packet`] and
-    /// [`Blas::occluded_packet_moved`], as [`Blas::closest_packet_in`].
-    #[inline(always)]
-    fn occluded_packet_in<const N: usize>(
-        &self,
-        tree: &WideBvh,
-        lanes: impl Lanes,
-        soa: &mut Soa<N>,
-        rays: &[Ray; N],
-        offset: Option<Vec3>,
-        mask: u64,
-    ) -> u64 {
         let mut v = AnyTriangles {
             lanes,
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
-            offset,
+            offset: Some(offset),
             pr: PacketRays::new(),
             hit: 0,
         };
-        for &(m, fr) in &packet::plan(soa, mask) {
-            match fr {
-                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, soa, m, &mut v),
-                None => {
-                    for k in bits(m) {
-                        let tr = TriangleRay::new(&moved(&rays[k], offset));
-                        let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
-                        self.walk(&mut soa.box_ray(k), &mut c);
-                        v.hit |= u64::from(c.hit) << k;
-                    }
-                }
-            }
-        }
+        // As in `closest_packet_moved`.
+        tree.walk_packet::<true, N>(lanes, self.depth, &fr.moved(offset), &mut soa, mask, &mut v);
         v.hit & mask
     }
 
@@ -464,9 +460,8 @@ pub(crate) trait MeshPackets: Lanes {
     fn closest_moved<const N: usize>(
         self,
         blas: &Blas,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
         found: &mut Found<N>,
     );
@@ -475,9 +470,8 @@ pub(crate) trait MeshPackets: Lanes {
     fn occluded_moved<const N: usize>(
         self,
         blas: &Blas,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
     ) -> u64;
 }
@@ -497,25 +491,23 @@ impl MeshPackets for packet::Portable {
     fn closest_moved<const N: usize>(
         self,
         blas: &Blas,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
         found: &mut Found<N>,
     ) {
-        blas.closest_packet_moved(self, world, rays, offset, mask, found);
+        blas.closest_packet_moved(self, moved, rays, mask, found);
     }
 
     #[inline(never)]
     fn occluded_moved<const N: usize>(
         self,
         blas: &Blas,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
     ) -> u64 {
-        blas.occluded_packet_moved(self, world, rays, offset, mask)
+        blas.occluded_packet_moved(self, moved, rays, mask)
     }
 }
 
@@ -523,10 +515,9 @@ impl MeshPackets for packet::Portable {
 mod x86 {
     //! The mesh packet walks compiled for AVX2.
     use super::{Blas, Found, MeshPackets};
-    use crate::packet::Soa;
+    use crate::packet::Moved;
     use crate::packet::x86::Avx2;
     use prism_geometry::Ray;
-    use prism_geometry::glam::Vec3;
 
     impl MeshPackets for Avx2 {
         #[inline(always)]
@@ -547,27 +538,25 @@ mod x86 {
         fn closest_moved<const N: usize>(
             self,
             blas: &Blas,
-            world: &Soa<N>,
+            moved: Moved<'_, N>,
             rays: &[Ray; N],
-            offset: Vec3,
             mask: u64,
             found: &mut Found<N>,
         ) {
             // SAFETY: as in `closest` above.
-            unsafe { closest_moved(self, blas, world, rays, offset, mask, found) }
+            unsafe { closest_moved(self, blas, moved, rays, mask, found) }
         }
 
         #[inline(always)]
         fn occluded_moved<const N: usize>(
             self,
             blas: &Blas,
-            world: &Soa<N>,
+            moved: Moved<'_, N>,
             rays: &[Ray; N],
-            offset: Vec3,
             mask: u64,
         ) -> u64 {
             // SAFETY: as in `closest` above.
-            unsafe { occluded_moved(self, blas, world, rays, offset, mask) }
+            unsafe { occluded_moved(self, blas, moved, rays, mask) }
         }
     }
 
@@ -592,13 +581,12 @@ mod x86 {
     fn closest_moved<const N: usize>(
         lanes: Avx2,
         blas: &Blas,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
         found: &mut Found<N>,
     ) {
-        blas.closest_packet_moved(lanes, world, rays, offset, mask, found);
+        blas.closest_packet_moved(lanes, moved, rays, mask, found);
     }
 
     /// [`Blas::occluded_packet_moved`] compiled for AVX2.
@@ -607,12 +595,11 @@ mod x86 {
     fn occluded_moved<const N: usize>(
         lanes: Avx2,
         blas: &Blas,
-        world: &Soa<N>,
+        moved: Moved<'_, N>,
         rays: &[Ray; N],
-        offset: Vec3,
         mask: u64,
     ) -> u64 {
-        blas.occluded_packet_moved(lanes, world, rays, offset, mask)
+        blas.occluded_packet_moved(lanes, moved, rays, mask)
     }
 }
 
@@ -635,7 +622,7 @@ struct ClosestTriangles<'a, const N: usize, L> {
 
 impl<const N: usize, L: Lanes> Leaf<N> for &mut ClosestTriangles<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>, _: &Frustum) -> u64 {
         let reach = soa.reach_mut();
         self.pr.prepare_moved(self.rays, meet, self.offset);
         if let Some(block) = self.blocks.get(first as usize / 4)
@@ -691,7 +678,7 @@ struct AnyTriangles<'a, const N: usize, L> {
 
 impl<const N: usize, L: Lanes> Leaf<N> for &mut AnyTriangles<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut Soa<N>) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, _: &mut Soa<N>, _: &Frustum) -> u64 {
         let mut done = 0u64;
         self.pr.prepare_moved(self.rays, meet, self.offset);
         match self.blocks.get(first as usize / 4) {

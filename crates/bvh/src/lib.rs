@@ -107,7 +107,7 @@ mod wide;
 
 use blas::{Blas, MeshPackets};
 use obvhs::BvhBuildParams;
-use packet::{Leaf, MIN_PACKET, SMALL_PACKET, Soa, bits};
+use packet::{Frustum, Leaf, MIN_PACKET, Moved, SMALL_PACKET, Soa, bits};
 use prism_geometry::glam::{Vec3, Vec4};
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
@@ -474,7 +474,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     /// hit becomes its ray's best and shortens the ray and its reach in
     /// `world` (the top level's walk, when there is one: its rows).
     #[inline(always)]
-    fn object(&mut self, i: u32, meet: u64, mut world: Option<&mut Soa<N>>) {
+    fn object(&mut self, i: u32, meet: u64, mut world: Option<(&mut Soa<N>, &Frustum)>) {
         let accel = self.accel;
         if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
             && meet.count_ones() >= MIN_PACKET
@@ -482,12 +482,13 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             let blas = &accel.blas[*mesh as usize];
             if let Some(offset) = transform.object_offset()
                 && !fits_small::<N>(meet)
-                && let Some(world) = world.as_deref_mut()
+                && let Some((world, fr)) = world.as_mut()
             {
                 // Placed by a translation alone: the walk's own rows,
-                // moved (no gather, no reciprocals made again).
+                // moved (no gather; no reciprocals or frustum made again).
                 let mut found = [None; N];
-                self.lanes.closest_moved(blas, world, self.rays, offset, meet, &mut found);
+                let moved = Moved { world, fr, offset };
+                self.lanes.closest_moved(blas, moved, self.rays, meet, &mut found);
                 for (k, hit) in found.into_iter().enumerate() {
                     if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
                         self.keep(i, k, hit, dir, world.reach_mut());
@@ -496,7 +497,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
                 return;
             }
             let reach: &mut [f32] = match world {
-                Some(w) => w.reach_mut(),
+                Some((w, _)) => w.reach_mut(),
                 None => &mut [],
             };
             if whole::<N>(transform, meet) {
@@ -521,7 +522,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             return;
         }
         let reach: &mut [f32] = match world {
-            Some(w) => w.reach_mut(),
+            Some((w, _)) => w.reach_mut(),
             None => &mut [],
         };
         for k in bits(meet) {
@@ -538,9 +539,9 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
 
 impl<const N: usize, L: MeshPackets> Leaf<N> for ClosestObjects<'_, '_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>, fr: &Frustum) -> u64 {
         for slot in first..first + count {
-            self.object(self.accel.tlas_objects[slot as usize], meet, Some(soa));
+            self.object(self.accel.tlas_objects[slot as usize], meet, Some((&mut *soa, fr)));
         }
         0
     }
@@ -651,16 +652,16 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
     /// The rays of `meet` that object `i` occludes: a mesh instance met by
     /// several rays tests them as a packet, anything else ray by ray.
     #[inline(always)]
-    fn object(&self, i: u32, meet: u64, world: Option<&Soa<N>>) -> u64 {
+    fn object(&self, i: u32, meet: u64, world: Option<(&Soa<N>, &Frustum)>) -> u64 {
         let (accel, rays) = (self.accel, self.rays);
         match &accel.objects[i as usize] {
             Object::Mesh { mesh, transform } if meet.count_ones() >= MIN_PACKET => {
                 let blas = &accel.blas[*mesh as usize];
-                if let (Some(offset), false, Some(world), Ok(rays)) =
+                if let (Some(offset), false, Some((world, fr)), Ok(rays)) =
                     (transform.object_offset(), fits_small::<N>(meet), world, <&[Ray; N]>::try_from(rays))
                 {
                     // Placed by a translation alone: as `ClosestObjects`.
-                    return self.lanes.occluded_moved(blas, world, rays, offset, meet);
+                    return self.lanes.occluded_moved(blas, Moved { world, fr, offset }, rays, meet);
                 }
                 if let (true, Ok(rays)) = (whole::<N>(transform, meet), <&[Ray; N]>::try_from(rays)) {
                     return self.lanes.occluded(blas, rays, meet);
@@ -681,10 +682,10 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
 
 impl<const N: usize, L: MeshPackets> Leaf<N> for &mut AnyObjects<'_, N, L> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64 {
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>, fr: &Frustum) -> u64 {
         let mut hit = 0u64;
         for slot in first..first + count {
-            hit |= self.object(self.accel.tlas_objects[slot as usize], meet & !hit, Some(soa));
+            hit |= self.object(self.accel.tlas_objects[slot as usize], meet & !hit, Some((&*soa, fr)));
         }
         self.done |= hit;
         hit

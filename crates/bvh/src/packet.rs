@@ -66,11 +66,24 @@ pub(crate) const SMALL_PACKET: usize = 16;
 /// that meet the leaf's box (`meet`): tests them against the leaf's
 /// primitives `first..first + count`, may shrink their reach in the walk's
 /// rows `soa` ([`Soa::reach_mut`], see [`narrow`]), and returns those that
-/// are done (an occlusion query's occluded rays).
+/// are done (an occlusion query's occluded rays). `fr` is the walk's
+/// frustum, which bounds the rays of `meet` too.
 /// Named types rather than closures, so that the call is compiled into a
 /// `#[target_feature]` caller (see [`crate::traverse::Visit`]).
 pub(crate) trait Leaf<const N: usize> {
-    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>) -> u64;
+    fn visit(&mut self, first: u32, count: u32, meet: u64, soa: &mut Soa<N>, fr: &Frustum) -> u64;
+}
+
+/// A top-level packet walk's rays as a mesh instance placed by a
+/// translation alone sees them: the walk's rows and frustum, and the
+/// offset that moves them into the instance's object space
+/// (`Transform::object_offset`; see [`Soa::fill_moved`] and
+/// [`Frustum::moved`]).
+#[derive(Clone, Copy)]
+pub(crate) struct Moved<'a, const N: usize> {
+    pub world: &'a Soa<N>,
+    pub fr: &'a Frustum,
+    pub offset: Vec3,
 }
 
 /// Ray `k`'s interval now ends at `t_max`: its reach in a walk's
@@ -620,6 +633,20 @@ impl Frustum {
     fn mixed() -> Self {
         let none = [Vec3A::INFINITY, Vec3A::NEG_INFINITY];
         Self { mixed: true, ..Self::from_bounds(0, none, none, f32::INFINITY) }
+    }
+
+    /// This frustum for its rays moved by `offset` as [`Soa::fill_moved`]
+    /// moves them: the origins' bounds moved (rounding is monotone, so each
+    /// moved origin stays within them), the rest as it is.
+    #[inline(always)]
+    pub(crate) fn moved(&self, offset: Vec3) -> Self {
+        if self.mixed {
+            return *self;
+        }
+        let off = offset.to_array();
+        let o_lo: [f32; 3] = std::array::from_fn(|a| self.o_lo[a] + off[a]);
+        let o_hi: [f32; 3] = std::array::from_fn(|a| self.o_hi[a] + off[a]);
+        Self { o_lo, o_hi, same_origin: o_lo == o_hi, ..*self }
     }
 
     /// From the bounds of rays of the octant `signs` (bit `a` set when
@@ -1232,7 +1259,7 @@ impl WideBvh {
                 let count = ((cur & !LEAF) >> FIRST_BITS) + 1;
                 let meet = rays & active;
                 if meet != 0 {
-                    let done = leaf.visit(first, count, meet, soa);
+                    let done = leaf.visit(first, count, meet, soa, fr);
                     for k in bits(done) {
                         if let Some(x) = soa.reach.get_mut(k) {
                             *x = f32::NEG_INFINITY;
@@ -1529,6 +1556,45 @@ mod tests {
             }
         }
         assert!(compared > 10_000, "{compared} lanes compared");
+    }
+
+    /// A walk's frustum moved with its rays ([`Frustum::moved`]) is the
+    /// frustum of the moved rows over the same rays, and bounds every
+    /// subset of them (the rays of one instance).
+    #[test]
+    fn moved_frustum_is_the_moved_rays_frustum() {
+        use prism_geometry::Transform;
+        let mut r = prism_testkit::Rng::new(41);
+        let mut rng = move || r.f32();
+        for i in 0..300 {
+            let signs = Vec3::new(1.0, -1.0, if i % 2 == 0 { 1.0 } else { -1.0 });
+            let eye = Vec3::new(rng(), rng(), rng()) * 10.0 - 5.0;
+            let rays: Vec<Ray> = (0..PACKET)
+                .map(|_| {
+                    let o = if i % 3 == 0 { eye } else { eye + Vec3::new(rng(), rng(), rng()) };
+                    let d = (Vec3::new(rng(), rng(), rng()) + 0.05) * signs;
+                    Ray { origin: o, t_min: rng() * 0.01, dir: d, t_max: 100.0 }
+                })
+                .collect();
+            let mask = u64::MAX;
+            let offset = Vec3::new(rng(), rng(), rng()) * 40.0 - 20.0;
+            let Some(offset) = Transform::translate(offset).unwrap().object_offset() else { continue };
+            let world = Soa::<PACKET>::new(&rays, mask);
+            let code = u32::from(world.oct[0]);
+            let fr = world.frustum(code, mask);
+            let mut moved = Soa::<PACKET>::empty(mask);
+            moved.fill_moved(&world, offset, mask);
+            assert_eq!(fr.moved(offset), moved.frustum(code, mask), "packet {i}");
+            let part = u64::from(rng().to_bits()) << 32 | u64::from(rng().to_bits());
+            let (all, sub) = (fr.moved(offset), moved.frustum(code, part));
+            for a in 0..3 {
+                assert!(all.o_lo[a] <= sub.o_lo[a] && all.o_hi[a] >= sub.o_hi[a], "packet {i}, axis {a}");
+                assert!(all.inv_lo[a] <= sub.inv_lo[a] && all.inv_hi[a] >= sub.inv_hi[a]);
+            }
+            assert!(all.t_min <= sub.t_min && all.near_row == sub.near_row && all.far_row == sub.far_row);
+            assert!(!all.same_origin || sub.same_origin);
+        }
+        assert_eq!(Frustum::mixed().moved(Vec3::ONE), Frustum::mixed());
     }
 
     /// `plan`'s one pass gives the reference's groups and frustums: rays
