@@ -246,13 +246,18 @@ impl Blas {
 
     /// [`Blas::closest`] for each object-space ray `rays[k]` of `mask`,
     /// walked together as packets ([`crate::packet`]) where the layout is
-    /// wide: `found[k]` gets ray `k`'s hit, the one `closest` gives.
+    /// wide: `found[k]` gets ray `k`'s hit, the one `closest` gives. `fr`,
+    /// where given, is a frustum that bounds all of them, of one octant
+    /// (or a mixed one) with no zero direction component (a top-level
+    /// walk's, moved into object space): they then walk together under it,
+    /// with no [`packet::plan`] made.
     #[inline(always)]
     pub fn closest_packet<const N: usize>(
         &self,
         lanes: impl Lanes,
         rays: &[Ray; N],
         mask: u64,
+        fr: Option<&Frustum>,
         found: &mut Found<N>,
     ) {
         let Nodes::Wide(tree) = &self.nodes else {
@@ -272,6 +277,13 @@ impl Blas {
             pr: PacketRays::new(),
             found: [None; N],
         };
+        if let Some(fr) = fr {
+            tree.walk_packet::<false, N>(lanes, self.depth, fr, &mut soa, mask, &mut v);
+            for k in bits(mask) {
+                found[k] = v.found[k].map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
+            }
+            return;
+        }
         for &(m, fr) in &packet::plan(&soa, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
@@ -343,8 +355,15 @@ impl Blas {
 
     /// [`Blas::occluded`] for each object-space ray `rays[k]` of `mask`,
     /// walked together where the layout is wide; returns the occluded rays.
+    /// `fr` as for [`Blas::closest_packet`].
     #[inline(always)]
-    pub fn occluded_packet<const N: usize>(&self, lanes: impl Lanes, rays: &[Ray; N], mask: u64) -> u64 {
+    pub fn occluded_packet<const N: usize>(
+        &self,
+        lanes: impl Lanes,
+        rays: &[Ray; N],
+        mask: u64,
+        fr: Option<&Frustum>,
+    ) -> u64 {
         let Nodes::Wide(tree) = &self.nodes else {
             return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
         };
@@ -359,6 +378,10 @@ impl Blas {
             pr: PacketRays::new(),
             hit: 0,
         };
+        if let Some(fr) = fr {
+            tree.walk_packet::<true, N>(lanes, self.depth, fr, &mut soa, mask, &mut v);
+            return v.hit & mask;
+        }
         for &(m, fr) in &packet::plan(&soa, mask) {
             match fr {
                 Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
@@ -451,10 +474,17 @@ impl Blas {
 /// packet reaches costs nothing next to the walk behind it.
 pub(crate) trait MeshPackets: Lanes {
     /// [`Blas::closest_packet`] with these lanes.
-    fn closest<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>);
+    fn closest<const N: usize>(
+        self,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        fr: Option<&Frustum>,
+        found: &mut Found<N>,
+    );
 
     /// [`Blas::occluded_packet`] with these lanes.
-    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64;
+    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, fr: Option<&Frustum>) -> u64;
 
     /// [`Blas::closest_packet_moved`] with these lanes.
     fn closest_moved<const N: usize>(
@@ -478,13 +508,20 @@ pub(crate) trait MeshPackets: Lanes {
 
 impl MeshPackets for packet::Portable {
     #[inline(never)]
-    fn closest<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>) {
-        blas.closest_packet(self, rays, mask, found);
+    fn closest<const N: usize>(
+        self,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        fr: Option<&Frustum>,
+        found: &mut Found<N>,
+    ) {
+        blas.closest_packet(self, rays, mask, fr, found);
     }
 
     #[inline(never)]
-    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
-        blas.occluded_packet(self, rays, mask)
+    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, fr: Option<&Frustum>) -> u64 {
+        blas.occluded_packet(self, rays, mask, fr)
     }
 
     #[inline(never)]
@@ -515,23 +552,36 @@ impl MeshPackets for packet::Portable {
 mod x86 {
     //! The mesh packet walks compiled for AVX2.
     use super::{Blas, Found, MeshPackets};
-    use crate::packet::Moved;
     use crate::packet::x86::Avx2;
+    use crate::packet::{Frustum, Moved};
     use prism_geometry::Ray;
 
     impl MeshPackets for Avx2 {
         #[inline(always)]
-        fn closest<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>) {
+        fn closest<const N: usize>(
+            self,
+            blas: &Blas,
+            rays: &[Ray; N],
+            mask: u64,
+            fr: Option<&Frustum>,
+            found: &mut Found<N>,
+        ) {
             // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
             // `new` is unsafe with that contract), which is every feature
             // `closest` is compiled for.
-            unsafe { closest(self, blas, rays, mask, found) }
+            unsafe { closest(self, blas, rays, mask, fr, found) }
         }
 
         #[inline(always)]
-        fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
+        fn occluded<const N: usize>(
+            self,
+            blas: &Blas,
+            rays: &[Ray; N],
+            mask: u64,
+            fr: Option<&Frustum>,
+        ) -> u64 {
             // SAFETY: as in `closest` above.
-            unsafe { occluded(self, blas, rays, mask) }
+            unsafe { occluded(self, blas, rays, mask, fr) }
         }
 
         #[inline(always)]
@@ -564,15 +614,28 @@ mod x86 {
     /// AVX2 caller would otherwise take it in whole at each call.
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     #[inline(never)]
-    fn closest<const N: usize>(lanes: Avx2, blas: &Blas, rays: &[Ray; N], mask: u64, found: &mut Found<N>) {
-        blas.closest_packet(lanes, rays, mask, found);
+    fn closest<const N: usize>(
+        lanes: Avx2,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        fr: Option<&Frustum>,
+        found: &mut Found<N>,
+    ) {
+        blas.closest_packet(lanes, rays, mask, fr, found);
     }
 
     /// [`Blas::occluded_packet`] compiled for AVX2.
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     #[inline(never)]
-    fn occluded<const N: usize>(lanes: Avx2, blas: &Blas, rays: &[Ray; N], mask: u64) -> u64 {
-        blas.occluded_packet(lanes, rays, mask)
+    fn occluded<const N: usize>(
+        lanes: Avx2,
+        blas: &Blas,
+        rays: &[Ray; N],
+        mask: u64,
+        fr: Option<&Frustum>,
+    ) -> u64 {
+        blas.occluded_packet(lanes, rays, mask, fr)
     }
 
     /// [`Blas::closest_packet_moved`] compiled for AVX2.

@@ -446,8 +446,15 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     /// keeps each hit (nearer than the ray's best, as the walk was bounded
     /// by its `t_max`).
     #[inline(always)]
-    fn mesh_hits<const M: usize>(&mut self, i: u32, blas: &Blas, dense: &Dense<M>, reach: &mut [f32]) {
-        dense.closest(self.lanes, blas, |k, hit, dir| self.keep(i, k, hit, dir, reach));
+    fn mesh_hits<const M: usize>(
+        &mut self,
+        i: u32,
+        blas: &Blas,
+        dense: &Dense<M>,
+        fr: Option<&Frustum>,
+        reach: &mut [f32],
+    ) {
+        dense.closest(self.lanes, blas, fr, |k, hit, dir| self.keep(i, k, hit, dir, reach));
     }
 
     /// Makes ray `k`'s mesh hit `(face, t, b1, b2)` on object `i` (its
@@ -496,13 +503,14 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
                 }
                 return;
             }
+            let frame = world.as_ref().and_then(|(_, fr)| in_object_space(fr, transform));
             let reach: &mut [f32] = match world {
                 Some((w, _)) => w.reach_mut(),
                 None => &mut [],
             };
             if whole::<N>(transform, meet) {
                 let mut found = [None; N];
-                self.lanes.closest(blas, self.rays, meet, &mut found);
+                self.lanes.closest(blas, self.rays, meet, frame.as_ref(), &mut found);
                 for (k, hit) in found.into_iter().enumerate() {
                     if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
                         self.keep(i, k, hit, dir, reach);
@@ -514,10 +522,10 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             let ray = |k: usize| rays.get(k).copied();
             if fits_small::<N>(meet) {
                 let dense = Dense::<SMALL_PACKET>::new(transform, meet, ray);
-                self.mesh_hits(i, blas, &dense, reach);
+                self.mesh_hits(i, blas, &dense, frame.as_ref(), reach);
             } else {
                 let dense = Dense::<N>::new(transform, meet, ray);
-                self.mesh_hits(i, blas, &dense, reach);
+                self.mesh_hits(i, blas, &dense, frame.as_ref(), reach);
             }
             return;
         }
@@ -545,6 +553,16 @@ impl<const N: usize, L: MeshPackets> Leaf<N> for ClosestObjects<'_, '_, N, L> {
         }
         0
     }
+}
+
+/// A top-level walk's frustum `fr` as it bounds its rays in the object
+/// space of an instance under `transform`: as it is under the identity,
+/// moved under a translation alone ([`Frustum::moved`]), and `None` under
+/// any other map (which turns the directions; the instance's walk then
+/// plans its own).
+#[inline(always)]
+fn in_object_space(fr: &Frustum, transform: &Transform) -> Option<Frustum> {
+    if transform.is_identity() { Some(*fr) } else { transform.object_offset().map(|offset| fr.moved(offset)) }
 }
 
 /// Whether the rays of `meet` (of a packet of capacity `N`) go to a
@@ -620,10 +638,11 @@ impl<const M: usize> Dense<M> {
         &self,
         lanes: impl MeshPackets,
         blas: &Blas,
+        fr: Option<&Frustum>,
         mut f: impl FnMut(usize, (u32, f32, f32, f32), Vec3),
     ) {
         let mut found = [None; M];
-        lanes.closest(blas, &self.local, self.mask(), &mut found);
+        lanes.closest(blas, &self.local, self.mask(), fr, &mut found);
         for ((hit, &id), ray) in found.iter().zip(&self.ids).zip(&self.local).take(self.len) {
             if let Some(hit) = *hit {
                 f(usize::from(id), hit, ray.dir);
@@ -633,8 +652,8 @@ impl<const M: usize> Dense<M> {
 
     /// The occluded rays, as a mask over the whole packet.
     #[inline(always)]
-    fn occluded(&self, lanes: impl MeshPackets, blas: &Blas) -> u64 {
-        let hit = lanes.occluded(blas, &self.local, self.mask());
+    fn occluded(&self, lanes: impl MeshPackets, blas: &Blas, fr: Option<&Frustum>) -> u64 {
+        let hit = lanes.occluded(blas, &self.local, self.mask(), fr);
         bits(hit).fold(0, |m, j| m | self.ids.get(j).map_or(0, |&k| 1u64 << k))
     }
 }
@@ -663,14 +682,19 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
                     // Placed by a translation alone: as `ClosestObjects`.
                     return self.lanes.occluded_moved(blas, Moved { world, fr, offset }, rays, meet);
                 }
+                let frame = world.and_then(|(_, fr)| in_object_space(fr, transform));
                 if let (true, Ok(rays)) = (whole::<N>(transform, meet), <&[Ray; N]>::try_from(rays)) {
-                    return self.lanes.occluded(blas, rays, meet);
+                    return self.lanes.occluded(blas, rays, meet, frame.as_ref());
                 }
                 let ray = |k: usize| rays.get(k).copied();
                 if fits_small::<N>(meet) {
-                    Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(self.lanes, blas)
+                    Dense::<SMALL_PACKET>::new(transform, meet, ray).occluded(
+                        self.lanes,
+                        blas,
+                        frame.as_ref(),
+                    )
                 } else {
-                    Dense::<N>::new(transform, meet, ray).occluded(self.lanes, blas)
+                    Dense::<N>::new(transform, meet, ray).occluded(self.lanes, blas, frame.as_ref())
                 }
             }
             _ => bits(meet)
@@ -1311,7 +1335,7 @@ impl Accel {
             // are, and its hits are the answers (a scene of one model,
             // such as `prism render model.obj`).
             let mut found = [None; N];
-            lanes.closest(&self.blas[*mesh as usize], rays, mask, &mut found);
+            lanes.closest(&self.blas[*mesh as usize], rays, mask, None, &mut found);
             for ((o, f), r) in out.iter_mut().zip(found).zip(rays) {
                 *o = f.and_then(|(face, t, b1, b2)| {
                     done(Best::Mesh { object: i, face, t, b1, b2, dir: r.dir })
