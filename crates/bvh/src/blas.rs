@@ -5,7 +5,7 @@
 //! Every triangle is tested by prism-geometry's [`TriangleRay`], the one
 //! watertight ray/triangle test.
 
-use crate::packet::{self, Frustum, Lanes, Leaf, Moved, Soa, bits};
+use crate::packet::{self, Frustum, Lanes, Leaf, Rows, Soa, bits};
 use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
 use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
@@ -244,61 +244,57 @@ impl Blas {
         v.hit
     }
 
-    /// [`Blas::closest`] for each object-space ray `rays[k]` of `mask`,
-    /// walked together as packets ([`crate::packet`]) where the layout is
-    /// wide: `found[k]` gets ray `k`'s hit, the one `closest` gives. `fr`,
-    /// where given, is a frustum that bounds all of them, of one octant
-    /// (or a mixed one) with no zero direction component (a top-level
-    /// walk's, moved into object space): they then walk together under it,
-    /// with no [`packet::plan`] made.
+    /// [`Blas::closest`] for each ray `rays[k]` of `mask`, walked together
+    /// as packets ([`crate::packet`]) where the layout is wide: `found[k]`
+    /// gets ray `k`'s hit, the one `closest` gives the ray in object space.
+    /// `rows` says where the walk's rows and frustum come from ([`Rows`]).
     #[inline(always)]
     pub fn closest_packet<const N: usize>(
         &self,
         lanes: impl Lanes,
         rays: &[Ray; N],
         mask: u64,
-        fr: Option<&Frustum>,
+        rows: Rows<'_, N>,
         found: &mut Found<N>,
     ) {
+        let offset = rows.offset();
         let Nodes::Wide(tree) = &self.nodes else {
             for k in bits(mask) {
-                found[k] = self.closest::<false>(&rays[k]);
+                found[k] = self.closest::<false>(&moved_ray(&rays[k], offset));
             }
             return;
         };
         let mut soa = Soa::<N>::empty(mask);
-        soa.fill(rays, mask);
+        let fr = rows.fill(&mut soa, rays, mask);
         let mut v = ClosestTriangles {
             lanes,
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
-            offset: None,
+            offset,
             pr: PacketRays::new(),
             found: [None; N],
         };
-        if let Some(fr) = fr {
-            tree.walk_packet::<false, N>(lanes, self.depth, fr, &mut soa, mask, &mut v);
-            for k in bits(mask) {
-                found[k] = v.found[k].map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
-            }
-            return;
-        }
-        for &(m, fr) in &packet::plan(&soa, mask) {
-            match fr {
-                Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
-                None => {
-                    for k in bits(m) {
-                        // A ray of no frustum reaches no packet leaf.
-                        let tr = TriangleRay::new(&rays[k]);
-                        let mut c = ClosestTriangle::<false> {
-                            tris: v.tris,
-                            blocks: v.blocks,
-                            tr,
-                            found: v.found[k],
-                        };
-                        self.walk(&mut soa.box_ray(k), &mut c);
-                        v.found[k] = c.found;
+        match fr {
+            Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, mask, &mut v),
+            None => {
+                for &(m, fr) in &packet::plan(&soa, mask) {
+                    match fr {
+                        Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
+                        None => {
+                            for k in bits(m) {
+                                // A ray of no frustum reaches no packet leaf.
+                                let tr = TriangleRay::new(&moved_ray(&rays[k], offset));
+                                let mut c = ClosestTriangle::<false> {
+                                    tris: v.tris,
+                                    blocks: v.blocks,
+                                    tr,
+                                    found: v.found[k],
+                                };
+                                self.walk(&mut soa.box_ray(k), &mut c);
+                                v.found[k] = c.found;
+                            }
+                        }
                     }
                 }
             }
@@ -308,125 +304,52 @@ impl Blas {
         }
     }
 
-    /// [`Blas::closest_packet`] for the world-space rays `rays[k]` of
-    /// `mask` (in a top-level walk's rows, bounded by its frustum: see
-    /// [`Moved`]) on an instance placed by a translation alone, whose map
-    /// to object space adds the offset
-    /// ([`prism_geometry::Transform::object_offset`]): the rays are moved
-    /// as [`prism_geometry::Transform::ray_to_object`] moves them, lane by
-    /// lane, and neither gathered nor made again, and the frustum is moved
-    /// with them ([`Frustum::moved`]), not made again from the rows. All of
-    /// them walk together: the top-level walk holds rays of one octant (or
-    /// a mixed packet's, walked whole) with no zero direction component.
-    #[inline(always)]
-    pub fn closest_packet_moved<const N: usize>(
-        &self,
-        lanes: impl Lanes,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut Found<N>,
-    ) {
-        let Moved { world, fr, offset } = moved;
-        let Nodes::Wide(tree) = &self.nodes else {
-            for k in bits(mask) {
-                found[k] = self.closest::<false>(&moved_ray(&rays[k], Some(offset)));
-            }
-            return;
-        };
-        let mut soa = Soa::<N>::empty(mask);
-        soa.fill_moved(world, offset, mask);
-        let mut v = ClosestTriangles {
-            lanes,
-            tris: &self.tris,
-            blocks: &self.blocks,
-            rays,
-            offset: Some(offset),
-            pr: PacketRays::new(),
-            found: [None; N],
-        };
-        // The rays of one walk of the top level: its frustum, moved, bounds
-        // them (no plan to make).
-        tree.walk_packet::<false, N>(lanes, self.depth, &fr.moved(offset), &mut soa, mask, &mut v);
-        for k in bits(mask) {
-            found[k] = v.found[k].map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
-        }
-    }
-
-    /// [`Blas::occluded`] for each object-space ray `rays[k]` of `mask`,
-    /// walked together where the layout is wide; returns the occluded rays.
-    /// `fr` as for [`Blas::closest_packet`].
+    /// [`Blas::occluded`] for each ray `rays[k]` of `mask`, walked together
+    /// where the layout is wide, `rows` as for [`Blas::closest_packet`];
+    /// returns the occluded rays.
     #[inline(always)]
     pub fn occluded_packet<const N: usize>(
         &self,
         lanes: impl Lanes,
         rays: &[Ray; N],
         mask: u64,
-        fr: Option<&Frustum>,
+        rows: Rows<'_, N>,
     ) -> u64 {
+        let offset = rows.offset();
         let Nodes::Wide(tree) = &self.nodes else {
-            return bits(mask).filter(|&k| self.occluded(&rays[k])).fold(0, |m, k| m | 1 << k);
+            return bits(mask)
+                .filter(|&k| self.occluded(&moved_ray(&rays[k], offset)))
+                .fold(0, |m, k| m | 1 << k);
         };
         let mut soa = Soa::<N>::empty(mask);
-        soa.fill(rays, mask);
+        let fr = rows.fill(&mut soa, rays, mask);
         let mut v = AnyTriangles {
             lanes,
             tris: &self.tris,
             blocks: &self.blocks,
             rays,
-            offset: None,
+            offset,
             pr: PacketRays::new(),
             hit: 0,
         };
-        if let Some(fr) = fr {
-            tree.walk_packet::<true, N>(lanes, self.depth, fr, &mut soa, mask, &mut v);
-            return v.hit & mask;
-        }
-        for &(m, fr) in &packet::plan(&soa, mask) {
-            match fr {
-                Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
-                None => {
-                    for k in bits(m) {
-                        let tr = TriangleRay::new(&rays[k]);
-                        let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
-                        self.walk(&mut soa.box_ray(k), &mut c);
-                        v.hit |= u64::from(c.hit) << k;
+        match fr {
+            Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, mask, &mut v),
+            None => {
+                for &(m, fr) in &packet::plan(&soa, mask) {
+                    match fr {
+                        Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
+                        None => {
+                            for k in bits(m) {
+                                let tr = TriangleRay::new(&moved_ray(&rays[k], offset));
+                                let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
+                                self.walk(&mut soa.box_ray(k), &mut c);
+                                v.hit |= u64::from(c.hit) << k;
+                            }
+                        }
                     }
                 }
             }
         }
-        v.hit & mask
-    }
-
-    /// [`Blas::occluded_packet`] for world-space rays on an instance placed
-    /// by a translation alone, as [`Blas::closest_packet_moved`].
-    #[inline(always)]
-    pub fn occluded_packet_moved<const N: usize>(
-        &self,
-        lanes: impl Lanes,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-    ) -> u64 {
-        let Moved { world, fr, offset } = moved;
-        let Nodes::Wide(tree) = &self.nodes else {
-            return bits(mask)
-                .filter(|&k| self.occluded(&moved_ray(&rays[k], Some(offset))))
-                .fold(0, |m, k| m | 1 << k);
-        };
-        let mut soa = Soa::<N>::empty(mask);
-        soa.fill_moved(world, offset, mask);
-        let mut v = AnyTriangles {
-            lanes,
-            tris: &self.tris,
-            blocks: &self.blocks,
-            rays,
-            offset: Some(offset),
-            pr: PacketRays::new(),
-            hit: 0,
-        };
-        // As in `closest_packet_moved`.
-        tree.walk_packet::<true, N>(lanes, self.depth, &fr.moved(offset), &mut soa, mask, &mut v);
         v.hit & mask
     }
 
@@ -479,31 +402,12 @@ pub(crate) trait MeshPackets: Lanes {
         blas: &Blas,
         rays: &[Ray; N],
         mask: u64,
-        fr: Option<&Frustum>,
+        rows: Rows<'_, N>,
         found: &mut Found<N>,
     );
 
     /// [`Blas::occluded_packet`] with these lanes.
-    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, fr: Option<&Frustum>) -> u64;
-
-    /// [`Blas::closest_packet_moved`] with these lanes.
-    fn closest_moved<const N: usize>(
-        self,
-        blas: &Blas,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut Found<N>,
-    );
-
-    /// [`Blas::occluded_packet_moved`] with these lanes.
-    fn occluded_moved<const N: usize>(
-        self,
-        blas: &Blas,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-    ) -> u64;
+    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, rows: Rows<'_, N>) -> u64;
 }
 
 impl MeshPackets for packet::Portable {
@@ -513,38 +417,15 @@ impl MeshPackets for packet::Portable {
         blas: &Blas,
         rays: &[Ray; N],
         mask: u64,
-        fr: Option<&Frustum>,
+        rows: Rows<'_, N>,
         found: &mut Found<N>,
     ) {
-        blas.closest_packet(self, rays, mask, fr, found);
+        blas.closest_packet(self, rays, mask, rows, found);
     }
 
     #[inline(never)]
-    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, fr: Option<&Frustum>) -> u64 {
-        blas.occluded_packet(self, rays, mask, fr)
-    }
-
-    #[inline(never)]
-    fn closest_moved<const N: usize>(
-        self,
-        blas: &Blas,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut Found<N>,
-    ) {
-        blas.closest_packet_moved(self, moved, rays, mask, found);
-    }
-
-    #[inline(never)]
-    fn occluded_moved<const N: usize>(
-        self,
-        blas: &Blas,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-    ) -> u64 {
-        blas.occluded_packet_moved(self, moved, rays, mask)
+    fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, rows: Rows<'_, N>) -> u64 {
+        blas.occluded_packet(self, rays, mask, rows)
     }
 }
 
@@ -552,8 +433,8 @@ impl MeshPackets for packet::Portable {
 mod x86 {
     //! The mesh packet walks compiled for AVX2.
     use super::{Blas, Found, MeshPackets};
+    use crate::packet::Rows;
     use crate::packet::x86::Avx2;
-    use crate::packet::{Frustum, Moved};
     use prism_geometry::Ray;
 
     impl MeshPackets for Avx2 {
@@ -563,50 +444,19 @@ mod x86 {
             blas: &Blas,
             rays: &[Ray; N],
             mask: u64,
-            fr: Option<&Frustum>,
+            rows: Rows<'_, N>,
             found: &mut Found<N>,
         ) {
             // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
             // `new` is unsafe with that contract), which is every feature
             // `closest` is compiled for.
-            unsafe { closest(self, blas, rays, mask, fr, found) }
+            unsafe { closest(self, blas, rays, mask, rows, found) }
         }
 
         #[inline(always)]
-        fn occluded<const N: usize>(
-            self,
-            blas: &Blas,
-            rays: &[Ray; N],
-            mask: u64,
-            fr: Option<&Frustum>,
-        ) -> u64 {
+        fn occluded<const N: usize>(self, blas: &Blas, rays: &[Ray; N], mask: u64, rows: Rows<'_, N>) -> u64 {
             // SAFETY: as in `closest` above.
-            unsafe { occluded(self, blas, rays, mask, fr) }
-        }
-
-        #[inline(always)]
-        fn closest_moved<const N: usize>(
-            self,
-            blas: &Blas,
-            moved: Moved<'_, N>,
-            rays: &[Ray; N],
-            mask: u64,
-            found: &mut Found<N>,
-        ) {
-            // SAFETY: as in `closest` above.
-            unsafe { closest_moved(self, blas, moved, rays, mask, found) }
-        }
-
-        #[inline(always)]
-        fn occluded_moved<const N: usize>(
-            self,
-            blas: &Blas,
-            moved: Moved<'_, N>,
-            rays: &[Ray; N],
-            mask: u64,
-        ) -> u64 {
-            // SAFETY: as in `closest` above.
-            unsafe { occluded_moved(self, blas, moved, rays, mask) }
+            unsafe { occluded(self, blas, rays, mask, rows) }
         }
     }
 
@@ -619,10 +469,10 @@ mod x86 {
         blas: &Blas,
         rays: &[Ray; N],
         mask: u64,
-        fr: Option<&Frustum>,
+        rows: Rows<'_, N>,
         found: &mut Found<N>,
     ) {
-        blas.closest_packet(lanes, rays, mask, fr, found);
+        blas.closest_packet(lanes, rays, mask, rows, found);
     }
 
     /// [`Blas::occluded_packet`] compiled for AVX2.
@@ -633,36 +483,9 @@ mod x86 {
         blas: &Blas,
         rays: &[Ray; N],
         mask: u64,
-        fr: Option<&Frustum>,
+        rows: Rows<'_, N>,
     ) -> u64 {
-        blas.occluded_packet(lanes, rays, mask, fr)
-    }
-
-    /// [`Blas::closest_packet_moved`] compiled for AVX2.
-    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    #[inline(never)]
-    fn closest_moved<const N: usize>(
-        lanes: Avx2,
-        blas: &Blas,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-        found: &mut Found<N>,
-    ) {
-        blas.closest_packet_moved(lanes, moved, rays, mask, found);
-    }
-
-    /// [`Blas::occluded_packet_moved`] compiled for AVX2.
-    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    #[inline(never)]
-    fn occluded_moved<const N: usize>(
-        lanes: Avx2,
-        blas: &Blas,
-        moved: Moved<'_, N>,
-        rays: &[Ray; N],
-        mask: u64,
-    ) -> u64 {
-        blas.occluded_packet_moved(lanes, moved, rays, mask)
+        blas.occluded_packet(lanes, rays, mask, rows)
     }
 }
 

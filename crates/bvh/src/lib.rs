@@ -107,7 +107,7 @@ mod wide;
 
 use blas::{Blas, MeshPackets};
 use obvhs::BvhBuildParams;
-use packet::{Frustum, Leaf, MIN_PACKET, Moved, SMALL_PACKET, Soa, bits};
+use packet::{Frustum, Leaf, MIN_PACKET, Moved, Rows, SMALL_PACKET, Soa, bits};
 use prism_geometry::glam::{Vec3, Vec4};
 use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, TriangleMesh, TriangleRay};
 use rayon::prelude::*;
@@ -494,8 +494,8 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
                 // Placed by a translation alone: the walk's own rows,
                 // moved (no gather; no reciprocals or frustum made again).
                 let mut found = [None; N];
-                let moved = Moved { world, fr, offset };
-                self.lanes.closest_moved(blas, moved, self.rays, meet, &mut found);
+                let rows = Rows::Moved(Moved { world, fr, offset });
+                self.lanes.closest(blas, self.rays, meet, rows, &mut found);
                 for (k, hit) in found.into_iter().enumerate() {
                     if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
                         self.keep(i, k, hit, dir, world.reach_mut());
@@ -510,7 +510,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             };
             if whole::<N>(transform, meet) {
                 let mut found = [None; N];
-                self.lanes.closest(blas, self.rays, meet, frame.as_ref(), &mut found);
+                self.lanes.closest(blas, self.rays, meet, Rows::Made(frame.as_ref()), &mut found);
                 for (k, hit) in found.into_iter().enumerate() {
                     if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
                         self.keep(i, k, hit, dir, reach);
@@ -642,7 +642,7 @@ impl<const M: usize> Dense<M> {
         mut f: impl FnMut(usize, (u32, f32, f32, f32), Vec3),
     ) {
         let mut found = [None; M];
-        lanes.closest(blas, &self.local, self.mask(), fr, &mut found);
+        lanes.closest(blas, &self.local, self.mask(), Rows::Made(fr), &mut found);
         for ((hit, &id), ray) in found.iter().zip(&self.ids).zip(&self.local).take(self.len) {
             if let Some(hit) = *hit {
                 f(usize::from(id), hit, ray.dir);
@@ -653,7 +653,7 @@ impl<const M: usize> Dense<M> {
     /// The occluded rays, as a mask over the whole packet.
     #[inline(always)]
     fn occluded(&self, lanes: impl MeshPackets, blas: &Blas, fr: Option<&Frustum>) -> u64 {
-        let hit = lanes.occluded(blas, &self.local, self.mask(), fr);
+        let hit = lanes.occluded(blas, &self.local, self.mask(), Rows::Made(fr));
         bits(hit).fold(0, |m, j| m | self.ids.get(j).map_or(0, |&k| 1u64 << k))
     }
 }
@@ -680,11 +680,11 @@ impl<const N: usize, L: MeshPackets> AnyObjects<'_, N, L> {
                     (transform.object_offset(), fits_small::<N>(meet), world, <&[Ray; N]>::try_from(rays))
                 {
                     // Placed by a translation alone: as `ClosestObjects`.
-                    return self.lanes.occluded_moved(blas, Moved { world, fr, offset }, rays, meet);
+                    return self.lanes.occluded(blas, rays, meet, Rows::Moved(Moved { world, fr, offset }));
                 }
                 let frame = world.and_then(|(_, fr)| in_object_space(fr, transform));
                 if let (true, Ok(rays)) = (whole::<N>(transform, meet), <&[Ray; N]>::try_from(rays)) {
-                    return self.lanes.occluded(blas, rays, meet, frame.as_ref());
+                    return self.lanes.occluded(blas, rays, meet, Rows::Made(frame.as_ref()));
                 }
                 let ray = |k: usize| rays.get(k).copied();
                 if fits_small::<N>(meet) {
@@ -1335,7 +1335,7 @@ impl Accel {
             // are, and its hits are the answers (a scene of one model,
             // such as `prism render model.obj`).
             let mut found = [None; N];
-            lanes.closest(&self.blas[*mesh as usize], rays, mask, None, &mut found);
+            lanes.closest(&self.blas[*mesh as usize], rays, mask, Rows::Made(None), &mut found);
             for ((o, f), r) in out.iter_mut().zip(found).zip(rays) {
                 *o = f.and_then(|(face, t, b1, b2)| {
                     done(Best::Mesh { object: i, face, t, b1, b2, dir: r.dir })

@@ -86,6 +86,49 @@ pub(crate) struct Moved<'a, const N: usize> {
     pub offset: Vec3,
 }
 
+/// Where a mesh's packet walk ([`crate::blas::Blas::closest_packet`])
+/// gets its rows and frustum.
+#[derive(Clone, Copy)]
+pub(crate) enum Rows<'a, const N: usize> {
+    /// Made from the rays, which are in object space ([`Soa::fill`]), and
+    /// planned by octant ([`plan`]) unless a frustum that bounds them all
+    /// is given: a top-level walk's, as it stands in object space (the
+    /// rays then all of one octant, or of a mixed walk, with no zero
+    /// direction component).
+    Made(Option<&'a Frustum>),
+    /// Moved from a top-level walk's ([`Moved`]); the rays are its
+    /// world-space rays.
+    Moved(Moved<'a, N>),
+}
+
+impl<const N: usize> Rows<'_, N> {
+    /// What moves the rays into object space, if anything.
+    #[inline(always)]
+    pub(crate) fn offset(&self) -> Option<Vec3> {
+        match self {
+            Rows::Made(_) => None,
+            Rows::Moved(m) => Some(m.offset),
+        }
+    }
+
+    /// Fills `soa` (just made by [`Soa::empty`] for `mask`) with the rays
+    /// of `mask`; returns the frustum that bounds all of them, where there
+    /// is one, else `None` (the walk then plans).
+    #[inline(always)]
+    pub(crate) fn fill(&self, soa: &mut Soa<N>, rays: &[Ray], mask: u64) -> Option<Frustum> {
+        match *self {
+            Rows::Made(fr) => {
+                soa.fill(rays, mask);
+                fr.copied()
+            }
+            Rows::Moved(Moved { world, fr, offset }) => {
+                soa.fill_moved(world, offset, mask);
+                Some(fr.moved(offset))
+            }
+        }
+    }
+}
+
 /// Ray `k`'s interval now ends at `t_max`: its reach in a walk's
 /// [`Soa::reach`] row, as [`BoxRay::set_t_max`] sets a single ray's.
 #[inline(always)]
