@@ -10,9 +10,12 @@
 //!   `bash ../shared/peers/embree/build.sh target/peers` when missing. Per
 //!   scene, round and thread count it runs Embree (single rays and 8-wide
 //!   packets, `--quality high --device-config frequency_level=simd256`) and
-//!   then `prism-bench` on the same mesh and rays; the best of the rounds
-//!   counts on each side, and the ratio is prism / the better of Embree's
-//!   two modes.
+//!   then `prism-bench --rays peer` on the same mesh and rays (the primary
+//!   rays of the same camera, and the peer's own incoherent and shadow
+//!   sets, made by prism-testkit as the peer makes them); the best of the
+//!   rounds counts on each side, and the ratio is prism / the better of
+//!   Embree's two modes. Each side's hit counts are printed beside each
+//!   other: on the same rays they agree but for a few grazing rays.
 //!
 //!   `--embree-robust` also runs Embree with `RTC_SCENE_FLAG_ROBUST` (its
 //!   `--robust`), in the same round right after the default run: robust
@@ -170,6 +173,11 @@ fn vs_embree(root: &Path, peer: &Path, bench: &Path, data: &Path, o: &Options) -
     let bunny = data.join("stanford-bunny.obj");
     let kitchen = data.join("kitchen.obj");
     let mut table = Table::new();
+    // (scene, query) → hits (occluded rays for shadow rays) of prism and
+    // of Embree's default mode: the same rays give the same answers, up
+    // to the few rays that graze an edge (prism's test is watertight,
+    // Embree's default is not).
+    let mut hits: BTreeMap<(String, &'static str), [u64; 2]> = BTreeMap::new();
     for round in 0..o.rounds {
         for scene in &o.scenes {
             let (mesh, grid) = match scene.as_str() {
@@ -211,6 +219,13 @@ fn vs_embree(root: &Path, peer: &Path, bench: &Path, data: &Path, o: &Options) -
                         ) else {
                             continue;
                         };
+                        if !robust
+                            && let Some(h) = json_field(line, "hits")
+                                .or_else(|| json_field(line, "occluded"))
+                                .and_then(|h| h.parse().ok())
+                        {
+                            hits.entry((scene.clone(), q)).or_default()[1] = h;
+                        }
                         let slot = usize::from(mode != "single") + 1 + if robust { 2 } else { 0 };
                         let row = table.entry((scene.clone(), q, t)).or_default();
                         row[slot] = row[slot].max(v);
@@ -221,7 +236,8 @@ fn vs_embree(root: &Path, peer: &Path, bench: &Path, data: &Path, o: &Options) -
                 if grid {
                     p.args(["--grid", "6"]);
                 }
-                p.args(["--threads", &t.to_string(), "--reps", &o.reps.to_string()]);
+                // The same secondary rays as the peer's (its generator, its order).
+                p.args(["--threads", &t.to_string(), "--reps", &o.reps.to_string(), "--rays", "peer"]);
                 for line in stdout_of(&mut p)?.lines() {
                     let (Some(q), Some(v)) = (
                         json_field(line, "query"),
@@ -234,6 +250,9 @@ fn vs_embree(root: &Path, peer: &Path, bench: &Path, data: &Path, o: &Options) -
                     let Some(q) = ["primary", "incoherent", "shadow"].into_iter().find(|&k| k == q) else {
                         continue;
                     };
+                    if let Some(h) = json_field(line, "hits").and_then(|h| h.parse().ok()) {
+                        hits.entry((scene.clone(), q)).or_default()[0] = h;
+                    }
                     let row = table.entry((scene.clone(), q, t)).or_default();
                     row[0] = row[0].max(v);
                 }
@@ -261,6 +280,13 @@ fn vs_embree(root: &Path, peer: &Path, bench: &Path, data: &Path, o: &Options) -
             "{{\"bench\":\"vs-embree\",\"scene\":\"{scene}\",\"query\":\"{q}\",\"threads\":{t},\"prism\":{prism:.3},\"embree_single\":{single:.3},\"embree_packet8\":{packet:.3},\"ratio\":{ratio:.3}{json}}}"
         );
         eprintln!("{scene:<8} {q:<11} {t:>3} {prism:>9.2} {single:>13.2} {packet:>14.2} {ratio:>7.2}×{text}");
+    }
+    eprintln!("\nhits on the same rays (occluded rays for shadow rays): prism, Embree");
+    for ((scene, q), [p, e]) in &hits {
+        println!(
+            "{{\"bench\":\"vs-embree-hits\",\"scene\":\"{scene}\",\"query\":\"{q}\",\"prism\":{p},\"embree\":{e}}}"
+        );
+        eprintln!("{scene:<8} {q:<11} {p:>10} {e:>10} ({:+})", *p as i64 - *e as i64);
     }
     Ok(())
 }

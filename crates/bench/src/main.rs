@@ -7,7 +7,14 @@
 //! ```text
 //! prism-bench [--data DIR] [--mesh PATH [--grid N]] [--reps N]
 //!             [--threads 1,2] [--quality NAME] [--width W --height H]
+//!             [--rays issue7|peer] [--queries NAME,…]
 //! ```
+//!
+//! `--rays peer` makes the incoherent and shadow sets as the Embree peer's
+//! benchmark makes them (`../shared/peers/embree/bench.cpp`; `cargo xtask
+//! bench --vs-peers` passes it), so that both sides trace the same rays;
+//! the default, `issue7`, keeps the sets every earlier number in
+//! docs/benchmarks.md was measured on.
 //!
 //! Without `--mesh`: the Stanford bunny, the kitchen, and a 6×6×6 grid of
 //! bunny instances, from `DIR` (default `../shared/data`).
@@ -22,7 +29,8 @@ use prism_bvh::PACKET_SIZE;
 use prism_bvh::{Accel, BuildOptions, BuildQuality, Object};
 use prism_geometry::{Aabb, Ray, Transform, TriangleMesh};
 use prism_testkit::bench::{
-    grid_offsets, incoherent_rays, offset_hit_points, primary_rays, shadow_rays, tile_order,
+    grid_offsets, incoherent_rays, offset_hit_points, peer_secondary_rays, primary_rays, shadow_rays,
+    tile_order,
 };
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -45,6 +53,20 @@ struct Options {
     height: u32,
     /// Ray sets to run (all when empty).
     queries: Vec<String>,
+    /// Which secondary ray sets (`--rays`).
+    rays: RaySets,
+}
+
+/// The secondary (incoherent and shadow) ray sets.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum RaySets {
+    /// Issue 7's: eight hemisphere rays per hit point, hit points in the
+    /// primary set's 8×8-pixel tile order, one shadow ray per point.
+    Issue7,
+    /// The Embree peer's, made as it makes them
+    /// ([`prism_testkit::bench::peer_secondary_rays`]): what
+    /// `cargo xtask bench --vs-peers` traces on both sides.
+    Peer,
 }
 
 /// The ray sets and queries the harness runs, in order.
@@ -62,6 +84,7 @@ fn parse(args: &[String]) -> Result<Options, Error> {
         width: 1920,
         height: 1080,
         queries: Vec::new(),
+        rays: RaySets::Issue7,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -91,11 +114,18 @@ fn parse(args: &[String]) -> Result<Options, Error> {
                     return Err(format!("unknown query {q} (one of {})", QUERIES.join(", ")).into());
                 }
             }
+            "--rays" => {
+                o.rays = match value()?.as_str() {
+                    "issue7" => RaySets::Issue7,
+                    "peer" => RaySets::Peer,
+                    v => return Err(format!("unknown ray sets {v} (issue7 or peer)").into()),
+                };
+            }
             "-h" | "--help" => {
                 eprintln!(
                     "prism-bench [--data DIR] [--mesh PATH [--grid N]] [--reps N] [--threads 1,2] \
                      [--quality fastest|very-fast|fast|medium|slow|very-slow] [--width W --height H] \
-                     [--queries primary,primary-packet,incoherent,incoherent-packet,shadow,shadow-packet]"
+                     [--rays issue7|peer] [--queries primary,primary-packet,incoherent,incoherent-packet,shadow,shadow-packet]"
                 );
                 std::process::exit(0);
             }
@@ -153,11 +183,23 @@ fn bench_scene(name: &str, accel: &Accel, o: &Options, rows: &mut Vec<Row>) {
     let t0 = Instant::now();
     // In 8×8 pixel blocks, so that the packet queries get neighbouring
     // pixels (the single-ray queries trace the same rays in the same order).
-    let primary = tile_order(&primary_rays(b, o.width, o.height), o.width, o.height, 8);
-    let points =
-        offset_hit_points(&primary, b, |r| accel.closest_hit(r).map(|h| (h.hit.point, h.hit.geo_normal)));
-    let incoherent = incoherent_rays(&points, 8);
-    let shadow = shadow_rays(&points, b);
+    let row_major = primary_rays(b, o.width, o.height);
+    let primary = tile_order(&row_major, o.width, o.height, 8);
+    let (incoherent, shadow) = match o.rays {
+        RaySets::Issue7 => {
+            let points = offset_hit_points(&primary, b, |r| {
+                accel.closest_hit(r).map(|h| (h.hit.point, h.hit.geo_normal))
+            });
+            (incoherent_rays(&points, 8), shadow_rays(&points, b))
+        }
+        RaySets::Peer => {
+            let sets = peer_secondary_rays(&row_major, b, |r| {
+                accel.closest_hit(r).map(|h| (h.hit.t, h.hit.geo_normal))
+            });
+            eprintln!("{name}: the Embree peer's secondary rays, {} passes over the hit points", sets.copies);
+            (sets.incoherent, sets.shadow)
+        }
+    };
     eprintln!(
         "{name}: {} triangles stored, {} as seen by rays; built in {:.1} ms, {:.1} MB; \
          {} + {} + {} rays generated in {:.1} s",
