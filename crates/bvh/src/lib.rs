@@ -484,7 +484,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
     fn object(&mut self, i: u32, meet: u64, mut world: Option<(&mut Soa<N>, &Frustum)>) {
         let accel = self.accel;
         if let Object::Mesh { mesh, transform } = &accel.objects[i as usize]
-            && meet.count_ones() >= MIN_PACKET
+            && meet.count_ones() >= MIN_CLOSEST_INSTANCE_PACKET
         {
             let blas = &accel.blas[*mesh as usize];
             if let Some(offset) = transform.object_offset()
@@ -564,6 +564,17 @@ impl<const N: usize, L: MeshPackets> Leaf<N> for ClosestObjects<'_, '_, N, L> {
 fn in_object_space(fr: &Frustum, transform: &Transform) -> Option<Frustum> {
     if transform.is_identity() { Some(*fr) } else { transform.object_offset().map(|offset| fr.moved(offset)) }
 }
+
+/// Fewer rays of a closest-hit packet than this that meet a mesh
+/// instance walk it one by one. A packet's incoherent rays (each from
+/// its own origin, in unrelated directions) reach most instances in
+/// small groups, whose packet set-up cost more than their walks shared:
+/// 16 against [`MIN_PACKET`] (4) measured +10 % on the grid's incoherent
+/// packets (the Embree peer's rays; +5 % on issue 7's), camera packets
+/// level. Occlusion packets keep [`MIN_PACKET`]: their shadow rays lost
+/// 1–5 % at 8–24 (docs/benchmarks.md, "Instances met by few rays of a
+/// closest-hit packet").
+const MIN_CLOSEST_INSTANCE_PACKET: u32 = 16;
 
 /// Whether the rays of `meet` (of a packet of capacity `N`) go to a
 /// [`Dense`] packet of [`SMALL_PACKET`] slots rather than of `N`.
