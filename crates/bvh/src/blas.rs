@@ -275,30 +275,13 @@ impl Blas {
             pr: PacketRays::new(),
             found: [None; N],
         };
-        match fr {
-            Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, mask, &mut v),
-            None => {
-                for &(m, fr) in &packet::plan(&soa, mask) {
-                    match fr {
-                        Some(fr) => tree.walk_packet::<false, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
-                        None => {
-                            for k in bits(m) {
-                                // A ray of no frustum reaches no packet leaf.
-                                let tr = TriangleRay::new(&moved_ray(&rays[k], offset));
-                                let mut c = ClosestTriangle::<false> {
-                                    tris: v.tris,
-                                    blocks: v.blocks,
-                                    tr,
-                                    found: v.found[k],
-                                };
-                                self.walk(&mut soa.box_ray(k), &mut c);
-                                v.found[k] = c.found;
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        self.walk_rows::<false, N, _>(tree, lanes, fr, &mut soa, mask, &mut v, |v, k, br| {
+            // A ray of no frustum reaches no packet leaf.
+            let tr = TriangleRay::new(&moved_ray(&rays[k], offset));
+            let mut c = ClosestTriangle::<false> { tris: v.tris, blocks: v.blocks, tr, found: v.found[k] };
+            self.walk(br, &mut c);
+            v.found[k] = c.found;
+        });
         for k in bits(mask) {
             found[k] = v.found[k].map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2));
         }
@@ -332,25 +315,48 @@ impl Blas {
             pr: PacketRays::new(),
             hit: 0,
         };
-        match fr {
-            Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, mask, &mut v),
-            None => {
-                for &(m, fr) in &packet::plan(&soa, mask) {
-                    match fr {
-                        Some(fr) => tree.walk_packet::<true, N>(lanes, self.depth, &fr, &mut soa, m, &mut v),
-                        None => {
-                            for k in bits(m) {
-                                let tr = TriangleRay::new(&moved_ray(&rays[k], offset));
-                                let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
-                                self.walk(&mut soa.box_ray(k), &mut c);
-                                v.hit |= u64::from(c.hit) << k;
-                            }
-                        }
+        self.walk_rows::<true, N, _>(tree, lanes, fr, &mut soa, mask, &mut v, |v, k, br| {
+            let tr = TriangleRay::new(&moved_ray(&rays[k], offset));
+            let mut c = AnyTriangle { tris: v.tris, blocks: v.blocks, tr, hit: false };
+            self.walk(br, &mut c);
+            v.hit |= u64::from(c.hit) << k;
+        });
+        v.hit & mask
+    }
+
+    /// The packet walks of the rays of `mask` over `tree`, their rows in
+    /// `soa`: all under `fr` where the caller has a frustum that bounds
+    /// them; otherwise [`packet::plan`]'s groups, each under its own
+    /// frustum, and the rays of no group each by `alone(visitor, k, box
+    /// ray)`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn walk_rows<const ANY: bool, const N: usize, V>(
+        &self,
+        tree: &WideBvh,
+        lanes: impl Lanes,
+        fr: Option<Frustum>,
+        soa: &mut Soa<N>,
+        mask: u64,
+        v: &mut V,
+        mut alone: impl FnMut(&mut V, usize, &mut BoxRay),
+    ) where
+        for<'v> &'v mut V: Leaf<N>,
+    {
+        if let Some(fr) = fr {
+            tree.walk_packet::<ANY, N>(lanes, self.depth, &fr, soa, mask, &mut *v);
+            return;
+        }
+        for &(m, fr) in &packet::plan(soa, mask) {
+            match fr {
+                Some(fr) => tree.walk_packet::<ANY, N>(lanes, self.depth, &fr, soa, m, &mut *v),
+                None => {
+                    for k in bits(m) {
+                        alone(v, k, &mut soa.box_ray(k));
                     }
                 }
             }
         }
-        v.hit & mask
     }
 
     /// Calls `f(face, t, b1, b2)` for every triangle crossing in the
