@@ -476,6 +476,19 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
         }
     }
 
+    /// [`Self::keep`] for each hit of a packet walk over object `i`'s
+    /// mesh with the packet's own rays (their directions are the
+    /// object-space ones: the instance's transform is the identity or a
+    /// translation).
+    #[inline(always)]
+    fn keep_found(&mut self, i: u32, found: blas::Found<N>, reach: &mut [f32]) {
+        for (k, hit) in found.into_iter().enumerate() {
+            if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
+                self.keep(i, k, hit, dir, reach);
+            }
+        }
+    }
+
     /// Tests object `i` against the rays of `meet`: a mesh instance met
     /// by several rays as a packet, anything else ray by ray. Each closer
     /// hit becomes its ray's best and shortens the ray and its reach in
@@ -496,11 +509,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
                 let mut found = [None; N];
                 let rows = Rows::Moved(Moved { world, fr, offset });
                 self.lanes.closest(blas, self.rays, meet, rows, &mut found);
-                for (k, hit) in found.into_iter().enumerate() {
-                    if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
-                        self.keep(i, k, hit, dir, world.reach_mut());
-                    }
-                }
+                self.keep_found(i, found, world.reach_mut());
                 return;
             }
             let frame = world.as_ref().and_then(|(_, fr)| in_object_space(fr, transform));
@@ -511,11 +520,7 @@ impl<const N: usize, L: MeshPackets> ClosestObjects<'_, '_, N, L> {
             if whole::<N>(transform, meet) {
                 let mut found = [None; N];
                 self.lanes.closest(blas, self.rays, meet, Rows::Made(frame.as_ref()), &mut found);
-                for (k, hit) in found.into_iter().enumerate() {
-                    if let (Some(hit), Some(dir)) = (hit, self.rays.get(k).map(|r| r.dir)) {
-                        self.keep(i, k, hit, dir, reach);
-                    }
-                }
+                self.keep_found(i, found, reach);
                 return;
             }
             let rays = &*self.rays;
