@@ -72,11 +72,11 @@
 //!
 //! The wide layout's node test exists three times ([`Kernel`]): portable
 //! Rust over eight-lane arrays (no `unsafe`; the compiler vectorises it),
-//! AVX2 intrinsics, and AVX-512 (mask-register compare and compress-store
-//! of the children hit, on 256-bit vectors); the walk and its leaf tests
-//! are compiled once per kernel, and [`Kernel::detect`] picks AVX2,
-//! measured fastest, where the CPU has it (else the portable one) when the
-//! structure is built ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects
+//! AVX2 intrinsics, and AVX-512 (AVX2's test with a mask-register
+//! compare, on 256-bit vectors, in a walk that has AVX-512's 32 vector
+//! registers); the walk and its leaf tests are compiled once per kernel,
+//! and [`Kernel::detect`] picks the fastest measured that the CPU has
+//! (AVX-512, else AVX2, else the portable one) when the structure is built ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects
 //! another). All give bit-for-bit the same answers (same operations in the
 //! same order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
@@ -1792,8 +1792,8 @@ mod tests {
     /// Every kernel this CPU has is selectable and actually walks (so the
     /// kernel comparisons in `tests/blas_kinds.rs` ran it): this FAILS,
     /// rather than skipping, where the host has AVX2 or AVX-512 and that
-    /// path did not run; and detection picks AVX2 where the CPU has it
-    /// (measured fastest), else the portable one.
+    /// path did not run; and detection picks AVX-512 where the CPU has it
+    /// (measured fastest), else AVX2, else the portable one.
     #[test]
     fn every_kernel_the_host_has_is_exercised() {
         let (positions, indices) = wavy_grid(20, [9.0, 7.0, 0.3]);
@@ -1821,6 +1821,7 @@ mod tests {
         if std::env::var_os("PRISM_BVH_KERNEL").is_none() {
             // The measured fastest (docs/benchmarks.md) that the CPU has.
             let expected = match std::env::var_os("PRISM_BVH_NO_SIMD") {
+                None if host_has(Kernel::Avx512) => Kernel::Avx512,
                 None if host_has(Kernel::Avx2) => Kernel::Avx2,
                 _ => Kernel::Portable,
             };

@@ -90,8 +90,12 @@ pub enum Kernel {
     Portable,
     /// AVX2 intrinsics: one 256-bit register per plane row.
     Avx2,
-    /// AVX-512 (F and VL) on 256-bit vectors: mask-register comparisons
-    /// and compress-stores of the children hit.
+    /// AVX-512 (F and VL) on 256-bit vectors: AVX2's node test with a
+    /// mask-register comparison, in a walk compiled for AVX-512, whose 32
+    /// vector registers hold the ray's broadcasts and the leaf test's
+    /// values together (the AVX2 walk spills and reloads them around each
+    /// leaf). The children hit are compacted by the scalar loop: AVX-512's
+    /// compress-stores measured slower (docs/benchmarks.md).
     Avx512,
 }
 
@@ -124,21 +128,25 @@ impl Kernel {
         }
     }
 
-    /// The kernel new hierarchies use: [`Kernel::Avx2`] where the CPU has
-    /// it, else [`Kernel::Portable`]; `PRISM_BVH_NO_SIMD` forces the
+    /// The kernel new hierarchies use: [`Kernel::Avx512`] where the CPU
+    /// has it, else [`Kernel::Avx2`] where it has that, else
+    /// [`Kernel::Portable`]; `PRISM_BVH_NO_SIMD` forces the
     /// portable one, and the environment variable `PRISM_BVH_KERNEL`
     /// (`portable`, `avx2`, `avx512`) names another that the CPU runs.
-    /// AVX2 is the default because it measured fastest on every single-ray
-    /// set of the machine of docs/benchmarks.md ("The intrinsics node
-    /// tests inlined"): 12–26 % ahead of the portable kernel (vectorised
-    /// by the compiler inside the AVX2 build) and 5–30 % ahead of AVX-512.
+    /// AVX2 measured 12–26 % ahead of the portable kernel (vectorised by
+    /// the compiler inside the AVX2 build; docs/benchmarks.md, "The
+    /// intrinsics node tests inlined"). AVX-512 was 5–30 % behind AVX2
+    /// while it compacted the children hit with compress-stores; without
+    /// them it measured level to 7 % ahead of AVX2 on the single-ray sets
+    /// (section "The AVX-512 walk without compress-stores").
     #[must_use]
     pub fn detect() -> Self {
         if std::env::var_os("PRISM_BVH_NO_SIMD").is_some() {
             return Self::Portable;
         }
         let named = std::env::var("PRISM_BVH_KERNEL").ok();
-        let fallback = if Self::Avx2.supported() { Self::Avx2 } else { Self::Portable };
+        let fallback =
+            [Self::Avx512, Self::Avx2].into_iter().find(|k| k.supported()).unwrap_or(Self::Portable);
         Self::ALL
             .into_iter()
             .find(|k| named.as_deref() == Some(k.name()) && k.supported())
@@ -522,13 +530,6 @@ pub(crate) struct Hits {
 /// lanes whose box the ray's `[t_min, reach]` meets.
 pub(crate) trait NodeTest: Copy {
     fn test(self, node: &Node, r: &WideRay, reach: f32, t_near: &mut [f32; WIDTH]) -> u32;
-
-    /// Writes the lanes of `mask` to the front of `out`, in lane order;
-    /// returns how many.
-    #[inline(always)]
-    fn compact(self, mask: u32, t_near: &[f32; WIDTH], node: &Node, out: &mut Hits) -> usize {
-        compact(mask, t_near, &node.child, out)
-    }
 }
 
 /// The portable node test.
@@ -571,7 +572,7 @@ fn compact(mut mask: u32, t_near: &[f32; WIDTH], lanes: &[u32; WIDTH], out: &mut
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod x86 {
     //! The AVX2 and AVX-512 node tests.
-    use super::{Hits, Node, NodeTest, WIDTH, WideRay};
+    use super::{Node, NodeTest, WIDTH, WideRay};
     use core::arch::x86_64::*;
 
     /// The AVX2 node test. Made only inside code compiled for AVX2 that
@@ -667,23 +668,6 @@ pub(crate) mod x86 {
                 u32::from(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(n, f))
             }
         }
-
-        /// The lanes of `mask` compress-stored to the front of `out`.
-        #[inline(always)]
-        fn compact(self, mask: u32, t_near: &[f32; WIDTH], node: &Node, out: &mut Hits) -> usize {
-            let m = (mask & 0xff) as u8;
-            // SAFETY: as for `test`, the token guarantees AVX-512 F and
-            // VL; `t_near`, `node.child`, `out.near` and `out.child` hold
-            // eight lanes each (unaligned loads); a compress-store writes
-            // at most the lanes set in `m`, contiguously from the start.
-            unsafe {
-                let n = _mm256_loadu_ps(t_near.as_ptr());
-                _mm256_mask_compressstoreu_ps(out.near.as_mut_ptr().cast(), m, n);
-                let c = _mm256_loadu_si256(node.child.as_ptr().cast());
-                _mm256_mask_compressstoreu_epi32(out.child.as_mut_ptr().cast(), m, c);
-            }
-            m.count_ones() as usize
-        }
     }
 }
 
@@ -725,7 +709,7 @@ impl WideBvh {
                         continue;
                     }
                     let mut out = Hits { near: [0.0; WIDTH], child: [0; WIDTH] };
-                    let n = test.compact(mask, &t_near, node, &mut out).min(WIDTH);
+                    let n = compact(mask, &t_near, &node.child, &mut out).min(WIDTH);
                     let Hits { near, child } = &mut out;
                     if !V::ANY {
                         sort(&mut near[..n], &mut child[..n]);

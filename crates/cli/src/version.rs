@@ -11,9 +11,10 @@ pub const COMMIT: &str = env!("PRISM_GIT_COMMIT");
 /// each: `(path, enabled)`. Two today, both chosen when the structure is
 /// built and both off with `PRISM_BVH_NO_SIMD`: the AVX2 compilation of
 /// the closest-hit and packet queries' walks (`bvh-avx2`), and an intrinsics kernel for the node test
-/// of the wide (8-child) hierarchies (`bvh8-avx2`, the default where the
-/// CPU has AVX2, or `bvh8-avx512` when `PRISM_BVH_KERNEL` asks for it; see
-/// [`prism_bvh::Kernel::detect`]). A new run-time path adds a line here.
+/// of the wide (8-child) hierarchies (`bvh8-avx512` where the CPU has
+/// AVX-512 F and VL, else `bvh8-avx2` where it has AVX2, unless
+/// `PRISM_BVH_KERNEL` names another; see [`prism_bvh::Kernel::detect`]).
+/// A new run-time path adds a line here.
 #[must_use]
 pub fn simd_paths() -> Vec<(&'static str, bool)> {
     let forced_off = std::env::var_os("PRISM_BVH_NO_SIMD").is_some();

@@ -20,9 +20,16 @@ fn version_names_the_version_the_commit_and_the_simd_paths() {
         "{s}"
     );
     let simd = lines[2].strip_prefix("simd:   ").unwrap_or_else(|| panic!("{s}"));
-    // With AVX2, its intrinsics node test is the default (measured fastest);
-    // without, everything runs the scalar builds.
-    assert!(simd.starts_with("bvh-avx2 bvh8-avx2 (") || simd.starts_with("scalar ("), "{s}");
+    // The default node test is the fastest measured that the CPU has:
+    // AVX-512, else AVX2; without AVX2 everything runs the scalar builds.
+    let expected = if prism_bvh::Kernel::Avx512.supported() {
+        "bvh-avx2 bvh8-avx512 ("
+    } else if prism_bvh::Kernel::Avx2.supported() {
+        "bvh-avx2 bvh8-avx2 ("
+    } else {
+        "scalar ("
+    };
+    assert!(simd.starts_with(expected), "expected {expected:?}: {s}");
     if simd.starts_with("bvh-avx2 ") {
         let out = common::prism_cmd(dir.path())
             .arg("--version")
