@@ -6,7 +6,7 @@
 //! watertight ray/triangle test.
 
 use crate::packet::{self, Frustum, Lanes, Leaf, Rows, Soa, bits};
-use crate::traverse::{self, BoxRay, Tree, Visit, visitor, walk_any};
+use crate::traverse::{self, BoxRay, Dispatch, Tree, Visit, Walker, visitor, walk_any, walk_any_by};
 use crate::wide::{self, Kernel, WideBvh};
 use crate::{BlasKind, BuildQuality, bvh2, cwbvh};
 use obvhs::bvh2::Bvh2;
@@ -197,10 +197,16 @@ impl Blas {
     /// Walks the hierarchy, whichever layout it has.
     #[inline(always)]
     fn walk(&self, br: &mut BoxRay, v: impl Visit) {
+        self.walk_by(Dispatch, br, v);
+    }
+
+    /// [`Blas::walk`] through `walker` ([`Walker`]).
+    #[inline(always)]
+    fn walk_by(&self, walker: impl Walker, br: &mut BoxRay, v: impl Visit) {
         match &self.nodes {
             Nodes::Cwbvh(b) => walk_any(b, self.depth, br, v),
             Nodes::Bvh2(b) => walk_any(b, self.depth, br, v),
-            Nodes::Wide(b) => walk_any(b, self.depth, br, v),
+            Nodes::Wide(b) => walk_any_by(walker, b, self.depth, br, v),
         }
     }
 
@@ -223,6 +229,16 @@ impl Blas {
     /// the loop), the same hit either way ([`closest_in_leaf`]).
     #[inline(always)]
     pub fn closest<const BRANCHLESS: bool>(&self, ray: &Ray) -> Option<(u32, f32, f32, f32)> {
+        self.closest_by::<BRANCHLESS>(Dispatch, ray)
+    }
+
+    /// [`Blas::closest`], walked through `walker` ([`Walker`]).
+    #[inline(always)]
+    pub fn closest_by<const BRANCHLESS: bool>(
+        &self,
+        walker: impl Walker,
+        ray: &Ray,
+    ) -> Option<(u32, f32, f32, f32)> {
         let mut br = BoxRay::new(ray);
         let mut v = ClosestTriangle::<BRANCHLESS> {
             tris: &self.tris,
@@ -230,7 +246,7 @@ impl Blas {
             tr: TriangleRay::new(ray),
             found: None,
         };
-        self.walk(&mut br, &mut v);
+        self.walk_by(walker, &mut br, &mut v);
         v.found.map(|(slot, t, b1, b2)| (self.faces[slot as usize], t, b1, b2))
     }
 

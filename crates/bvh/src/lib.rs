@@ -113,7 +113,7 @@ use prism_geometry::{Aabb, Hit, Instance, Intersect, Ray, Shape, Transform, Tria
 use rayon::prelude::*;
 use std::ops::ControlFlow;
 use std::sync::Arc;
-use traverse::{BoxRay, Tree, Visit, visitor, walk_any};
+use traverse::{BoxRay, Dispatch, Tree, Visit, Walker, visitor, walk_any, walk_any_by};
 
 pub use packet::PACKET as PACKET_SIZE;
 pub use wide::Kernel;
@@ -396,17 +396,19 @@ fn widen_for_rounding(b: Aabb, t: &Transform) -> Aabb {
 
 /// The closest-hit walk over the top level's objects (`BRANCHLESS`: as
 /// [`Blas::closest`]; `false` for a packet's rays).
-struct ClosestObject<'a, const BRANCHLESS: bool> {
+struct ClosestObject<'a, const BRANCHLESS: bool, W: Walker> {
     accel: &'a Accel,
     ray: Ray,
     best: Best,
+    /// How the meshes' walks reach their node tests ([`Walker`]).
+    walker: W,
 }
 
-impl<const BRANCHLESS: bool> Visit for &mut ClosestObject<'_, BRANCHLESS> {
+impl<const BRANCHLESS: bool, W: Walker> Visit for &mut ClosestObject<'_, BRANCHLESS, W> {
     #[inline(always)]
     fn visit(&mut self, slot: u32, br: &mut BoxRay) -> bool {
         let i = self.accel.tlas_objects[slot as usize];
-        self.accel.closest_object_walked::<BRANCHLESS>(i, &mut self.ray, &mut self.best, br);
+        self.accel.closest_object_walked::<BRANCHLESS>(self.walker, i, &mut self.ray, &mut self.best, br);
         true
     }
 }
@@ -844,6 +846,10 @@ struct Simd {
     /// features) may run.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     wide: bool,
+    /// The wide trees' kernel is [`Kernel::Avx512`] (so the CPU has it):
+    /// `closest_best_avx512` runs.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    avx512: bool,
 }
 
 impl Simd {
@@ -858,7 +864,7 @@ impl Simd {
             && is_x86_feature_detected!("popcnt");
         #[cfg(not(target_arch = "x86_64"))]
         let wide = false;
-        Self { wide }
+        Self { wide, avx512: false }
     }
 }
 
@@ -1004,7 +1010,7 @@ impl Accel {
             tlas_objects,
             unbounded,
             identity: objects_identity,
-            simd: Simd::detect(),
+            simd: Simd { avx512: kernel == Kernel::Avx512, ..Simd::detect() },
             packets,
         })
     }
@@ -1029,7 +1035,9 @@ impl Accel {
         if !kernel.supported() {
             return false;
         }
-        self.tlas.set_kernel(kernel) && self.blas.iter_mut().all(|b| b.set_kernel(kernel))
+        let set = self.tlas.set_kernel(kernel) && self.blas.iter_mut().all(|b| b.set_kernel(kernel));
+        self.simd.avx512 = set && kernel == Kernel::Avx512;
+        set
     }
 
     /// Bounds of every bounded object (infinite planes excluded).
@@ -1074,6 +1082,19 @@ impl Accel {
     /// packet's rays).
     #[inline(always)]
     fn closest_object<const BRANCHLESS: bool>(&self, i: u32, ray: &mut Ray, best: &mut Best) {
+        self.closest_object_by::<BRANCHLESS>(Dispatch, i, ray, best);
+    }
+
+    /// [`Accel::closest_object`], a mesh walked through `walker`
+    /// ([`Walker`]).
+    #[inline(always)]
+    fn closest_object_by<const BRANCHLESS: bool>(
+        &self,
+        walker: impl Walker,
+        i: u32,
+        ray: &mut Ray,
+        best: &mut Best,
+    ) {
         match &self.objects[i as usize] {
             Object::Shape(s) => {
                 // The full hit at once, not `intersect_t` and the winner's
@@ -1087,7 +1108,9 @@ impl Accel {
             }
             Object::Mesh { mesh, transform } => {
                 let local = transform.ray_to_object(ray);
-                if let Some((face, t, b1, b2)) = self.blas[*mesh as usize].closest::<BRANCHLESS>(&local) {
+                if let Some((face, t, b1, b2)) =
+                    self.blas[*mesh as usize].closest_by::<BRANCHLESS>(walker, &local)
+                {
                     ray.t_max = t;
                     *best = Best::Mesh { object: i, face, t, b1, b2, dir: local.dir };
                 }
@@ -1100,13 +1123,14 @@ impl Accel {
     #[inline(always)]
     fn closest_object_walked<const BRANCHLESS: bool>(
         &self,
+        walker: impl Walker,
         i: u32,
         ray: &mut Ray,
         best: &mut Best,
         br: &mut BoxRay,
     ) {
         let t_max = ray.t_max;
-        self.closest_object::<BRANCHLESS>(i, ray, best);
+        self.closest_object_by::<BRANCHLESS>(walker, i, ray, best);
         if ray.t_max != t_max {
             br.set_t_max(ray.t_max);
         }
@@ -1159,40 +1183,58 @@ impl Accel {
         self.closest_dispatch(ray).record()
     }
 
-    /// The closest-hit walk, compiled for AVX2 where the CPU has it.
+    /// The closest-hit walk, compiled for AVX2 where the CPU has it, and
+    /// for AVX-512 with the walks inline where the structure's kernel is
+    /// AVX-512.
     #[inline(always)]
     fn closest_dispatch(&self, ray: &Ray) -> Best {
         #[cfg(target_arch = "x86_64")]
         if self.simd.wide {
+            if self.simd.avx512 {
+                // SAFETY: `avx512` is set only where the running CPU
+                // reports every feature `closest_best_avx512` is compiled
+                // for (the AVX-512 kernel's, `Kernel::supported`).
+                return unsafe { self.closest_best_avx512(ray) };
+            }
             // SAFETY: `wide` is set only when the running CPU reports
             // every feature `closest_best_wide` is compiled for.
             return unsafe { self.closest_best_wide(ray) };
         }
-        self.closest_best(ray)
+        self.closest_best(Dispatch, ray)
     }
 
     /// [`Accel::closest_best`] compiled for AVX2 (8-wide node tests).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     fn closest_best_wide(&self, ray: &Ray) -> Best {
-        self.closest_best(ray)
+        self.closest_best(Dispatch, ray)
+    }
+
+    /// [`Accel::closest_best`] compiled for AVX-512, with the wide trees'
+    /// walks compiled into it ([`wide::x86::InAvx512`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl")]
+    fn closest_best_avx512(&self, ray: &Ray) -> Best {
+        // SAFETY: this function runs only where the CPU has AVX-512 F and
+        // VL and AVX2 (its callers' contract, by its features).
+        self.closest_best(unsafe { wide::x86::InAvx512::new() }, ray)
     }
 
     #[inline(always)]
-    fn closest_best(&self, ray: &Ray) -> Best {
+    fn closest_best(&self, walker: impl Walker, ray: &Ray) -> Best {
         if !usable(ray) {
             return Best::None;
         }
-        let mut v = ClosestObject::<true> { accel: self, ray: *ray, best: Best::None };
+        let mut v = ClosestObject::<true, _> { accel: self, ray: *ray, best: Best::None, walker };
         for &i in &self.unbounded {
-            self.closest_object::<true>(i, &mut v.ray, &mut v.best);
+            self.closest_object_by::<true>(walker, i, &mut v.ray, &mut v.best);
         }
         if let Some(i) = self.sole {
-            self.closest_object::<true>(i, &mut v.ray, &mut v.best);
+            self.closest_object_by::<true>(walker, i, &mut v.ray, &mut v.best);
             return v.best;
         }
         let mut br = BoxRay::new(&v.ray);
-        walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
+        walk_any_by(walker, &self.tlas, self.tlas_depth, &mut br, &mut v);
         v.best
     }
 
@@ -1408,7 +1450,12 @@ impl Accel {
                 ),
                 None => {
                     for k in bits(m) {
-                        let mut c = ClosestObject::<false> { accel: self, ray: live[k], best: best[k] };
+                        let mut c = ClosestObject::<false, _> {
+                            accel: self,
+                            ray: live[k],
+                            best: best[k],
+                            walker: Dispatch,
+                        };
                         walk_any(&self.tlas, self.tlas_depth, &mut soa.box_ray(k), &mut c);
                         (live[k], best[k]) = (c.ray, c.best);
                     }
@@ -1900,7 +1947,16 @@ mod tests {
             let ray = Ray::with_interval(o, d, 0.0, if k % 3 == 0 { 1.5 } else { f32::INFINITY });
             // SAFETY: `accel.simd.wide` says this CPU has the features.
             let wide = accel.finish(unsafe { accel.closest_best_wide(&ray) });
-            let plain = accel.finish(accel.closest_best(&ray));
+            let plain = accel.finish(accel.closest_best(Dispatch, &ray));
+            if accel.simd.avx512 {
+                // SAFETY: `avx512` says this CPU has the features.
+                let inline = accel.finish(unsafe { accel.closest_best_avx512(&ray) });
+                assert_eq!(
+                    inline.map(|h| (h.object, h.triangle, h.hit.t.to_bits())),
+                    plain.map(|h| (h.object, h.triangle, h.hit.t.to_bits())),
+                    "{ray:?}"
+                );
+            }
             let record = accel.closest_record(&ray);
             assert_eq!(
                 record.map(|r| (r.object(), r.triangle().unwrap_or(SceneHit::NO_TRIANGLE), r.t().to_bits())),

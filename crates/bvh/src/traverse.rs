@@ -2,6 +2,7 @@
 //! ray as the box tests want it, the callback a walk calls per primitive,
 //! the traversal stack, and the tree depth that sizes it.
 
+use crate::wide::WideBvh;
 use prism_geometry::Ray;
 use prism_geometry::glam::{Vec3A, Vec4};
 use std::mem::MaybeUninit;
@@ -120,10 +121,19 @@ pub(crate) trait Visit {
     /// Visits the `count` slots from `first` (a wide BVH's leaf, whose
     /// slots start at a multiple of four): as many calls of
     /// [`Visit::visit`], in order, unless the visitor tests the block at
-    /// once with the same result.
+    /// once with the same result. A loop, not `Iterator::all`: its closure
+    /// was compiled out of line, for the baseline target even inside a
+    /// walk compiled for AVX-512 (`wide::x86::InAvx512`).
     #[inline(always)]
     fn visit_leaf(&mut self, first: u32, count: u32, ray: &mut BoxRay) -> bool {
-        (first..first + count).all(|slot| self.visit(slot, ray))
+        let mut slot = first;
+        while slot < first + count {
+            if !self.visit(slot, ray) {
+                return false;
+            }
+            slot += 1;
+        }
+        true
     }
 }
 
@@ -220,6 +230,54 @@ pub(crate) trait Tree {
     /// meets. The callback may shrink the ray's interval; it returns `false` to
     /// stop the walk. `stack` must hold [`depth`] entries.
     fn walk<S: Stack<Self::Entry>>(&self, stack: &mut S, ray: &mut BoxRay, prim: impl Visit);
+
+    /// [`Tree::walk`], through `walker` where this tree's walk depends on
+    /// the caller's compilation ([`Walker`]; the wide tree's).
+    #[inline(always)]
+    fn walk_by<S: Stack<Self::Entry>>(
+        &self,
+        walker: impl Walker,
+        stack: &mut S,
+        ray: &mut BoxRay,
+        prim: impl Visit,
+    ) {
+        let _ = walker;
+        self.walk(stack, ray, prim);
+    }
+}
+
+/// How a single-ray walk reaches the wide tree's node tests: [`Dispatch`]
+/// through the tree's kernel ([`crate::wide::Kernel`]), each kernel's walk
+/// an out-of-line function compiled for its features, which any caller
+/// may call; or inline, where the caller itself is compiled for the
+/// kernel (`wide::x86::InAvx512`), which spares the call and the
+/// visitor's state passed through memory.
+pub(crate) trait Walker: Copy {
+    fn walk_wide<S: Stack<(u32, f32)>>(
+        self,
+        tree: &WideBvh,
+        stack: &mut S,
+        ray: &mut BoxRay,
+        prim: impl Visit,
+    );
+}
+
+/// The walk through the tree's kernel dispatch: for callers compiled for
+/// any target.
+#[derive(Clone, Copy)]
+pub(crate) struct Dispatch;
+
+impl Walker for Dispatch {
+    #[inline(always)]
+    fn walk_wide<S: Stack<(u32, f32)>>(
+        self,
+        tree: &WideBvh,
+        stack: &mut S,
+        ray: &mut BoxRay,
+        prim: impl Visit,
+    ) {
+        tree.walk(stack, ray, prim);
+    }
 }
 
 /// Depth of `tree` (root = 1, empty = 0), for sizing the walk's stack.
@@ -239,10 +297,22 @@ pub(crate) fn depth(tree: &impl Tree) -> usize {
 /// [`Tree::walk`] with a stack that fits a tree of depth `depth`.
 #[inline(always)]
 pub(crate) fn walk_any<T: Tree>(tree: &T, depth: usize, ray: &mut BoxRay, prim: impl Visit) {
+    walk_any_by(Dispatch, tree, depth, ray, prim);
+}
+
+/// [`walk_any`] through `walker` ([`Walker`]).
+#[inline(always)]
+pub(crate) fn walk_any_by<T: Tree>(
+    walker: impl Walker,
+    tree: &T,
+    depth: usize,
+    ray: &mut BoxRay,
+    prim: impl Visit,
+) {
     if depth <= INLINE_STACK {
-        tree.walk(&mut InlineStack::<T::Entry, INLINE_STACK>::new(), ray, prim);
+        tree.walk_by(walker, &mut InlineStack::<T::Entry, INLINE_STACK>::new(), ray, prim);
     } else {
-        tree.walk(&mut Vec::with_capacity(depth), ray, prim);
+        tree.walk_by(walker, &mut Vec::with_capacity(depth), ray, prim);
     }
 }
 
