@@ -253,10 +253,16 @@ impl Blas {
     /// Whether any triangle lies in the ray's interval.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
+        self.occluded_by(Dispatch, ray)
+    }
+
+    /// [`Blas::occluded`], walked through `walker` ([`Walker`]).
+    #[inline(always)]
+    pub fn occluded_by(&self, walker: impl Walker, ray: &Ray) -> bool {
         let mut br = BoxRay::new(ray);
         let mut v =
             AnyTriangle { tris: &self.tris, blocks: &self.blocks, tr: TriangleRay::new(ray), hit: false };
-        self.walk(&mut br, &mut v);
+        self.walk_by(walker, &mut br, &mut v);
         v.hit
     }
 

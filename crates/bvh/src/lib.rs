@@ -414,18 +414,21 @@ impl<const BRANCHLESS: bool, W: Walker> Visit for &mut ClosestObject<'_, BRANCHL
 }
 
 /// The occlusion walk over the top level's objects.
-struct AnyObject<'a> {
+struct AnyObject<'a, W: Walker> {
     accel: &'a Accel,
     ray: &'a Ray,
     hit: bool,
+    /// As [`ClosestObject::walker`].
+    walker: W,
 }
 
-impl Visit for &mut AnyObject<'_> {
+impl<W: Walker> Visit for &mut AnyObject<'_, W> {
     const ANY: bool = true;
 
     #[inline(always)]
     fn visit(&mut self, slot: u32, _: &mut BoxRay) -> bool {
-        self.hit = self.accel.object_occludes(self.accel.tlas_objects[slot as usize], self.ray);
+        self.hit =
+            self.accel.object_occludes_by(self.walker, self.accel.tlas_objects[slot as usize], self.ray);
         !self.hit
     }
 }
@@ -1240,39 +1243,66 @@ impl Accel {
 
     #[inline(always)]
     fn object_occludes(&self, i: u32, ray: &Ray) -> bool {
+        self.object_occludes_by(Dispatch, i, ray)
+    }
+
+    /// [`Accel::object_occludes`], a mesh walked through `walker`
+    /// ([`Walker`]).
+    #[inline(always)]
+    fn object_occludes_by(&self, walker: impl Walker, i: u32, ray: &Ray) -> bool {
         match &self.objects[i as usize] {
             // `t` only: no hit record (prism-geometry's `intersect_t`).
             Object::Shape(s) => self.shape_t(i, s, ray).is_some(),
             Object::Mesh { mesh, transform } => {
-                self.blas[*mesh as usize].occluded(&transform.ray_to_object(ray))
+                self.blas[*mesh as usize].occluded_by(walker, &transform.ray_to_object(ray))
             }
         }
     }
 
     /// Whether anything lies in `[ray.t_min, ray.t_max]` (early exit).
     ///
-    /// Compiled for the baseline target only: an AVX2 build of it, as
-    /// [`Accel::closest_hit`] has, measured 5-13 % slower on shadow rays
-    /// (docs/benchmarks.md, "AVX2 builds of the queries").
+    /// Compiled for the baseline target where the kernel is AVX2 or
+    /// portable: an AVX2 build of it, as [`Accel::closest_hit`] has,
+    /// measured 5-13 % slower on shadow rays (docs/benchmarks.md, "AVX2
+    /// builds of the queries"). Where the structure's kernel is AVX-512, a
+    /// build compiled for AVX-512 with the walks inline runs instead, as
+    /// for `closest_hit` (kitchen shadow rays +9.5 %, the bunny's and the
+    /// grid's level).
     #[must_use]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.occluded_impl(ray)
+        #[cfg(target_arch = "x86_64")]
+        if self.simd.wide && self.simd.avx512 {
+            // SAFETY: `avx512` is set only where the running CPU reports
+            // every feature `occluded_avx512` is compiled for.
+            return unsafe { self.occluded_avx512(ray) };
+        }
+        self.occluded_impl(Dispatch, ray)
+    }
+
+    /// [`Accel::occluded_impl`] compiled for AVX-512, the wide trees'
+    /// walks compiled into it ([`wide::x86::InAvx512`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl")]
+    fn occluded_avx512(&self, ray: &Ray) -> bool {
+        // SAFETY: this function runs only where the CPU has AVX-512 F and
+        // VL and AVX2 (its callers' contract, by its features).
+        self.occluded_impl(unsafe { wide::x86::InAvx512::new() }, ray)
     }
 
     #[inline(always)]
-    fn occluded_impl(&self, ray: &Ray) -> bool {
+    fn occluded_impl(&self, walker: impl Walker, ray: &Ray) -> bool {
         if !usable(ray) {
             return false;
         }
-        if self.unbounded.iter().any(|&i| self.object_occludes(i, ray)) {
+        if self.unbounded.iter().any(|&i| self.object_occludes_by(walker, i, ray)) {
             return true;
         }
         if let Some(i) = self.sole {
-            return self.object_occludes(i, ray);
+            return self.object_occludes_by(walker, i, ray);
         }
         let mut br = BoxRay::new(ray);
-        let mut v = AnyObject { accel: self, ray, hit: false };
-        walk_any(&self.tlas, self.tlas_depth, &mut br, &mut v);
+        let mut v = AnyObject { accel: self, ray, hit: false, walker };
+        walk_any_by(walker, &self.tlas, self.tlas_depth, &mut br, &mut v);
         v.hit
     }
 
@@ -1554,7 +1584,7 @@ impl Accel {
                 }
                 None => {
                     for k in bits(m) {
-                        let mut v = AnyObject { accel: self, ray: &rays[k], hit: false };
+                        let mut v = AnyObject { accel: self, ray: &rays[k], hit: false, walker: Dispatch };
                         walk_any(&self.tlas, self.tlas_depth, &mut soa.box_ray(k), &mut v);
                         done |= u64::from(v.hit) << k;
                     }
