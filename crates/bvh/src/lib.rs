@@ -1934,6 +1934,8 @@ mod tests {
         assert!(one.resolve(front).is_none(), "no such triangle in `one`'s mesh");
     }
 
+    /// (x86-64 only: the AVX2 and AVX-512 builds it compares exist there.)
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn wide_queries_match_plain_ones() {
         let (positions, indices) = wavy_grid(40, [9.0, 7.0, 0.3]);
