@@ -76,8 +76,8 @@
 //! compare, on 256-bit vectors, in a walk that has AVX-512's 32 vector
 //! registers); the walk and its leaf tests are compiled once per kernel,
 //! and [`Kernel::detect`] picks the fastest measured that the CPU has
-//! (AVX-512, else AVX2, else the portable one) when the structure is built ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects
-//! another). All give bit-for-bit the same answers (same operations in the
+//! (AVX-512, else AVX2, else the portable one) when the structure is
+//! built ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects another). All give bit-for-bit the same answers (same operations in the
 //! same order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
 //! bit-identical to the scalar test; single rays, mostly incoherent, pick
@@ -850,13 +850,14 @@ struct Simd {
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     wide: bool,
     /// The wide trees' kernel is [`Kernel::Avx512`] (so the CPU has it):
-    /// `closest_best_avx512` runs.
+    /// `closest_best_avx512` and `occluded_avx512` run.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx512: bool,
 }
 
 impl Simd {
-    fn detect() -> Self {
+    /// What this CPU has, with `kernel` the structure's node-test kernel.
+    fn detect(kernel: Kernel) -> Self {
         #[cfg(target_arch = "x86_64")]
         let wide = std::env::var_os("PRISM_BVH_NO_SIMD").is_none()
             && is_x86_feature_detected!("avx2")
@@ -867,7 +868,7 @@ impl Simd {
             && is_x86_feature_detected!("popcnt");
         #[cfg(not(target_arch = "x86_64"))]
         let wide = false;
-        Self { wide, avx512: false }
+        Self { wide, avx512: kernel == Kernel::Avx512 }
     }
 }
 
@@ -1013,7 +1014,7 @@ impl Accel {
             tlas_objects,
             unbounded,
             identity: objects_identity,
-            simd: Simd { avx512: kernel == Kernel::Avx512, ..Simd::detect() },
+            simd: Simd::detect(kernel),
             packets,
         })
     }
