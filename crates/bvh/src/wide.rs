@@ -658,7 +658,7 @@ pub(crate) mod x86 {
     /// # Safety
     /// The CPU must have AVX2.
     #[inline(always)]
-    unsafe fn distances(node: &Node, r: &WideRay, reach: f32) -> (__m256, __m256) {
+    pub(crate) unsafe fn distances(node: &Node, r: &WideRay, reach: f32) -> (__m256, __m256) {
         let p = &node.planes;
         let (n, f) = (&r.near_row, &r.far_row);
         // SAFETY: the caller guarantees AVX2 (which `slab` needs); the
