@@ -77,8 +77,9 @@
 //! registers); the walk and its leaf tests are compiled once per kernel,
 //! and [`Kernel::detect`] picks the fastest measured that the CPU has
 //! (AVX-512, else AVX2, else the portable one) when the structure is
-//! built ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects another). All give bit-for-bit the same answers (same operations in the
-//! same order, nothing fused; tests compare them). A leaf's four triangles
+//! built ([`Accel::set_kernel`] or `PRISM_BVH_KERNEL` selects another).
+//! All give bit-for-bit the same answers (same operations in the same
+//! order, nothing fused; tests compare them). A leaf's four triangles
 //! are tested together by [`prism_geometry::TriangleRay::intersect4`],
 //! bit-identical to the scalar test; single rays, mostly incoherent, pick
 //! the nearest lane without a branch per lane
@@ -856,7 +857,9 @@ struct Simd {
 }
 
 impl Simd {
-    /// What this CPU has, with `kernel` the structure's node-test kernel.
+    /// What this CPU has, with `kernel` the structure's node-test kernel
+    /// (`avx512` only where the CPU runs that kernel, whoever picked it:
+    /// the unsafe calls it gates rely on it).
     fn detect(kernel: Kernel) -> Self {
         #[cfg(target_arch = "x86_64")]
         let wide = std::env::var_os("PRISM_BVH_NO_SIMD").is_none()
@@ -868,7 +871,7 @@ impl Simd {
             && is_x86_feature_detected!("popcnt");
         #[cfg(not(target_arch = "x86_64"))]
         let wide = false;
-        Self { wide, avx512: kernel == Kernel::Avx512 }
+        Self { wide, avx512: kernel == Kernel::Avx512 && kernel.supported() }
     }
 }
 

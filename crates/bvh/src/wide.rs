@@ -653,7 +653,9 @@ pub(crate) mod x86 {
     /// through memory, with the rows re-checked and the ray re-broadcast
     /// (perf, docs/benchmarks.md): slower than the portable kernel. As a
     /// plain `#[inline(always)]` function it is compiled into
-    /// `walk_avx2`/`walk_avx512`, whose features the intrinsics inherit.
+    /// `walk_avx2`/`walk_avx512` and the packet walks' AVX2 builds (the
+    /// per-ray fold, `packet::x86::Avx2`), whose features the intrinsics
+    /// inherit.
     ///
     /// # Safety
     /// The CPU must have AVX2.
