@@ -219,6 +219,14 @@ pub(crate) trait Lanes: Copy {
         mask
     }
 
+    /// [`Lanes::fold`] for a ray of a packet of mixed octants (the rows
+    /// of `r` differ from ray to ray): the same answers, and kernels that
+    /// can pick each axis's planes without the rows do.
+    #[inline(always)]
+    fn fold_mixed(self, node: &Node, r: &WideRay, reach: f32, k: usize, s: &mut PerRay) -> u32 {
+        self.fold(node, r, reach, k, s)
+    }
+
     /// The rays that meet child `c` after the rays' [`Lanes::fold`]s.
     #[inline(always)]
     fn met(self, s: &PerRay, c: usize) -> u64 {
@@ -550,19 +558,16 @@ pub(crate) mod x86 {
         #[inline(always)]
         fn fold(self, node: &Node, r: &WideRay, reach: f32, k: usize, s: &mut super::PerRay) -> u32 {
             // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
-            // `new` is unsafe with that contract); `s.near` holds eight
-            // `f32`s, read and written whole (unaligned).
-            unsafe {
-                let (n, f) = crate::wide::x86::distances(node, r, reach);
-                let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(n, f);
-                let near = _mm256_loadu_ps(s.near.as_ptr());
-                _mm256_storeu_ps(s.near.as_mut_ptr(), _mm256_blendv_ps(near, _mm256_min_ps(n, near), hit));
-                let mask = _mm256_movemask_ps(hit) as u32;
-                if let Some(h) = s.hits.get_mut(k) {
-                    *h = mask as u8;
-                }
-                mask
-            }
+            // `new` is unsafe with that contract).
+            unsafe { fold_distances(crate::wide::x86::distances(node, r, reach), k, s) }
+        }
+
+        /// The planes picked by the sign of each ray's `inv`
+        /// ([`crate::wide::x86::distances_by_sign`]), not by its rows.
+        #[inline(always)]
+        fn fold_mixed(self, node: &Node, r: &WideRay, reach: f32, k: usize, s: &mut super::PerRay) -> u32 {
+            // SAFETY: as in `fold`.
+            unsafe { fold_distances(crate::wide::x86::distances_by_sign(node, r, reach), k, s) }
         }
 
         /// The rays that meet child `c`: bit `c` of every ray's byte in
@@ -583,6 +588,29 @@ pub(crate) mod x86 {
                 let h = _mm256_movemask_epi8(_mm256_sll_epi16(hi, shift)) as u32;
                 u64::from(l) | u64::from(h) << 32
             }
+        }
+    }
+
+    /// A ray's fold from its node distances `(n, f)`: each child's entry
+    /// bound lowered to `n` where the ray meets the child (a `minps` and a
+    /// blend on the comparison's lanes), and the ray's child mask kept as
+    /// its byte of `s.hits` and returned.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    unsafe fn fold_distances((n, f): (__m256, __m256), k: usize, s: &mut super::PerRay) -> u32 {
+        // SAFETY: the caller guarantees AVX2; `s.near` holds eight `f32`s,
+        // read and written whole (unaligned).
+        unsafe {
+            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(n, f);
+            let near = _mm256_loadu_ps(s.near.as_ptr());
+            _mm256_storeu_ps(s.near.as_mut_ptr(), _mm256_blendv_ps(near, _mm256_min_ps(n, near), hit));
+            let mask = _mm256_movemask_ps(hit) as u32;
+            if let Some(h) = s.hits.get_mut(k) {
+                *h = mask as u8;
+            }
+            mask
         }
     }
 }
@@ -1174,7 +1202,11 @@ impl<const N: usize> Soa<N> {
                 far_row,
                 t_min: self.t_min[k],
             };
-            any |= lanes.fold(node, &r, self.reach[k], k, &mut s);
+            any |= if MIXED {
+                lanes.fold_mixed(node, &r, self.reach[k], k, &mut s)
+            } else {
+                lanes.fold(node, &r, self.reach[k], k, &mut s)
+            };
         }
         let mut count = 0;
         while any != 0 {
@@ -1969,9 +2001,10 @@ mod tests {
         }
     }
 
-    /// The AVX2 fold of rays' node tests into a per-ray node test's state
-    /// gives the portable fold's masks, entry bounds (bit for bit) and
-    /// rays per child: random nodes with degenerate and inverted boxes,
+    /// The AVX2 fold of rays' node tests into a per-ray node test's state,
+    /// with the planes picked by rows and by the sign of `inv` (whose
+    /// distances agree bit for bit), gives the portable fold's masks,
+    /// entry bounds (bit for bit) and rays per child: random nodes with degenerate and inverted boxes,
     /// rays with zero direction components and origins in face planes,
     /// reaches of `-inf` and `inf`, any of the 64 ray slots.
     #[test]
@@ -2000,7 +2033,7 @@ mod tests {
                     }
                 }
             }
-            let (mut a, mut b) = (PerRay::new(), PerRay::new());
+            let (mut a, mut b, mut m) = (PerRay::new(), PerRay::new(), PerRay::new());
             let (mut any_a, mut any_b) = (0u32, 0u32);
             let mut slots: Vec<usize> = (0..PACKET).filter(|_| rng() < 0.3).collect();
             slots.push(round % PACKET);
@@ -2036,13 +2069,28 @@ mod tests {
                 };
                 let ma = Portable.fold(&node, &wr, reach, k, &mut a);
                 let mb = avx2.fold(&node, &wr, reach, k, &mut b);
+                let mm = avx2.fold_mixed(&node, &wr, reach, k, &mut m);
                 assert_eq!(ma, mb, "round {round}, ray {k}: mask");
+                assert_eq!(ma, mm, "round {round}, ray {k}: mask, planes by sign");
+                // SAFETY: the CPU has AVX2 (checked above).
+                let (by_rows, by_sign) = unsafe {
+                    use crate::wide::x86::{distances, distances_by_sign};
+                    (distances(&node, &wr, reach), distances_by_sign(&node, &wr, reach))
+                };
+                let lanes = |(n, f): (std::arch::x86_64::__m256, std::arch::x86_64::__m256)| {
+                    // SAFETY: a `__m256` is eight `f32`s.
+                    let [n, f]: [[f32; 8]; 2] = unsafe { std::mem::transmute([n, f]) };
+                    (n.map(f32::to_bits), f.map(f32::to_bits))
+                };
+                assert_eq!(lanes(by_rows), lanes(by_sign), "round {round}, ray {k}: distances");
                 (any_a, any_b) = (any_a | ma, any_b | mb);
             }
             assert_eq!(a.near.map(f32::to_bits), b.near.map(f32::to_bits), "round {round}: near");
+            assert_eq!(a.near.map(f32::to_bits), m.near.map(f32::to_bits), "round {round}: near by sign");
             for c in 0..WIDTH {
                 let (ra, rb) = (Portable.met(&a, c), avx2.met(&b, c));
                 assert_eq!(ra, rb, "round {round}, child {c}: rays");
+                assert_eq!(ra, avx2.met(&m, c), "round {round}, child {c}: rays by sign");
                 assert_eq!(ra != 0, any_a >> c & 1 == 1, "round {round}, child {c}");
                 met_many |= ra.count_ones() > 4;
                 met_hi |= ra >> 32 != 0;
