@@ -2004,9 +2004,10 @@ mod tests {
     /// The AVX2 fold of rays' node tests into a per-ray node test's state,
     /// with the planes picked by rows and by the sign of `inv` (whose
     /// distances agree bit for bit), gives the portable fold's masks,
-    /// entry bounds (bit for bit) and rays per child: random nodes with degenerate and inverted boxes,
-    /// rays with zero direction components and origins in face planes,
-    /// reaches of `-inf` and `inf`, any of the 64 ray slots.
+    /// entry bounds (bit for bit) and rays per child: random nodes with
+    /// degenerate and inverted boxes, rays with zero direction components
+    /// and origins in face planes, reaches of `-inf` and `inf`, any of the
+    /// 64 ray slots.
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn avx2_fold_matches_the_portable_fold() {

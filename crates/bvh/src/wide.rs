@@ -689,7 +689,11 @@ pub(crate) mod x86 {
     /// packets). The same distances bit for bit: the sign bit of `inv` is
     /// set exactly where `inv < 0`, the octant [`WideRay::new`] picks the
     /// rows by, as `inv` is `+inf` for a zero direction component and is
-    /// never `NaN` or `-0.0` for a usable ray (finite direction).
+    /// never `NaN` or `-0.0` for a usable ray (finite direction). A mixed
+    /// packet's per-ray rows come from its octants (`Soa::oct`), which
+    /// agree with those signs for the rays it walks: a ray with an
+    /// infinite reciprocal (a zero or tiny direction component) has no
+    /// octant (8) and walks alone (`plan`).
     ///
     /// # Safety
     /// The CPU must have AVX2.
