@@ -563,7 +563,7 @@ pub(crate) mod x86 {
         fn fold(self, node: &Node, r: &WideRay, reach: f32, k: usize, s: &mut super::PerRay) -> u32 {
             // SAFETY: an `Avx2` exists only where the CPU has AVX2 (its
             // `new` is unsafe with that contract).
-            unsafe { fold_distances(crate::wide::x86::distances(node, r, reach), k, s) }
+            unsafe { fold_distances(crate::wide::x86::distances::<false>(node, r, reach), k, s) }
         }
 
         /// The planes picked by the sign of each ray's `inv`
@@ -2071,7 +2071,9 @@ mod tests {
     /// entry bounds (bit for bit) and rays per child: random nodes with
     /// degenerate and inverted boxes, rays with zero direction components
     /// and origins in face planes, reaches of `-inf` and `inf`, any of the
-    /// 64 ray slots.
+    /// 64 ray slots. On the same nodes and rays, the single-ray node
+    /// tests' folded distances (`distances::<true>`) and the AVX2 and
+    /// portable single-ray node tests agree with them, a zero's sign aside.
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn avx2_fold_matches_the_portable_fold() {
@@ -2083,7 +2085,7 @@ mod tests {
         let avx2 = unsafe { x86::Avx2::new() };
         let mut r = prism_testkit::Rng::new(11);
         let mut rng = move || r.f32();
-        let (mut met_many, mut met_hi) = (false, false);
+        let (mut met_many, mut met_hi, mut folded_signs) = (false, false, false);
         for round in 0..3000 {
             let mut node = random_node(&mut rng, 0);
             for k in 0..WIDTH {
@@ -2138,9 +2140,13 @@ mod tests {
                 assert_eq!(ma, mb, "round {round}, ray {k}: mask");
                 assert_eq!(ma, mm, "round {round}, ray {k}: mask, planes by sign");
                 // SAFETY: the CPU has AVX2 (checked above).
-                let (by_rows, by_sign) = unsafe {
+                let (by_rows, by_sign, folded) = unsafe {
                     use crate::wide::x86::{distances, distances_by_sign};
-                    (distances(&node, &wr, reach), distances_by_sign(&node, &wr, reach))
+                    (
+                        distances::<false>(&node, &wr, reach),
+                        distances_by_sign(&node, &wr, reach),
+                        distances::<true>(&node, &wr, reach),
+                    )
                 };
                 let lanes = |(n, f): (std::arch::x86_64::__m256, std::arch::x86_64::__m256)| {
                     // SAFETY: a `__m256` is eight `f32`s.
@@ -2148,6 +2154,27 @@ mod tests {
                     (n.map(f32::to_bits), f.map(f32::to_bits))
                 };
                 assert_eq!(lanes(by_rows), lanes(by_sign), "round {round}, ray {k}: distances");
+                // The single-ray node test's form: the same values, a
+                // zero's sign aside (`+ 0.0` makes `-0.0` `+0.0`); never
+                // `NaN`, as `max`/`min` drop a slab's `NaN`.
+                let values = |d| {
+                    let (n, f) = lanes(d);
+                    let v = |b: u32| (f32::from_bits(b) + 0.0).to_bits();
+                    (n.map(v), f.map(v))
+                };
+                assert_eq!(values(by_rows), values(folded), "round {round}, ray {k}: folded distances");
+                folded_signs |= lanes(by_rows) != lanes(folded);
+                // The single-ray node tests themselves (AVX2's folded,
+                // the portable one's not): the same children, the same
+                // entry distances.
+                let (mut tp, mut tx) = ([0.0f32; WIDTH], [0.0f32; WIDTH]);
+                let mp = crate::wide::NodeTest::test(crate::wide::Portable, &node, &wr, reach, &mut tp);
+                // SAFETY: the CPU has AVX2 (checked above).
+                let single = unsafe { crate::wide::x86::Avx2::new() };
+                let mx = crate::wide::NodeTest::test(single, &node, &wr, reach, &mut tx);
+                assert_eq!(mp, mx, "round {round}, ray {k}: single-ray mask");
+                let lanes_of = |t: [f32; WIDTH]| t.map(|x| (x + 0.0).to_bits());
+                assert_eq!(lanes_of(tp), lanes_of(tx), "round {round}, ray {k}: single-ray entries");
                 (any_a, any_b) = (any_a | ma, any_b | mb);
             }
             assert_eq!(a.near.map(f32::to_bits), b.near.map(f32::to_bits), "round {round}: near");
@@ -2162,6 +2189,7 @@ mod tests {
             }
         }
         assert!(met_many && met_hi, "children met by several rays, and by rays above slot 31");
+        assert!(folded_signs, "a folded distance was a zero of the other sign");
     }
 
     /// The AVX2 eight-ray leaf tests give the portable ones' answers
