@@ -18,9 +18,50 @@ mod tidy;
 
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, ExitCode};
 
-fn main() -> Result<()> {
+/// Reports an error as one line (no backtrace, whatever `RUST_BACKTRACE`
+/// says) and exits with the failed command's own code where there is one
+/// (2 for a usage error of `prism`), else 1.
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(exit_code(&e))
+        }
+    }
+}
+
+/// The exit code for `e`: a failed command's own (1–255), else 1.
+fn exit_code(e: &anyhow::Error) -> u8 {
+    e.downcast_ref::<Failed>()
+        .and_then(|f| f.code)
+        .and_then(|c| u8::try_from(c).ok())
+        .filter(|&c| c != 0)
+        .unwrap_or(1)
+}
+
+/// A command that [`run_checked`] ran and that failed.
+#[derive(Debug)]
+pub struct Failed {
+    /// How it ended (`exit status: 1`, `signal: 9`…).
+    status: std::process::ExitStatus,
+    /// Its exit code, where it exited (not killed by a signal).
+    code: Option<i32>,
+    /// The command line, as `Debug` shows it.
+    command: String,
+}
+
+impl std::fmt::Display for Failed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "command failed ({}): {}", self.status, self.command)
+    }
+}
+
+impl std::error::Error for Failed {}
+
+fn run() -> Result<()> {
     let mut args = std::env::args().skip(1);
     let cmd = args.next();
     let rest: Vec<String> = args.collect();
@@ -76,7 +117,21 @@ pub fn run_checked(cmd: &mut Command) -> Result<()> {
     eprintln!("$ {cmd:?}");
     let status = cmd.status()?;
     if !status.success() {
-        bail!("command failed ({status}): {cmd:?}");
+        return Err(Failed { status, code: status.code(), command: format!("{cmd:?}") }.into());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{exit_code, run_checked};
+
+    #[test]
+    fn a_failed_command_passes_its_exit_code_on() {
+        let e = run_checked(std::process::Command::new("sh").args(["-c", "exit 3"])).unwrap_err();
+        assert_eq!(exit_code(&e), 3);
+        assert!(e.to_string().starts_with("command failed (exit status: 3): "), "{e}");
+        assert_eq!(exit_code(&anyhow::anyhow!("no command")), 1);
+        run_checked(std::process::Command::new("sh").args(["-c", "exit 0"])).unwrap();
+    }
 }

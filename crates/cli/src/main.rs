@@ -250,10 +250,29 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", report(&e));
             interrupt::exit_code(&e)
         }
     }
+}
+
+/// The error and its causes joined by `: ` (as `{e:#}`), leaving out a
+/// cause whose words the message before it already ends with: a library
+/// error that shows its source in its own message would otherwise say it
+/// twice (`cannot write x.json: No such file…: No such file…`).
+fn report(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !out.is_empty() && out.ends_with(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
 }
 
 fn view_command(args: ViewArgs) -> Result<()> {
@@ -334,7 +353,12 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         );
     }
     if let Some(s) = &args.stats_json {
-        overwrite::check_not_an_input(s, &loaded.inputs)?;
+        overwrite::check_output(s, &loaded.inputs, overwrite::Output::Stats)?;
+        // Made now, as the image's: a render never ends in a missing folder.
+        if let Some(dir) = s.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("--stats-json: cannot create the directory {}", dir.display()))?;
+        }
     }
     let (w, h) = loaded.settings.camera.size();
     if let Some(warning) = writable::check_space(&output, plan.uncompressed_bytes(w, h, &aovs))? {
@@ -503,4 +527,24 @@ fn default_output(scene: &Path) -> Result<PathBuf> {
     let mut name = stem.to_os_string();
     name.push(".png");
     Ok(Path::new("out").join(name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::report;
+    use anyhow::{Context, anyhow};
+
+    #[test]
+    fn a_cause_the_message_already_shows_is_said_once() {
+        let source = std::io::Error::from(std::io::ErrorKind::NotFound);
+        let words = source.to_string();
+        let e = anyhow::Error::new(prism_shade::OutputError::Io { path: "x.json".into(), source })
+            .context("--stats-json");
+        assert_eq!(format!("{e:#}"), format!("--stats-json: cannot write x.json: {words}: {words}"));
+        assert_eq!(report(&e), format!("--stats-json: cannot write x.json: {words}"));
+        // Other chains read as `{e:#}` does.
+        let e = Err::<(), _>(anyhow!("inner")).context("middle").context("outer").unwrap_err();
+        assert_eq!(report(&e), format!("{e:#}"));
+        assert_eq!(report(&e), "outer: middle: inner");
+    }
 }

@@ -5,11 +5,42 @@
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 
-/// Refuses an output path that is (or will replace) one of `inputs`, or
-/// that is a directory.
+/// Refuses an image output path that is (or will replace) one of
+/// `inputs`, or that is a directory.
 pub fn check_not_an_input(output: &Path, inputs: &[PathBuf]) -> Result<()> {
+    check_output(output, inputs, Output::Image)
+}
+
+/// What an output file holds, for the messages of [`check_output`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Output {
+    /// An image (or an AOV pass, a tile).
+    Image,
+    /// The statistics of `--stats-json`.
+    Stats,
+}
+
+impl Output {
+    fn noun(self) -> &'static str {
+        match self {
+            Self::Image => "the image",
+            Self::Stats => "the statistics",
+        }
+    }
+
+    fn name_hint(self) -> &'static str {
+        match self {
+            Self::Image => "a file name ending in .png or .exr",
+            Self::Stats => "a file name such as stats.json",
+        }
+    }
+}
+
+/// Refuses an output path of kind `what` that is (or will replace) one of
+/// `inputs`, or that is a directory.
+pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<()> {
     if output.is_dir() {
-        bail!("{}: the output is a directory; give a file name ending in .png or .exr", output.display());
+        bail!("{}: the output is a directory; give {}", output.display(), what.name_hint());
     }
     let target = match std::fs::canonicalize(output) {
         Ok(p) => Some(p),
@@ -26,8 +57,9 @@ pub fn check_not_an_input(output: &Path, inputs: &[PathBuf]) -> Result<()> {
         && inputs.contains(&t)
     {
         bail!(
-            "{}: refusing to write the image over an input of this render (the scene, a mesh, a material library or a texture)",
-            output.display()
+            "{}: refusing to write {} over an input of this render (the scene, a mesh, a material library or a texture)",
+            output.display(),
+            what.noun()
         );
     }
     Ok(())

@@ -171,6 +171,30 @@ fn an_unwritable_output_fails_before_the_scene_is_read_or_rendered() {
 }
 
 #[test]
+fn a_bad_stats_json_path_fails_before_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    for (target, words) in [
+        (".", ".: the output is a directory; give a file name such as stats.json"),
+        ("s.toml", "s.toml: refusing to write the statistics over an input of this render"),
+        ("s.toml/x.json", "--stats-json: cannot create the directory s.toml"),
+    ] {
+        let out = prism(dir.path(), &["render", "s.toml", "-o", "img.png", "--stats-json", target]);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{target}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(words), "{target}: {err}");
+        assert!(!err.contains("rendering"), "{target}: {err}");
+        // No image either: the render never started.
+        assert_eq!(listing(dir.path()), ["s.toml"], "{target}");
+    }
+    // A missing directory is made, as the image's is.
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "img.png", "--stats-json", "a/b/s.json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json = fs::read_to_string(dir.path().join("a/b/s.json")).unwrap();
+    assert!(json.contains("\"rays\""), "{json}");
+}
+
+#[test]
 fn eight_bit_colours_warn_and_samples_aliases_work() {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("s.toml"), GOOD.replace("[0.8, 0.1, 0.1]", "[255, 0, 0]")).unwrap();

@@ -412,3 +412,18 @@ fn reload_in_a_real_window_keeps_the_last_good_scene() {
     session.quit();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_display_no_server_answers_at_is_named() {
+    // A display number no test starts a server on.
+    let out = Command::new(BIN)
+        .args(["view", "scenes/seed.toml"])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env("DISPLAY", ":7391")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot open a window: no X server answers at DISPLAY=:7391"), "{err}");
+    assert!(!err.contains("set DISPLAY") && !err.contains("panicked"), "{err}");
+}

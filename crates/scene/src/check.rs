@@ -72,6 +72,12 @@ impl<'a> Ctx<'a> {
         let f = v as f32;
         if f.is_finite() {
             Ok(f)
+        } else if v.is_finite() {
+            // Finite, but past single precision, in which prism computes.
+            Err(self.invalid(
+                &n.span(),
+                format!("{what} must lie within ±{:e} (single precision), got {v:e}", f32::MAX),
+            ))
         } else {
             Err(self.invalid(&n.span(), format!("{what} must be a finite number, got {v}")))
         }

@@ -20,6 +20,7 @@ use ::exr::prelude::{
     Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
 };
 use std::collections::BTreeMap;
+use std::io::{Read, Seek};
 use std::path::Path;
 
 /// The values of one channel, one per pixel of the data window, row by
@@ -292,6 +293,9 @@ pub fn write_layered_exr(path: &Path, image: &LayeredExr) -> Result<(), OutputEr
     })
 }
 
+/// The first four bytes of every OpenEXR file.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
 /// Reads a single-part OpenEXR file written by [`write_layered_exr`] (or
 /// any single-part scan-line or tiled file whose display window starts at
 /// the origin). Channels are grouped into layers by the part of their name
@@ -300,13 +304,27 @@ pub fn write_layered_exr(path: &Path, image: &LayeredExr) -> Result<(), OutputEr
 /// other than text, `int` and `float` ones are left out.
 ///
 /// # Errors
-/// [`OutputError::Io`] if the file cannot be read, [`OutputError::Image`]
+/// [`OutputError::Read`] if the file cannot be read, [`OutputError::Image`]
 /// if it is not a readable OpenEXR file, has several parts, a display
 /// window away from the origin, or a data window outside it.
 pub fn read_layered_exr(path: &Path) -> Result<LayeredExr, OutputError> {
     let bad = |reason: String| OutputError::Image { path: path.to_path_buf(), reason };
-    let file =
-        std::fs::File::open(path).map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?;
+    let read_error = |source| OutputError::Read { path: path.to_path_buf(), source };
+    let mut file = std::fs::File::open(path).map_err(read_error)?;
+    // The magic number first, so that another kind of file (a PNG given
+    // to `prism merge`) is named as such, not by the decoder's words.
+    let mut magic = [0u8; 4];
+    match file.read_exact(&mut magic) {
+        Ok(()) if magic == EXR_MAGIC => {}
+        Ok(()) => {
+            return Err(bad("not an OpenEXR file (it does not start with OpenEXR's magic number)".into()));
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            return Err(bad("not an OpenEXR file (shorter than OpenEXR's 4-byte magic number)".into()));
+        }
+        Err(e) => return Err(read_error(e)),
+    }
+    file.seek(std::io::SeekFrom::Start(0)).map_err(read_error)?;
     let exr = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -315,7 +333,7 @@ pub fn read_layered_exr(path: &Path) -> Result<LayeredExr, OutputError> {
         .all_attributes()
         .from_unbuffered(file)
         .map_err(|e| match e {
-            ::exr::error::Error::Io(source) => OutputError::Io { path: path.to_path_buf(), source },
+            ::exr::error::Error::Io(source) => OutputError::Read { path: path.to_path_buf(), source },
             other => bad(other.to_string()),
         })?;
     let [part] = exr.layer_data.as_slice() else {
@@ -484,7 +502,17 @@ mod tests {
         check(none, "at least one channel");
         // Not an EXR file.
         std::fs::write(&p, b"not an exr").unwrap();
+        let e = read_layered_exr(&p).unwrap_err();
+        assert!(matches!(e, OutputError::Image { .. }), "{e}");
+        assert!(
+            e.to_string().ends_with(": not an OpenEXR file (it does not start with OpenEXR's magic number)"),
+            "{e}"
+        );
+        std::fs::write(&p, b"v/").unwrap();
+        assert!(read_layered_exr(&p).unwrap_err().to_string().contains("shorter than"));
+        // The magic number alone passes the check and fails in the decoder.
+        std::fs::write(&p, EXR_MAGIC).unwrap();
         assert!(matches!(read_layered_exr(&p), Err(OutputError::Image { .. })));
-        assert!(matches!(read_layered_exr(&dir.path().join("missing.exr")), Err(OutputError::Io { .. })));
+        assert!(matches!(read_layered_exr(&dir.path().join("missing.exr")), Err(OutputError::Read { .. })));
     }
 }

@@ -123,7 +123,7 @@ pub struct RenderExr {
 /// those channel names; the data window must be the whole image).
 ///
 /// # Errors
-/// [`OutputError::Io`]/[`OutputError::Image`] if it cannot be read,
+/// [`OutputError::Read`]/[`OutputError::Image`] if it cannot be read,
 /// [`OutputError::Invalid`] if it has no `R`, `G`, `B`, a channel of the
 /// wrong type, or a partial data window.
 pub fn read_render_exr(path: &Path) -> Result<RenderExr, OutputError> {

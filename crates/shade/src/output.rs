@@ -33,6 +33,15 @@ pub enum OutputError {
         #[source]
         source: std::io::Error,
     },
+    /// A file to read could not be opened or read (missing, no permission…).
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
     /// The image could not be encoded or decoded.
     #[error("image error in {}: {reason}", path.display())]
     Image {
@@ -304,14 +313,14 @@ pub fn write_aov_exr(path: &Path, pass: &AovImage) -> Result<(), OutputError> {
 /// [`write_aov_exr`]. A one-channel pass reads back from `R`.
 ///
 /// # Errors
-/// [`OutputError::Io`] if the file cannot be opened,
+/// [`OutputError::Read`] if the file cannot be opened,
 /// [`OutputError::Image`] if it cannot be decoded.
 pub fn read_exr_rgb(path: &Path) -> Result<(u32, u32, Vec<f32>), OutputError> {
     let reader = image::ImageReader::open(path)
-        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?;
+        .map_err(|source| OutputError::Read { path: path.to_path_buf(), source })?;
     let image = reader
         .with_guessed_format()
-        .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })?
+        .map_err(|source| OutputError::Read { path: path.to_path_buf(), source })?
         .decode()
         .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })?
         .into_rgb32f();

@@ -502,10 +502,9 @@ fn failed_writes_are_typed_and_leave_nothing_behind() {
     prism_shade::write_aov_exr(&target, &pass).expect("replaced");
     let (w, h, rgb) = prism_shade::read_exr_rgb(&target).expect("reads");
     assert_eq!((w, h, rgb), (2, 1, vec![1.0, 1.0, 1.0, f32::INFINITY, f32::INFINITY, f32::INFINITY]));
-    assert!(matches!(
-        prism_shade::read_exr_rgb(&dir.join("nope.exr")),
-        Err(prism_shade::OutputError::Io { .. })
-    ));
+    let err = prism_shade::read_exr_rgb(&dir.join("nope.exr")).expect_err("missing");
+    assert!(matches!(err, prism_shade::OutputError::Read { .. }), "{err}");
+    assert!(err.to_string().starts_with("cannot read "), "{err}");
     assert!(prism_shade::aov_path(std::path::Path::new(".."), Aov::Depth, "exr").is_err());
     assert_eq!(
         prism_shade::aov_path(std::path::Path::new("renders/out.png"), Aov::GeoNormal, "exr").expect("path"),

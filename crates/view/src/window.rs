@@ -76,7 +76,17 @@ fn map_key(k: minifb::Key) -> Option<Key> {
 
 fn window_error(e: &minifb::Error) -> ViewError {
     let msg = e.to_string();
-    if msg.contains("XOpenDisplay") { ViewError::NoDisplay } else { ViewError::Window(msg) }
+    if !msg.contains("XOpenDisplay") {
+        return ViewError::Window(msg);
+    }
+    // DISPLAY is set (`check_display` ran first) but names no X server
+    // that answers: saying "set DISPLAY" would mislead.
+    match std::env::var("DISPLAY") {
+        Ok(d) if !d.is_empty() => ViewError::Window(format!(
+            "no X server answers at DISPLAY={d}; start one there, point DISPLAY at one, or use `prism render`"
+        )),
+        _ => ViewError::NoDisplay,
+    }
 }
 
 pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup) -> Result<(), ViewError> {

@@ -191,11 +191,20 @@ fn missing_required_keys_are_named() {
 fn nan_and_infinity_are_refused() {
     refused(&[
         ("[[objects]]\ntype = \"sphere\"\nradius = nan\n", "must be a finite number", Some("nan")),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1e39\n",
+            "sphere radius must lie within ±3.4028235e38 (single precision), got 1e39",
+            Some("1e39"),
+        ),
         ("[[objects]]\ntype = \"sphere\"\nradius = 1\ncenter = [0, inf, 0]\n", "finite", Some("inf")),
     ]);
-    // Too large for f32 is infinite too.
+    // Too large for f32 is refused too, naming the range.
     refused(&[
-        ("[[objects]]\ntype = \"sphere\"\nradius = 1e300\n", "finite", None),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1e300\n",
+            "within ±3.4028235e38 (single precision), got 1e300",
+            None,
+        ),
         ("[[lights]]\nposition = [0, 0, 0]\nintensity = -inf\n", "finite", None),
     ]);
 }
