@@ -87,7 +87,12 @@ pub fn load_obj(
     let mtl_problem: std::cell::RefCell<Option<String>> = std::cell::RefCell::new(None);
     let loader = |p: &Path| {
         let path = dir.join(p);
-        let bytes = read_mtl(&path).ok_or(tobj::LoadError::OpenFileFailed)?;
+        let Some(bytes) = read_mtl(&path) else {
+            // tobj's own words would be "open file failed".
+            let why = if path.exists() { "not a readable file" } else { "no such file" };
+            *mtl_problem.borrow_mut() = Some(format!("{}: {why}", path.display()));
+            return Err(tobj::LoadError::OpenFileFailed);
+        };
         let (text, decode_warning) = match wild::decode_text(&bytes) {
             Ok(t) => t,
             Err(m) => {
