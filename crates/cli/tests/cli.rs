@@ -107,7 +107,7 @@ fn inputs_are_never_overwritten() {
 fn bad_options_and_files_fail_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("s.toml"), GOOD).unwrap();
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["render", "s.toml", "--width", "0"], "--width: image width must be at least 1"),
         (&["render", "s.toml", "--spp", "0"], "--spp:"),
         (&["render", "s.toml", "--width", "100000"], "--max-side"),
@@ -116,6 +116,9 @@ fn bad_options_and_files_fail_cleanly() {
         (&["render", "."], "directory"),
         (&["render", "s.toml", "--max-depth", "1000"], "--max-depth:"),
         (&["render", "s.toml", "--max-spp", "0"], "--max-spp <N>': 0 is not in 1.."),
+        // A negative value is the flag's, refused naming it.
+        (&["render", "s.toml", "--spp", "-1"], "invalid value '-1' for '--spp <N>'"),
+        (&["render", "s.toml", "--fov", "-5"], "--fov: the vertical field of view"),
     ];
     for (args, words) in cases {
         let out = prism(dir.path(), args);

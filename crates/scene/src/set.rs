@@ -225,10 +225,14 @@ fn join(here: &str, more: &str) -> String {
 fn index(key: &str, len: usize, here: &str, set: &str) -> Result<usize, SceneError> {
     match key.parse::<usize>() {
         Ok(n) if n < len => Ok(n),
-        Ok(n) => Err(flag_error(
-            set,
-            format!("`{here}` has {len} entries (0 to {}), there is no entry {n}", len.saturating_sub(1)),
-        )),
+        Ok(n) => {
+            let has = match len {
+                0 => "has no entries".to_owned(),
+                1 => "has 1 entry (0)".to_owned(),
+                _ => format!("has {len} entries (0 to {})", len - 1),
+            };
+            Err(flag_error(set, format!("`{here}` {has}, there is no entry {n}")))
+        }
         Err(_) => Err(flag_error(set, format!("`{here}` is a list; expected an index from 0, got `{key}`"))),
     }
 }
@@ -258,7 +262,12 @@ fn locate(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, S
         Some(Item::Table(sub)) if keys.len() > 1 => locate(sub, &keys[1..], set, &at),
         Some(Item::Table(_)) => Err(is_a_table(set, &at)),
         Some(Item::ArrayOfTables(a)) => {
-            let Some(k) = keys.get(1) else { return Err(is_a_table(set, &at)) };
+            let Some(k) = keys.get(1) else {
+                return Err(flag_error(
+                    set,
+                    format!("`{at}` is a list of tables; set one entry's key (such as {at}.0.KEY=VALUE)"),
+                ));
+            };
             let n = index(k, a.len(), &at, set)?;
             let at = format!("{at}.{n}");
             match (a.get(n), keys.len() > 2) {

@@ -77,6 +77,14 @@ fn problems_in_a_set_name_the_flag() {
             "--set: objects.9.radius=1: `objects` has 2 entries (0 to 1), there is no entry 9",
         ),
         (&["objects.x.radius=1"], "`objects` is a list; expected an index from 0, got `x`"),
+        (
+            &["lights.3.intensity=1"],
+            "--set: lights.3.intensity=1: `lights` has 1 entry (0), there is no entry 3",
+        ),
+        (
+            &["objects=5"],
+            "--set: objects=5: `objects` is a list of tables; set one entry's key (such as objects.0.KEY=VALUE)",
+        ),
         (&["render=3"], "`render` is a table; set its keys one by one"),
         (&["render.spp.x=1"], "`render.spp` is a number, not a table"),
         (&["objects.1.radios=1"], "unknown key `radios` in a sphere; did you mean `radius`?"),
