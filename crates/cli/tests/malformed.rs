@@ -264,8 +264,13 @@ fn cases() -> Vec<Case> {
     let png = png_bytes();
     let s = textured("half.png");
     v.push(
-        Case::new("truncated png", s.clone(), at(&s, "\"half.png\""), "cannot use this texture")
-            .file("half.png", png[..png.len() / 2].to_vec()),
+        Case::new(
+            "truncated png",
+            s.clone(),
+            at(&s, "\"half.png\""),
+            "cannot use this texture: the PNG data is cut short",
+        )
+        .file("half.png", png[..png.len() / 2].to_vec()),
     );
     let s = textured("notes.txt");
     v.push(

@@ -251,12 +251,22 @@ impl ImageTexture {
         limits.max_image_height = Some(MAX_TEXTURE_EDGE);
         limits.max_alloc = Some(1024 * 1024 * 1024);
         reader.limits(limits);
-        if reader.format().is_none() {
+        let Some(format) = reader.format() else {
             return Err(err(
                 "not a recognised image format (PNG, JPEG, BMP, EXR or Radiance HDR expected)".into()
             ));
-        }
-        let decoded = reader.decode().map_err(|e| err(e.to_string()))?;
+        };
+        let decoded = reader.decode().map_err(|e| {
+            let name = format.extensions_str().first().map_or("image".to_owned(), |x| x.to_uppercase());
+            err(match &e {
+                // Plain words first; the decoder's own after them.
+                image::ImageError::Decoding(_) => format!("the {name} data is corrupt or cut short ({e})"),
+                image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+                    format!("the {name} data is cut short: the file ends before the image does")
+                }
+                _ => e.to_string(),
+            })
+        })?;
         let (width, height) = (decoded.width(), decoded.height());
         if u64::from(width) * u64::from(height) > MAX_TEXTURE_TEXELS {
             return Err(err(format!(

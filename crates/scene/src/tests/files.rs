@@ -183,6 +183,7 @@ fn corrupt_textures_are_reported() {
     let text = format!("{BASE}{extra}");
     let err = parse_scene_str(&text, dir.path(), Path::new("test.toml")).unwrap_err().to_string();
     assert!(err.contains("bad.png") && err.contains("cannot use this texture"), "{err}");
+    assert!(err.contains("cannot use this texture: the PNG data is corrupt or cut short ("), "{err}");
     assert!(err.contains(&format!("used at test.toml:{}:", line_of(extra, "bad.png"))), "{err}");
 }
 
