@@ -36,7 +36,7 @@ fn main() -> ExitCode {
 /// The exit code for `e`: a failed command's own (1–255), else 1.
 fn exit_code(e: &anyhow::Error) -> u8 {
     e.downcast_ref::<Failed>()
-        .and_then(|f| f.code)
+        .and_then(|f| f.status.code())
         .and_then(|c| u8::try_from(c).ok())
         .filter(|&c| c != 0)
         .unwrap_or(1)
@@ -47,8 +47,6 @@ fn exit_code(e: &anyhow::Error) -> u8 {
 pub struct Failed {
     /// How it ended (`exit status: 1`, `signal: 9`…).
     status: std::process::ExitStatus,
-    /// Its exit code, where it exited (not killed by a signal).
-    code: Option<i32>,
     /// The command line, as `Debug` shows it.
     command: String,
 }
@@ -117,7 +115,7 @@ pub fn run_checked(cmd: &mut Command) -> Result<()> {
     eprintln!("$ {cmd:?}");
     let status = cmd.status()?;
     if !status.success() {
-        return Err(Failed { status, code: status.code(), command: format!("{cmd:?}") }.into());
+        return Err(Failed { status, command: format!("{cmd:?}") }.into());
     }
     Ok(())
 }

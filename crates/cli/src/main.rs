@@ -89,22 +89,19 @@ struct Cli {
     command: Command,
 }
 
+/// The subcommands that take numeric flags read a negative number as the
+/// flag's value (`allow_negative_numbers`), so that `--spp -1` is refused
+/// naming `--spp`, not as an unknown argument `-1`.
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file to a PNG (8-bit sRGB) or EXR (linear float) image.
-    // A negative number is a flag's value (`--spp -1` is then refused
-    // naming `--spp`), not an unknown flag.
     #[command(allow_negative_numbers = true)]
     Render(RenderArgs),
     /// Describe a scene: objects, triangles, materials, lights, bounds.
-    // A negative number is a flag's value (`--spp -1` is then refused
-    // naming `--spp`), not an unknown flag.
     #[command(allow_negative_numbers = true)]
     Info(InfoArgs),
     /// Open a window that renders a scene progressively: f/c fog on/off, s save PNG,
     /// r reload, arrows or drag orbit, w/a/d/x move, Home reset, Esc/q quit.
-    // A negative number is a flag's value (`--spp -1` is then refused
-    // naming `--spp`), not an unknown flag.
     #[command(allow_negative_numbers = true)]
     View(ViewArgs),
     /// Print a shell completion script: `prism completions bash > ~/.local/share/bash-completion/completions/prism`.
@@ -115,8 +112,6 @@ enum Command {
     /// Assemble tiles (`prism render --tile I/N -o TILE.exr`) into the full image.
     Merge(merge::MergeArgs),
     /// Render on a cluster: tiles or turntable frames as a job array, merged (see docs/farm.md).
-    // A negative number is a flag's value (`--spp -1` is then refused
-    // naming `--spp`), not an unknown flag.
     #[command(allow_negative_numbers = true)]
     Farm(farm::FarmArgs),
 }
