@@ -51,9 +51,77 @@ impl SceneFile {
                 None => Location::file(file_name),
             };
             let entry = e.span().and_then(|s| crate::suggest::entry_at(text, s.start, e.message()));
-            SceneError::Syntax { location, message: syntax_message(e.message(), entry) }
+            let mut message = syntax_message(e.message(), entry);
+            if let Some(span) = e.span() {
+                message.push_str(&unclosed_note(text, span.start, &message));
+            }
+            SceneError::Syntax { location, message }
         })
     }
+}
+
+/// For a message about an unfinished array or inline table (toml reports
+/// it where it gave up, often the next line), where that array or table
+/// was opened, if on an earlier line: `; the array opened at line 2,
+/// column 12 is not closed`. Otherwise nothing.
+fn unclosed_note(text: &str, offset: usize, message: &str) -> String {
+    let what = if message.starts_with("invalid array") {
+        "array"
+    } else if message.starts_with("invalid inline table") {
+        "inline table"
+    } else {
+        return String::new();
+    };
+    let Some(open) = innermost_open(text, offset) else { return String::new() };
+    let (line, column) = crate::error::line_col(text, open);
+    if line >= crate::error::line_col(text, offset).0 {
+        return String::new();
+    }
+    format!("; the {what} opened at line {line}, column {column} is not closed")
+}
+
+/// The byte offset of the innermost `[` or `{` still open at byte
+/// `offset` of TOML `text`, brackets inside strings and comments left
+/// out. Only ASCII bytes are compared, so a multi-byte character never
+/// matches.
+fn innermost_open(text: &str, offset: usize) -> Option<usize> {
+    let b = &text.as_bytes()[..offset.min(text.len())];
+    let mut open = Vec::new();
+    let mut i = 0;
+    // The end of a string that starts at `i` with quote `q`: after the
+    // closing quote, or at the line's end (or `b`'s) if it is not closed.
+    let string_end = |i: usize, q: u8| -> usize {
+        let triple = b.get(i..i + 3) == Some(&[q, q, q][..]);
+        let mut j = if triple { i + 3 } else { i + 1 };
+        while j < b.len() {
+            match b[j] {
+                b'\\' if q == b'"' => j += 2,
+                c if c == q && (!triple || b.get(j..j + 3) == Some(&[q, q, q][..])) => {
+                    return j + if triple { 3 } else { 1 };
+                }
+                b'\n' if !triple => return j,
+                _ => j += 1,
+            }
+        }
+        b.len()
+    };
+    while i < b.len() {
+        match b[i] {
+            b'#' => i = b[i..].iter().position(|&c| c == b'\n').map_or(b.len(), |n| i + n),
+            q @ (b'"' | b'\'') => i = string_end(i, q),
+            c => {
+                match c {
+                    b'[' | b'{' => open.push(i),
+                    b']' | b'}' => {
+                        open.pop();
+                    }
+                    _ => {}
+                }
+                i += 1;
+            }
+        }
+    }
+    open.pop()
 }
 
 /// toml's messages, made to say what was expected in scene terms
@@ -64,6 +132,10 @@ fn syntax_message(m: &str, entry: Option<crate::suggest::Entry>) -> String {
         return "missing [camera] table (position and look_at are required)".into();
     }
     let m = m.replace("`$__toml_private_datetime`", "a date").replace("a spanned value", "a value");
+    // toml puts what it expected on a line of its own; one line reads
+    // better after `file:line:column:`.
+    let m = m.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(": ");
+    let m = m.replace("invalid array: expected `]`", "invalid array: expected `,` or `]`");
     crate::suggest::friendly(&m, entry)
 }
 

@@ -375,3 +375,20 @@ fn unknown_aov_names_are_refused_where_they_are() {
     let text = BASE.replace("spp = 2", "spp = 2\naov_preview = 1");
     assert!(parse(&text).unwrap_err().to_string().starts_with("test.toml:6:"));
 }
+
+#[test]
+fn an_unclosed_array_or_table_names_where_it_opened() {
+    // toml gives up where the next key starts; the message adds where the
+    // array began. Brackets inside strings and comments are not counted.
+    let extra = "[[objects]]\ntype = \"sphere\"\ncenter = [0, \"]\", # ]\n  1\nradius = 1\n";
+    let err = expect_err(extra, "invalid array: expected `,` or `]`; the array opened at line ");
+    assert_at(&err, extra, "radius");
+    let line = line_of(extra, "center");
+    assert!(err.ends_with(&format!("opened at line {line}, column 10 is not closed")), "{err}");
+    let extra = "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = { translate = [0, 1, 0]\n";
+    let err = expect_err(extra, "invalid inline table");
+    assert!(!err.contains('\n'), "one line: {err}");
+    // A missing comma is on the array's own line: nothing to add.
+    let err = expect_err("[[objects]]\ntype = \"sphere\"\ncenter = [0, 1 2]\n", "expected `,` or `]`");
+    assert!(!err.contains("opened at"), "{err}");
+}
