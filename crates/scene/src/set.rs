@@ -145,6 +145,12 @@ impl Edited {
             for e in &mut self.edits {
                 if e.line >= edit.line {
                     e.line += edit.lines;
+                } else if edit.line < e.line + e.lines {
+                    // Inserted inside an earlier set's lines (a key added
+                    // under the table an earlier set created): that set's
+                    // lines now span the new ones too (the later set is
+                    // matched first, `remap`).
+                    e.lines += edit.lines;
                 }
             }
         }

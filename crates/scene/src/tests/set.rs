@@ -96,6 +96,27 @@ fn problems_in_a_set_name_the_flag() {
 }
 
 #[test]
+fn sets_that_add_keys_to_a_new_table_are_each_named() {
+    // The first set adds `[fog]` at the end; the second goes under that
+    // header, between the first one's header and its value.
+    let text = scene();
+    for (sets, named) in [
+        (&["fog.density=-1", "fog.mode=\"exponential\""][..], "fog.density=-1"),
+        (&["fog.mode=\"exponential\"", "fog.density=-1"], "fog.density=-1"),
+        (&["fog.mode=\"mist\"", "fog.density=0.1"], "fog.mode=\"mist\""),
+        (&["fog.density=0.1", "fog.mode=\"mist\""], "fog.mode=\"mist\""),
+    ] {
+        let err = set_err(&text, sets);
+        assert!(err.starts_with(&format!("--set: {named}: ")), "{sets:?}: {err}");
+    }
+    // Three keys added to one new table; an error elsewhere keeps its line.
+    let bad = text.replace("radius = 1", "radius = -1");
+    let plain = with_sets(&bad, &[]).unwrap_err().to_string();
+    let sets = ["fog.mode=\"exponential\"", "fog.density=0.1", "fog.color=[1, 1, 1]"];
+    assert_eq!(set_err(&bad, &sets), plain);
+}
+
+#[test]
 fn other_errors_keep_the_files_own_lines() {
     let bad = scene().replace("radius = 1", "radius = -1");
     let plain = with_sets(&bad, &[]).unwrap_err().to_string();
