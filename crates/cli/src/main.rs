@@ -314,11 +314,14 @@ fn info_command(args: &InfoArgs) -> Result<()> {
 }
 
 fn render_command(args: &RenderArgs) -> Result<()> {
-    // An explicit output name is checked before the (possibly long) load.
-    if let Some(o) = &args.output {
-        OutputFormat::from_path(o)?;
-        writable::check_writable(o)?;
-    }
+    // The output (given, or `out/<stem>.png`) is checked before the
+    // (possibly long) load.
+    let output = match &args.output {
+        Some(o) => o.clone(),
+        None => default_output(&args.scene)?,
+    };
+    let format = OutputFormat::from_path(&output)?;
+    writable::check_writable(&output)?;
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
     let opts = LoadOptions {
@@ -332,14 +335,6 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let load_seconds = load_start.elapsed().as_secs_f64();
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
-    }
-    let output = match &args.output {
-        Some(o) => o.clone(),
-        None => default_output(&args.scene)?,
-    };
-    let format = OutputFormat::from_path(&output)?;
-    if args.output.is_none() {
-        writable::check_writable(&output)?;
     }
     overwrite::check_not_an_input(&output, &loaded.inputs)?;
     let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());

@@ -172,6 +172,13 @@ fn an_unwritable_output_fails_before_the_scene_is_read_or_rendered() {
         assert!(!err.contains("radius") && !err.contains("rendering"), "{target}: {err}");
     }
     assert!(!ro.join("sub").exists());
+    // The default output, `out/s.png`, with a file named `out` in the way.
+    fs::write(dir.path().join("out"), b"").unwrap();
+    let out = prism(dir.path(), &["render", "s.toml"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("error: out/s.png: ") && err.contains("out is a file, not a directory"), "{err}");
+    assert!(!err.contains("radius"), "{err}");
 }
 
 #[test]
