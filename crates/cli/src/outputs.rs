@@ -117,7 +117,7 @@ impl ImageArgs {
     /// (returned as text) about flags that do not apply.
     ///
     /// # Errors
-    /// A non-finite `--exposure`.
+    /// An `--exposure` that is not a number in [-64, 64].
     pub fn plan(
         &self,
         output: PathBuf,

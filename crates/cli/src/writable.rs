@@ -66,7 +66,7 @@ enum Space {
     Enough,
     /// Less free than the uncompressed size: the files may still fit.
     Tight,
-    /// Full: fewer than [`FULL_BELOW`] bytes (or fewer than `needed`) free.
+    /// Full: fewer bytes free than the smaller of [`FULL_BELOW`] and `needed`.
     Full,
 }
 

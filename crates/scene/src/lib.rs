@@ -283,10 +283,10 @@ pub fn is_obj_path(path: &Path) -> bool {
 /// looked at without writing a scene file (`docs/scene-format.md`, "An
 /// OBJ file as a scene"):
 ///
-/// - the mesh, with its MTL materials (a neutral grey, diffuse 0.8 with a
-///   little specular, where a model has none or the material library
-///   cannot be used, with a warning then), vertex normals as `normals =
-///   "auto"`;
+/// - the mesh, with its MTL materials (where a model has none, or the
+///   material library cannot be read, a neutral grey: colour 0.8, diffuse
+///   0.9, specular 0.3; a library that cannot be read is also warned
+///   about), vertex normals as `normals = "auto"`;
 /// - a camera that frames the mesh's bounding sphere: with `c` the centre
 ///   of the bounding box and `r = |max − min| / 2`, the eye at
 ///   `c + e · r / sin(θ/2)` looking at `c`, where θ is the narrower of the

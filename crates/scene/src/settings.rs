@@ -49,8 +49,7 @@ pub(crate) struct Settings {
 }
 
 /// The image size for a scene of `scene_w × scene_h` pixels when the
-/// width and/or height are given (on the command line, or as a window's
-/// size): both given replace both; one alone sets that side and scales the
+/// width and/or height are given (on the command line): both given replace both; one alone sets that side and scales the
 /// other to keep the scene's aspect ratio, rounded to the nearest pixel
 /// (halves up) and at least 1 (at most `u32::MAX`); neither keeps the
 /// scene's size. Where the scene's side to scale from is 0 the aspect
