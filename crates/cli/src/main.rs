@@ -315,13 +315,13 @@ fn info_command(args: &InfoArgs) -> Result<()> {
 
 fn render_command(args: &RenderArgs) -> Result<()> {
     // The output (given, or `out/<stem>.png`) is checked before the
-    // (possibly long) load.
-    let output = match &args.output {
-        Some(o) => o.clone(),
-        None => default_output(&args.scene)?,
-    };
-    let format = OutputFormat::from_path(&output)?;
-    writable::check_writable(&output)?;
+    // (possibly long) load. A scene path with no name to give the image
+    // (`.`) is left to the load, which says what is wrong with it.
+    let early = args.output.clone().or_else(|| default_output(&args.scene).ok());
+    if let Some(o) = &early {
+        OutputFormat::from_path(o)?;
+        writable::check_writable(o)?;
+    }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
     let opts = LoadOptions {
@@ -336,6 +336,11 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
+    let output = match early {
+        Some(o) => o,
+        None => default_output(&args.scene)?,
+    };
+    let format = OutputFormat::from_path(&output)?;
     overwrite::check_not_an_input(&output, &loaded.inputs)?;
     let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());
     let previews = args.aov_preview || loaded.aov_preview;
