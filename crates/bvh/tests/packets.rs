@@ -26,7 +26,7 @@ fn compare(accel: &Accel, rays: &[Ray]) -> Result<usize, String> {
     let mut n = 0;
     for (k, ray) in rays.iter().enumerate() {
         let single = accel.closest_hit(ray);
-        if !same(&hits[k], &single) {
+        if !same(accel, ray, &hits[k], &single) {
             return Err(format!("ray {k}: packet {:?}\nsingle {single:?}\nray {ray:?}", hits[k]));
         }
         // The records, packed and single, resolve to the single hit (up
@@ -38,7 +38,7 @@ fn compare(accel: &Accel, rays: &[Ray]) -> Result<usize, String> {
                     && r.triangle().unwrap_or(SceneHit::NO_TRIANGLE) == h.triangle
                     && r.t().to_bits() == h.hit.t.to_bits()
             });
-            if !same(&resolved, &single) || !names || r.is_some() != resolved.is_some() {
+            if !same(accel, ray, &resolved, &single) || !names || r.is_some() != resolved.is_some() {
                 return Err(format!("ray {k}: {what} record {r:?}\nsingle {single:?}\nray {ray:?}"));
             }
         }
@@ -54,13 +54,17 @@ fn compare(accel: &Accel, rays: &[Ray]) -> Result<usize, String> {
 }
 
 /// The same hit: equal in every field, or a tie (another primitive at the
-/// very same `t`, which the two walks may visit in another order).
-fn same(a: &Option<SceneHit>, b: &Option<SceneHit>) -> bool {
+/// very same `t`, which the two walks may visit in another order), where
+/// brute force crosses `a`'s primitive at that `t` indeed (so a hit
+/// reported under a wrong object or triangle does not pass as a tie).
+fn same(accel: &Accel, ray: &Ray, a: &Option<SceneHit>, b: &Option<SceneHit>) -> bool {
     match (a, b) {
         (None, None) => true,
         (Some(a), Some(b)) => {
             (a.object, a.triangle) == (b.object, b.triangle) && a == b
-                || (a.object, a.triangle) != (b.object, b.triangle) && a.hit.t.to_bits() == b.hit.t.to_bits()
+                || (a.object, a.triangle) != (b.object, b.triangle)
+                    && a.hit.t.to_bits() == b.hit.t.to_bits()
+                    && common::crosses_at(accel, ray, a)
         }
         _ => false,
     }
@@ -258,7 +262,7 @@ fn slices_are_traced_in_chunks() {
     let mut out = vec![None; 10];
     accel.closest_hit_packet(&rays, &mut out);
     for (o, r) in out.iter().zip(&rays) {
-        assert!(same(o, &accel.closest_hit(r)));
+        assert!(same(&accel, r, o, &accel.closest_hit(r)));
     }
     let mut occ = [true; 2];
     accel.occluded_packet(&[], &mut occ);

@@ -135,7 +135,7 @@ fn close(a: f32, b: f32) -> bool {
 
 /// Whether brute force finds a crossing of `h`'s object and triangle at
 /// exactly `h`'s `t`.
-fn crosses_at(accel: &Accel, ray: &Ray, h: &SceneHit) -> bool {
+pub fn crosses_at(accel: &Accel, ray: &Ray, h: &SceneHit) -> bool {
     let mut found = false;
     accel.for_each_hit_brute_force(ray, |c| {
         found = (c.object, c.triangle, c.hit.t.to_bits()) == (h.object, h.triangle, h.hit.t.to_bits());
