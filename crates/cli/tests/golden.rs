@@ -240,10 +240,11 @@ fn every_golden_image_has_a_scene() {
     for e in entries {
         count += 1;
         let p = e.expect("entry").path();
+        assert!(p.extension().is_some_and(|x| x == "png"), "{} is not a golden PNG; delete it", p.display());
         let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
         assert!(names.contains(&stem), "{} has no scene in scenes/; delete it", p.display());
     }
-    assert!(count >= names.len(), "{count} golden images for {} scenes", names.len());
+    assert_eq!(count, names.len(), "one golden image per scene");
 }
 
 #[test]
@@ -269,6 +270,9 @@ fn the_metric_tolerates_a_few_pixels_but_not_a_change() {
     assert!(!compare(&a, &c, 40).passes());
     // One level everywhere (rounding on another machine) fails on the mean,
     // one level on a few pixels passes.
+    let c: Vec<u8> = a.iter().map(|x| x + 1).collect();
+    let d = compare(&a, &c, 40);
+    assert!(!d.passes() && d.mean > MAX_MEAN && d.p995 <= MAX_P995, "mean {} p995 {}", d.mean, d.p995);
     let mut c = a.clone();
     for px in (0..1000).step_by(50) {
         c[3 * px] += 1;
@@ -283,7 +287,11 @@ fn the_metric_catches_a_turned_or_mirrored_texture_and_a_smaller_cone() {
     let reference = render_text(&text, "textures.toml");
     let planet = "transform = [{ rotate_y = 180 }, { translate = [0, 1.3, 0] }]";
     let cone = "radius = 0.5\nheight = 1.1";
-    assert!(text.contains(planet) && text.contains(cone), "the scene changed; update this test");
+    let cone_at = "transform = [{ translate = [1.9, 0, 1.8] }]";
+    assert!(
+        text.contains(planet) && text.contains(cone) && text.contains(cone_at),
+        "the scene changed; update this test"
+    );
     for (what, from, to) in [
         ("sphere texture turned 180°", planet, "transform = [{ translate = [0, 1.3, 0] }]"),
         (
@@ -292,6 +300,8 @@ fn the_metric_catches_a_turned_or_mirrored_texture_and_a_smaller_cone() {
             "transform = [{ scale = [-1, 1, 1] }, { rotate_y = 180 }, { translate = [0, 1.3, 0] }]",
         ),
         ("cone 30% smaller", cone, "radius = 0.35\nheight = 0.77"),
+        // A tenth of its radius.
+        ("cone moved 0.05 along +X", cone_at, "transform = [{ translate = [1.95, 0, 1.8] }]"),
     ] {
         let changed = render_text(&text.replace(from, to), "textures.toml");
         let d = compare(&reference, &changed, WIDTH as usize);
