@@ -62,6 +62,13 @@ mod tests {
         assert!(text.starts_with(env!("CARGO_PKG_VERSION")), "{text}");
         assert!(text.contains(&format!("commit: {COMMIT}")), "{text}");
         assert!(COMMIT == "unknown" || (COMMIT.len() == 12 && COMMIT.bytes().all(|b| b.is_ascii_hexdigit())));
-        assert!(text.contains(&enabled_simd()), "{text}");
+        // The third line names known paths only (which ones this CPU
+        // enables is checked against its features in tests/conventions.rs).
+        let simd = text.lines().nth(2).and_then(|l| l.strip_prefix("simd:   ")).unwrap_or_default();
+        let (names, rest) = simd.split_once(" (").unwrap_or_default();
+        assert_eq!(rest, "detected at run time; scalar fallback always present)", "{text}");
+        let known: Vec<&str> = simd_paths().iter().map(|p| p.0).chain(["scalar"]).collect();
+        assert!(!names.is_empty() && names.split(' ').all(|n| known.contains(&n)), "{text}");
+        assert_eq!(names == "scalar", simd_paths().iter().all(|p| !p.1), "{text}");
     }
 }

@@ -16,6 +16,7 @@ fn inputs(target: &str) -> Vec<PathBuf> {
         .map(|e| e.expect("entry").path())
         .filter(|p| p.is_file())
         .collect();
+    assert!(!v.is_empty(), "{} holds no inputs: the test would check nothing", dir.display());
     v.sort();
     v
 }

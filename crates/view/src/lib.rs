@@ -204,8 +204,8 @@ mod tests {
     }
 
     #[test]
-    fn no_display_is_an_error_not_a_panic() {
-        // The message names the way out.
+    fn the_no_display_error_names_the_way_out() {
+        // (Running without a display: tests/view_window.rs in prism-cli.)
         let msg = ViewError::NoDisplay.to_string();
         assert!(msg.contains("DISPLAY") && msg.contains("prism render"), "{msg}");
     }

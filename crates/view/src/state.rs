@@ -623,7 +623,7 @@ mod tests {
     }
 
     #[test]
-    fn plan_covers_all_samples_once_in_growing_passes() {
+    fn plan_covers_all_samples_once_one_sample_a_pass() {
         for spp in [0, 1, 2, 3, 4, 7, 16, 33, 100] {
             let ranges: Vec<_> = SamplePlan::new(spp).collect();
             let mut next = 0;

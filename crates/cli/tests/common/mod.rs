@@ -63,12 +63,15 @@ pub fn line_of(text: &str, needle: &str) -> usize {
     text.lines().position(|l| l.contains(needle)).map_or(0, |i| i + 1)
 }
 
-/// Asserts that a failed run printed one clean error: `error: ` first, no
-/// panic text.
+/// Asserts that a failed run printed one clean error: after any
+/// `warning: ` lines, `error: ` first, and only once; no panic text.
 pub fn assert_clean_failure(name: &str, out: &Output) {
     let err = text(&out.stderr);
     assert!(!out.status.success(), "{name}: expected failure, got success\n{err}");
     assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{name}: {err}");
+    let first = err.lines().find(|l| !l.starts_with("warning: "));
+    assert!(first.is_some_and(|l| l.starts_with("error: ")), "{name}: `error: ` first\n{err}");
+    assert_eq!(err.lines().filter(|l| l.starts_with("error: ")).count(), 1, "{name}: one error\n{err}");
 }
 
 /// A 2×2 PNG.

@@ -27,8 +27,10 @@ fn messages_name_no_rust_types() {
 
 #[test]
 fn a_misspelt_key_gets_a_suggestion_and_the_keys_of_its_shape() {
-    let err = expect_err("[[objects]]\ntype = \"cylinder\"\nradius = 1\nhieght = 2\n", "");
-    assert!(err.contains("unknown key `hieght` in a cylinder; did you mean `height`?"), "{err}");
+    let err = expect_err(
+        "[[objects]]\ntype = \"cylinder\"\nradius = 1\nhieght = 2\n",
+        "unknown key `hieght` in a cylinder; did you mean `height`?",
+    );
     assert!(
         err.contains("a cylinder takes: base, radius, height, plus type, material, transform, name"),
         "{err}"

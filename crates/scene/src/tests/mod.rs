@@ -38,8 +38,9 @@ pub(super) fn parse(text: &str) -> Result<LoadedScene, SceneError> {
 }
 
 /// Parses `BASE + extra`, expects an error, and checks it starts with
-/// `test.toml:LINE:` (line counted in the whole text) and contains `words`.
+/// `test.toml:` and contains `words` (its line: [`assert_at`]).
 pub(super) fn expect_err(extra: &str, words: &str) -> String {
+    assert!(!words.is_empty(), "name the words the message must hold");
     let text = format!("{BASE}{extra}");
     let err = match parse(&text) {
         Ok(_) => panic!("expected an error containing {words:?} for:\n{extra}"),

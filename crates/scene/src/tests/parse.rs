@@ -131,7 +131,7 @@ fn overrides_replace_the_file_and_keep_the_aspect() {
 
 #[test]
 fn syntax_errors_have_line_and_column() {
-    let err = expect_err("[[objects]]\ntype = \"sphere\"\nradius = = 1\n", "");
+    let err = expect_err("[[objects]]\ntype = \"sphere\"\nradius = = 1\n", "invalid string");
     assert_at(&err, "[[objects]]\ntype = \"sphere\"\nradius = = 1\n", "radius = =");
 }
 
@@ -232,7 +232,11 @@ fn zero_and_negative_sizes_are_refused() {
             "must be greater than min",
             None,
         ),
-        ("[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n", "", None),
+        (
+            "[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n",
+            "triangle has zero area",
+            Some("vertices"),
+        ),
         (
             "[materials.m]\ntexture = { type = \"checker\", size = 0 }\n",
             "checker size must be greater than 0",
