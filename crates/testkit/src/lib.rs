@@ -32,7 +32,12 @@ use std::path::PathBuf;
 /// something other than empty, `0` or `false` (`.ci/run` exports `CI=true`).
 #[must_use]
 pub fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| !matches!(v.trim(), "" | "0" | "false" | "FALSE" | "False"))
+    means_ci(std::env::var("CI").ok().as_deref())
+}
+
+/// Whether a value of `CI` (`None`: unset) means CI, as [`in_ci`] reads it.
+fn means_ci(value: Option<&str>) -> bool {
+    value.is_some_and(|v| !matches!(v.trim(), "" | "0" | "false" | "FALSE" | "False"))
 }
 
 /// Reports that a test cannot run because `reason` (what is missing, and
@@ -45,7 +50,12 @@ pub fn in_ci() -> bool {
 /// # Panics
 /// Under CI, always: a test whose tools or data are missing must fail there.
 pub fn skip(reason: &str) {
-    assert!(!in_ci(), "CI is set but {reason}: CI must provide it (see .ci/run)");
+    skip_in(in_ci(), reason);
+}
+
+/// [`skip`], told whether it runs under CI.
+fn skip_in(ci: bool, reason: &str) {
+    assert!(!ci, "CI is set but {reason}: CI must provide it (see .ci/run)");
     let _ = writeln!(std::io::stderr(), "skipped: {reason}");
 }
 
@@ -89,10 +99,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn ci_is_any_value_but_empty_zero_or_false() {
+        for v in ["true", "1", "yes", " true ", "TRUE"] {
+            assert!(means_ci(Some(v)), "{v:?}");
+        }
+        for v in [None, Some(""), Some(" "), Some("0"), Some("false"), Some("FALSE"), Some("False")] {
+            assert!(!means_ci(v), "{v:?}");
+        }
+    }
+
+    #[test]
+    fn a_skip_fails_under_ci_and_returns_elsewhere() {
+        skip_in(false, "nothing is missing (a test of skip itself)");
+        let failed = std::panic::catch_unwind(|| skip_in(true, "the tool is missing"));
+        let message = failed.expect_err("a skip under CI panics");
+        let text = message.downcast_ref::<String>().map_or("", String::as_str);
+        assert!(text.contains("CI is set but the tool is missing"), "{text}");
+    }
+
+    #[test]
     fn shared_data_is_found_or_reported() {
-        // Either way this must not panic outside CI; under CI the data must be there.
-        if let Some(d) = shared_data() {
-            assert!(d.is_dir());
+        // Outside CI a missing folder is skipped; under CI it must be there
+        // and hold every shared mesh.
+        match shared_data() {
+            Some(d) => assert!(d.join(SHARED_MESHES[0]).is_file() || !in_ci(), "{}", d.display()),
+            None => assert!(!in_ci()),
         }
     }
 }
