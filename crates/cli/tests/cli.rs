@@ -45,6 +45,27 @@ fn exr_output_is_linear_float() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let img = image::open(dir.path().join("img.exr")).unwrap();
     assert!(matches!(img.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F), "{:?}", img.color());
+    // Linear: the same render as an 8-bit PNG is its sRGB encoding (within
+    // a level), which an sRGB-encoded EXR would miss by far in mid-tones.
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "img.png", "--spp", "2", "--no-fog"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let png = image::open(dir.path().join("img.png")).unwrap().to_rgb8();
+    let exr = img.to_rgb32f();
+    assert_eq!(png.dimensions(), exr.dimensions());
+    let mut mid = 0;
+    for (p, e) in png.pixels().zip(exr.pixels()) {
+        for c in 0..3 {
+            let encoded = prism_shade::linear_to_srgb8(e[c]);
+            assert!(
+                encoded.abs_diff(p[c]) <= 1,
+                "linear {} encodes to {encoded}, the PNG has {}",
+                e[c],
+                p[c]
+            );
+            mid += usize::from((0.1..0.6).contains(&e[c]));
+        }
+    }
+    assert!(mid > 100, "the image has mid-tones to tell linear from sRGB: {mid}");
 }
 
 #[test]

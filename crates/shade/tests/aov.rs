@@ -321,6 +321,8 @@ fn samples_are_averaged_except_the_object_id() {
             }
             assert_close(get(&avg, Aov::Normal, i, j), sum_n / spp as f32, 1e-6);
             // The id is the centre ray's, exactly the 1-spp pass.
+            let centre = s.accel.closest_hit(&cam.ray(i as f32 + 0.5, j as f32 + 0.5));
+            assert_eq!(id(&avg, i, j), centre.map_or(-1.0, |h| h.object as f32), "({i}, {j})");
             assert_eq!(id(&avg, i, j), id(&one, i, j));
             if ids.iter().any(|&x| x != ids[0]) {
                 edge_pixels += 1;
