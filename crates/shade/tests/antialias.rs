@@ -134,8 +134,25 @@ fn adaptive_sampling_refines_only_where_samples_disagree() {
         }
     }
     assert!(refined > 0);
-    // Threshold 0 refines every pixel that is not exactly flat; a huge
-    // threshold refines none.
+    // Threshold 0 refines every pixel that is not exactly flat (its own
+    // samples or a neighbour's mean differ), so every mixed pixel takes all
+    // its samples and equals the full render; flat ones keep their base.
+    let zero = Antialias { adaptive: Some(0.0), ..aa };
+    let (exact, exact_stats) =
+        prism_shade::render(&shot, &settings(&shot, spp, zero, 2), RenderHooks::default());
+    let mut mixed = 0;
+    for (k, (a, f)) in exact.pixels.iter().zip(&full.pixels).enumerate() {
+        mixed += usize::from(*f != A && *f != B);
+        assert!((*a - *f).abs().max_element() < 1e-6, "threshold 0, pixel {k}: {a} vs {f}");
+    }
+    assert!(mixed > 10 && refined <= mixed, "{mixed} mixed pixels, {refined} refined at 0.1");
+    assert!(
+        exact_stats.rays >= stats.rays && exact_stats.rays < full_stats.rays,
+        "{} {}",
+        exact_stats.rays,
+        stats.rays
+    );
+    // A huge threshold refines none.
     let none = Antialias { adaptive: Some(10.0), ..aa };
     let (_, few) = prism_shade::render(&shot, &settings(&shot, spp, none, 2), RenderHooks::default());
     assert_eq!(few.rays, 24 * 24 * u64::from(prism_shade::ADAPTIVE_BASE_SAMPLES));
