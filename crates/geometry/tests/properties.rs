@@ -221,6 +221,27 @@ proptest! {
         agree("mesh", &Instance::new(mesh.clone(), xf), &ray)?;
     }
 
+    /// A ray from outside a solid aimed at a point well inside it hits it,
+    /// before that point, placed by any transform or not (the other
+    /// properties only check the hits there are, so a shape that wrongly
+    /// missed some class of rays would pass them).
+    #[test]
+    fn rays_aimed_inside_a_solid_hit_it(o in vec3(6.0), jitter in vec3(0.5), xf in transform(), placed in any::<bool>()) {
+        let xf = if placed { xf } else { Transform::IDENTITY };
+        for case in cases().into_iter().filter(|c| c.solid) {
+            let inst = Instance::new(case.shape, xf);
+            let b = inst.bounds();
+            let target = b.center() + jitter * (b.max - b.min);
+            let scale = (b.max - b.min).max_element();
+            if f_world(&case, &xf, target) > -0.05 * scale || f_world(&case, &xf, o) < 0.05 * scale {
+                continue;
+            }
+            let ray = Ray::new(o, target - o);
+            let hit = inst.intersect(&ray);
+            prop_assert!(hit.is_some_and(|h| h.t <= 1.0 + 1e-4), "{}: aimed at {} from {}, got {:?}", case.name, target, o, hit.map(|h| h.t));
+        }
+    }
+
     /// Any finite ray, however large or small, gives either no hit or a
     /// finite one. Each bounded shape is tested with a ray from up to 10⁶
     /// away aimed at a point of its bounds (a random direction from there
