@@ -50,13 +50,15 @@ fn means_ci(value: Option<&str>) -> bool {
 /// # Panics
 /// Under CI, always: a test whose tools or data are missing must fail there.
 pub fn skip(reason: &str) {
-    skip_in(in_ci(), reason);
+    let line = skip_line(in_ci(), reason);
+    let _ = writeln!(std::io::stderr(), "{line}");
 }
 
-/// [`skip`], told whether it runs under CI.
-fn skip_in(ci: bool, reason: &str) {
+/// What [`skip`] prints, told whether it runs under CI (where it panics
+/// instead).
+fn skip_line(ci: bool, reason: &str) -> String {
     assert!(!ci, "CI is set but {reason}: CI must provide it (see .ci/run)");
-    let _ = writeln!(std::io::stderr(), "skipped: {reason}");
+    format!("skipped: {reason}")
 }
 
 /// `<workspace root>/../shared/data`, the shared test meshes, if present;
@@ -110,8 +112,8 @@ mod tests {
 
     #[test]
     fn a_skip_fails_under_ci_and_returns_elsewhere() {
-        skip_in(false, "nothing is missing (a test of skip itself)");
-        let failed = std::panic::catch_unwind(|| skip_in(true, "the tool is missing"));
+        assert_eq!(skip_line(false, "the tool is missing"), "skipped: the tool is missing");
+        let failed = std::panic::catch_unwind(|| skip_line(true, "the tool is missing"));
         let message = failed.expect_err("a skip under CI panics");
         let text = message.downcast_ref::<String>().map_or("", String::as_str);
         assert!(text.contains("CI is set but the tool is missing"), "{text}");
