@@ -11,9 +11,15 @@
 //!   may print);
 //! - `unsafe` only in the listed places, each with a `// SAFETY:` comment
 //!   just above it;
+//! - no hand-written skips: a test that cannot run says so through
+//!   `prism_testkit::skip`, which fails under `CI=true`, never with its
+//!   own print and `return` (which would pass in CI);
 //! - the crate layering, from `cargo metadata`, for every workspace crate.
 //!
 //! Each failure names the file and line (or the crate and dependency).
+//! Each rule is a function of the sources it reads, and a self-test feeds
+//! it a made-up file that breaks it, so that a rule which stopped
+//! reporting would fail rather than pass in silence.
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -294,28 +300,69 @@ fn the_tree_has_rust_files() {
     assert!(files.iter().any(|f| f.starts_with("fuzz/fuzz_targets")), "the walk missed fuzz/");
 }
 
+/// Rule: the file opens with a `//!` line.
+fn doc_line_rule(src: &Source, out: &mut Vec<String>) {
+    if !src.raw.first().is_some_and(|l| l.starts_with("//!")) {
+        out.push(format!("{}:1: no `//!` doc line", src.path));
+    }
+}
+
 #[test]
 fn every_file_opens_with_a_doc_line() {
-    check_all("every .rs file must open with a `//!` line saying what it holds", |src, out| {
-        if !src.raw.first().is_some_and(|l| l.starts_with("//!")) {
-            out.push(format!("{}:1: no `//!` doc line", src.path));
+    check_all("every .rs file must open with a `//!` line saying what it holds", doc_line_rule);
+}
+
+/// Rule: no `#[ignore]` attribute and no `should_panic`.
+fn ignore_rule(src: &Source, out: &mut Vec<String>) {
+    for (n, line) in src.code.iter().enumerate() {
+        let attr = line.contains("#[") || line.contains("#![");
+        if attr && has_token(line, "ignore", None) {
+            out.push(format!("{}:{}: #[ignore]: {}", src.path, n + 1, src.raw[n].trim()));
         }
-    });
+        if has_token(line, "should_panic", None) {
+            out.push(format!("{}:{}: should_panic: {}", src.path, n + 1, src.raw[n].trim()));
+        }
+    }
 }
 
 #[test]
 fn no_ignored_or_should_panic_tests() {
-    check_all("no #[ignore] or should_panic: a test runs, and checks a result", |src, out| {
-        for (n, line) in src.code.iter().enumerate() {
-            let attr = line.contains("#[") || line.contains("#![");
-            if attr && has_token(line, "ignore", None) {
-                out.push(format!("{}:{}: #[ignore]: {}", src.path, n + 1, src.raw[n].trim()));
-            }
-            if has_token(line, "should_panic", None) {
-                out.push(format!("{}:{}: should_panic: {}", src.path, n + 1, src.raw[n].trim()));
-            }
+    check_all("no #[ignore] or should_panic: a test runs, and checks a result", ignore_rule);
+}
+
+/// Where a print that mentions skipping is not a test skipping itself:
+/// the skip helper itself, and xtask's reports of peers it cannot find
+/// (`cargo xtask bench --vs-peers` is a tool run, not a test).
+const MAY_PRINT_SKIPS: &[&str] = &["crates/testkit/src/", "xtask/src/peers.rs"];
+
+/// Rule: no print whose text says "skip" (the macro's arguments up to the
+/// end of the statement, over up to four lines) outside
+/// [`MAY_PRINT_SKIPS`]: a test that cannot run calls
+/// `prism_testkit::skip`, which fails under `CI=true`.
+fn skip_rule(src: &Source, out: &mut Vec<String>) {
+    if MAY_PRINT_SKIPS.iter().any(|p| src.path.starts_with(p)) {
+        return;
+    }
+    for (n, line) in src.code.iter().enumerate() {
+        if prints(line).is_none() {
+            continue;
         }
-    });
+        let statement_end = (n..src.code.len().min(n + 4)).find(|&k| src.code[k].contains(';')).unwrap_or(n);
+        let says_skip = src.raw[n..=statement_end].iter().any(|l| l.to_lowercase().contains("skip"));
+        if says_skip {
+            out.push(format!(
+                "{}:{}: a hand-written skip (call prism_testkit::skip, which fails under CI): {}",
+                src.path,
+                n + 1,
+                src.raw[n].trim()
+            ));
+        }
+    }
+}
+
+#[test]
+fn no_hand_written_skips() {
+    check_all("tests skip only through prism_testkit::skip", skip_rule);
 }
 
 /// The `mod NAME;` declarations under `#[cfg(test)]` in `src`, as path
@@ -340,17 +387,26 @@ fn test_module_files(src: &Source) -> Vec<String> {
 
 #[test]
 fn only_the_cli_prints() {
-    let sources: Vec<Source> = rust_files()
-        .iter()
-        .filter(|p| {
-            let p = p.to_string_lossy().replace('\\', "/");
-            p.starts_with("crates/") && p.split('/').nth(2) == Some("src") && !p.starts_with("crates/cli/")
-        })
-        .map(|p| read(p))
-        .collect();
-    let test_files: BTreeSet<String> = sources.iter().flat_map(test_module_files).collect();
+    let sources: Vec<Source> = rust_files().iter().map(|p| read(p)).collect();
+    let problems = print_rule(&sources);
+    assert!(
+        problems.is_empty(),
+        "only crates/cli prints or exits; libraries return values and errors (or add a justified entry to MAY_PRINT in xtask/src/tidy.rs):\n{}",
+        problems.join("\n")
+    );
+}
+
+/// Rule: library code under `crates/*/src` (not `crates/cli`, test
+/// modules or [`MAY_PRINT`]) neither prints nor exits. Other files in
+/// `sources` are not checked.
+fn print_rule(sources: &[Source]) -> Vec<String> {
+    let library = |p: &str| {
+        p.starts_with("crates/") && p.split('/').nth(2) == Some("src") && !p.starts_with("crates/cli/")
+    };
+    let sources: Vec<&Source> = sources.iter().filter(|s| library(&s.path)).collect();
+    let test_files: BTreeSet<String> = sources.iter().flat_map(|s| test_module_files(s)).collect();
     let mut problems = Vec::new();
-    for src in &sources {
+    for src in sources {
         if test_files.iter().any(|t| src.path.starts_with(t.as_str()))
             || MAY_PRINT
                 .iter()
@@ -374,48 +430,48 @@ fn only_the_cli_prints() {
             }
         }
     }
-    assert!(
-        problems.is_empty(),
-        "only crates/cli prints or exits; libraries return values and errors (or add a justified entry to MAY_PRINT in xtask/src/tidy.rs):\n{}",
-        problems.join("\n")
-    );
+    problems
+}
+
+/// Rule: `unsafe` only under [`MAY_USE_UNSAFE`], each with a `// SAFETY:`
+/// comment (or an `unsafe fn`'s `# Safety` doc) right above it.
+fn unsafe_rule(src: &Source, out: &mut Vec<String>) {
+    for (n, line) in src.code.iter().enumerate() {
+        if !has_token(line, "unsafe", None) {
+            continue;
+        }
+        // The comment and attribute lines right above; `# Safety` is the
+        // doc section of an `unsafe fn`.
+        let explained = src.raw[..n]
+            .iter()
+            .rev()
+            .map(|l| l.trim())
+            .take_while(|l| l.starts_with("//") || l.starts_with("#["))
+            .any(|l| l.contains("SAFETY:") || l.contains("# Safety"));
+        if !explained {
+            out.push(format!(
+                "{}:{}: unsafe without a SAFETY comment: {}",
+                src.path,
+                n + 1,
+                src.raw[n].trim()
+            ));
+        }
+        if !MAY_USE_UNSAFE.iter().any(|p| src.path.starts_with(p)) {
+            out.push(format!(
+                "{}:{}: unsafe outside {MAY_USE_UNSAFE:?} (add the place there and to docs/fuzzing.md, with why): {}",
+                src.path,
+                n + 1,
+                src.raw[n].trim()
+            ));
+        }
+    }
 }
 
 #[test]
 fn unsafe_is_rare_and_explained() {
     check_all(
         "`unsafe` only where MAY_USE_UNSAFE allows, each with a `// SAFETY:` comment just above it (attributes may sit between)",
-        |src, out| {
-            for (n, line) in src.code.iter().enumerate() {
-                if !has_token(line, "unsafe", None) {
-                    continue;
-                }
-                // The comment and attribute lines right above; `# Safety` is the
-                // doc section of an `unsafe fn`.
-                let explained = src.raw[..n]
-                    .iter()
-                    .rev()
-                    .map(|l| l.trim())
-                    .take_while(|l| l.starts_with("//") || l.starts_with("#["))
-                    .any(|l| l.contains("SAFETY:") || l.contains("# Safety"));
-                if !explained {
-                    out.push(format!(
-                        "{}:{}: unsafe without a SAFETY comment: {}",
-                        src.path,
-                        n + 1,
-                        src.raw[n].trim()
-                    ));
-                }
-                if !MAY_USE_UNSAFE.iter().any(|p| src.path.starts_with(p)) {
-                    out.push(format!(
-                    "{}:{}: unsafe outside {MAY_USE_UNSAFE:?} (add the place there and to docs/fuzzing.md, with why): {}",
-                    src.path,
-                    n + 1,
-                    src.raw[n].trim()
-                ));
-                }
-            }
-        },
+        unsafe_rule,
     );
 }
 
@@ -476,8 +532,19 @@ fn crate_layering_holds() {
     let crates = workspace_manifests();
     let members: BTreeSet<&str> = crates.iter().map(|m| m.name.as_str()).collect();
     assert!(members.contains("prism-geometry") && members.contains("prism-cli"), "members: {members:?}");
+    let problems = layering_problems(&crates);
+    assert!(problems.is_empty(), "crate layering (xtask/src/tidy.rs LAYERS):\n{problems}");
+    // The geometry kernel's one dependency is really there (the walk saw the manifests).
+    let geometry = crates.iter().find(|m| m.name == "prism-geometry").map(|m| &m.deps);
+    assert!(geometry.is_some_and(|d| d.iter().any(|(n, k)| n == "glam" && k == "normal")), "{geometry:?}");
+}
+
+/// Rule: each crate depends only on what [`LAYERS`] and [`EXTERNAL`]
+/// allow it, and every row of `LAYERS` names a member.
+fn layering_problems(crates: &[Manifest]) -> String {
+    let members: BTreeSet<&str> = crates.iter().map(|m| m.name.as_str()).collect();
     let mut problems = String::new();
-    for manifest in &crates {
+    for manifest in crates {
         let (name, deps) = (&manifest.name, &manifest.deps);
         let Some((_, allowed)) = LAYERS.iter().find(|(c, _)| c == name) else {
             let _ = writeln!(
@@ -509,10 +576,7 @@ fn crate_layering_holds() {
             let _ = writeln!(problems, "LAYERS names `{name}`, which is not a workspace member");
         }
     }
-    assert!(problems.is_empty(), "crate layering (xtask/src/tidy.rs LAYERS):\n{problems}");
-    // The geometry kernel's one dependency is really there (the walk saw the manifests).
-    let geometry = crates.iter().find(|m| m.name == "prism-geometry").map(|m| &m.deps);
-    assert!(geometry.is_some_and(|d| d.iter().any(|(n, k)| n == "glam" && k == "normal")), "{geometry:?}");
+    problems
 }
 
 #[test]
@@ -552,4 +616,110 @@ fn test_modules_are_found() {
     let walk =
         Source::new("crates/x/src/walk.rs".into(), "#[cfg(test)]\nmod checks;\n#[cfg(test)]\nmod t {}\n");
     assert_eq!(test_module_files(&walk), ["crates/x/src/walk/checks.rs", "crates/x/src/walk/checks/"]);
+}
+
+/// A rule checked one file at a time.
+type FileRule = fn(&Source, &mut Vec<String>);
+
+/// Runs a per-file rule on one made-up file.
+fn complaints(rule: FileRule, path: &str, text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    rule(&Source::new(path.into(), text), &mut out);
+    out
+}
+
+#[test]
+fn each_rule_reports_what_breaks_it() {
+    // Each rule against a file that breaks it (it must name the file and
+    // line) and one that keeps it (it must say nothing).
+    let cases: [(FileRule, &str, &str, &str, &str); 7] = [
+        (doc_line_rule, "crates/x/src/a.rs", "use x;\n", "crates/x/src/a.rs:1:", "//! A.\nuse x;\n"),
+        (
+            ignore_rule,
+            "crates/x/tests/t.rs",
+            "//! T.\n#[test]\n#[ignore]\nfn t() {}\n",
+            "crates/x/tests/t.rs:3:",
+            "//! T.\n#[test]\nfn t() {} // #[ignore]\n",
+        ),
+        (
+            ignore_rule,
+            "crates/x/tests/t.rs",
+            "//! T.\n#[test]\n#[should_panic]\nfn t() {}\n",
+            "crates/x/tests/t.rs:3:",
+            "//! T.\nlet s = \"should_panic\";\n",
+        ),
+        (
+            unsafe_rule,
+            "crates/bvh/src/w.rs",
+            "//! W.\nfn f() {\n    unsafe { g() }\n}\n",
+            "crates/bvh/src/w.rs:3:",
+            "//! W.\n// SAFETY: g has no preconditions.\nunsafe { g() }\n",
+        ),
+        (
+            unsafe_rule,
+            "crates/shade/src/w.rs",
+            "//! W.\n// SAFETY: no preconditions.\nunsafe { g() }\n",
+            "crates/shade/src/w.rs:3: unsafe outside",
+            "//! W.\nlet s = \"unsafe\";\n",
+        ),
+        (
+            skip_rule,
+            "crates/x/tests/t.rs",
+            "//! T.\nif !found {\n    eprintln!(\"Skipping: no mesh\");\n    return;\n}\n",
+            "crates/x/tests/t.rs:3:",
+            "//! T.\nif !found {\n    prism_testkit::skip(\"no mesh\");\n    return;\n}\n",
+        ),
+        (
+            skip_rule,
+            "crates/x/src/lib.rs",
+            "//! T.\nprintln!(\n    \"{} {}\",\n    \"skipped\", why\n);\n",
+            "crates/x/src/lib.rs:2:",
+            "//! T.\nprintln!(\"{}\", why);\nlet skip = 3;\n",
+        ),
+    ];
+    for (rule, path, bad, expected, good) in cases {
+        let found = complaints(rule, path, bad);
+        assert!(found.len() == 1 && found[0].starts_with(expected), "{expected}: {found:?}");
+        assert_eq!(complaints(rule, path, good), Vec::<String>::new(), "{path}: {good}");
+    }
+    // The skip helper itself may print its skips.
+    assert!(
+        complaints(skip_rule, "crates/testkit/src/lib.rs", "//! K.\neprintln!(\"skipped: {why}\");\n")
+            .is_empty()
+    );
+
+    // Printing: a library file, its test module, the CLI.
+    let sources = [
+        Source::new("crates/shade/src/a.rs".into(), "//! A.\nfn f() {\n    println!(\"x\");\n}\n"),
+        Source::new(
+            "crates/shade/src/b.rs".into(),
+            "//! B.\n#[cfg(test)]\nmod tests {\n    fn t() { dbg!(1); }\n}\n",
+        ),
+        Source::new("crates/cli/src/main.rs".into(), "//! M.\nfn main() { std::process::exit(2); }\n"),
+        Source::new("crates/shade/tests/t.rs".into(), "//! T.\nfn t() { println!(\"x\"); }\n"),
+    ];
+    let found = print_rule(&sources);
+    assert!(found.len() == 1 && found[0].starts_with("crates/shade/src/a.rs:3: println"), "{found:?}");
+
+    // Layering: geometry may not use shade, nor any crate but glam.
+    let manifest = |name: &str, deps: &[(&str, &str)]| Manifest {
+        name: name.into(),
+        path: format!("crates/{name}/Cargo.toml"),
+        deps: deps.iter().map(|(d, k)| (d.to_string(), k.to_string())).collect(),
+    };
+    let mut crates: Vec<Manifest> = LAYERS.iter().map(|(name, _)| manifest(name, &[])).collect();
+    assert_eq!(layering_problems(&crates), "");
+    crates[0] =
+        manifest("prism-geometry", &[("glam", "normal"), ("prism-shade", "normal"), ("rand", "normal")]);
+    let found = layering_problems(&crates);
+    assert!(
+        found.lines().count() == 2
+            && found.contains("`prism-shade` breaks")
+            && found.contains("`rand` breaks"),
+        "{found}"
+    );
+    crates[0] = manifest("prism-geometry", &[("glam", "normal"), ("proptest", "dev")]);
+    crates.push(manifest("prism-extra", &[]));
+    let found = layering_problems(&crates);
+    assert!(found.lines().count() == 1 && found.contains("prism-extra is not in LAYERS"), "{found}");
 }

@@ -245,16 +245,33 @@ fn eight_bit_colours_warn_and_samples_aliases_work() {
 #[test]
 fn camera_chooses_a_named_camera_and_lists_the_names_when_unknown() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = format!(
-        "{GOOD}\n[[cameras]]\nname = \"above\"\nposition = [0, 9, 0.01]\nlook_at = [0, 0, 0]\nprojection = \"orthographic\"\n"
-    );
+    let above_keys = "position = [0, 9, 0.01]\nlook_at = [0, 0, 0]\nprojection = \"orthographic\"\n";
+    let scene = format!("{GOOD}\n[[cameras]]\nname = \"above\"\n{above_keys}");
     fs::write(dir.path().join("s.toml"), scene).unwrap();
-    let first = prism(dir.path(), &["render", "s.toml", "-o", "a.png", "--quiet"]);
-    assert!(first.status.success(), "{}", text(&first.stderr));
-    let above = prism(dir.path(), &["render", "s.toml", "-o", "b.png", "--quiet", "--camera", "above"]);
-    assert!(above.status.success(), "{}", text(&above.stderr));
-    let (a, b) = (fs::read(dir.path().join("a.png")).unwrap(), fs::read(dir.path().join("b.png")).unwrap());
-    assert_ne!(a, b, "another camera, another picture");
+    // The same scene with only `[camera]`, and with "above" as `[camera]`.
+    fs::write(dir.path().join("plain.toml"), GOOD).unwrap();
+    let camera_table = "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n";
+    assert!(GOOD.contains(camera_table));
+    fs::write(dir.path().join("top.toml"), GOOD.replace(camera_table, &format!("[camera]\n{above_keys}")))
+        .unwrap();
+    let renders = [
+        ("s.toml", "a.png", None),
+        ("s.toml", "b.png", Some("above")),
+        ("plain.toml", "plain.png", None),
+        ("top.toml", "top.png", None),
+    ];
+    for (scene, png, camera) in renders {
+        let mut args = vec!["render", scene, "-o", png, "--quiet"];
+        args.extend(camera.iter().flat_map(|c| ["--camera", c]));
+        let out = prism(dir.path(), &args);
+        assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));
+    }
+    let pixels = |png: &str| image::open(dir.path().join(png)).unwrap().to_rgb8().into_raw();
+    // Without --camera the render uses `[camera]`, not the first named one;
+    // with it, the named camera's picture, not merely another one.
+    assert_eq!(pixels("a.png"), pixels("plain.png"), "the default is `[camera]`");
+    assert_eq!(pixels("b.png"), pixels("top.png"), "--camera above renders from \"above\"");
+    assert_ne!(pixels("a.png"), pixels("b.png"), "another camera, another picture");
     let out = prism(dir.path(), &["render", "s.toml", "-o", "c.png", "--camera", "side"]);
     common::assert_clean_failure("unknown camera", &out);
     let err = text(&out.stderr);

@@ -18,8 +18,9 @@ use std::process::Command;
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 72;
 const FLOOR_Y: f32 = -0.74;
-const MESH_ALBEDO: f32 = 0.7;
-const FLOOR_ALBEDO: f32 = 0.5;
+// Unequal channels, so that every channel is compared on its own.
+const MESH_ALBEDO: [f32; 3] = [0.7, 0.5, 0.3];
+const FLOOR_ALBEDO: [f32; 3] = [0.35, 0.5, 0.6];
 
 /// The scene's light, in both renderers' terms.
 enum TestLight {
@@ -31,6 +32,10 @@ fn v(p: Vec3) -> String {
     format!("[{}, {}, {}]", p.x, p.y, p.z)
 }
 
+fn rgb(c: [f32; 3]) -> String {
+    v(Vec3::from_array(c))
+}
+
 /// The prism scene file.
 fn prism_scene(mesh: &Path, light: &TestLight) -> String {
     // One ray per pixel centre for the point light; 64 stratified camera
@@ -39,6 +44,7 @@ fn prism_scene(mesh: &Path, light: &TestLight) -> String {
         TestLight::Point { .. } => 1,
         TestLight::Quad { .. } => 64,
     };
+    let (mesh_albedo, floor_albedo) = (rgb(MESH_ALBEDO), rgb(FLOOR_ALBEDO));
     let mut s = format!(
         r#"[render]
 width = {WIDTH}
@@ -53,13 +59,13 @@ look_at = [0, -0.1, 0.1]
 fov = 40
 
 [materials.mesh]
-color = [{MESH_ALBEDO}, {MESH_ALBEDO}, {MESH_ALBEDO}]
+color = {mesh_albedo}
 ambient = 0
 diffuse = 1
 specular = 0
 
 [materials.floor]
-color = [{FLOOR_ALBEDO}, {FLOOR_ALBEDO}, {FLOOR_ALBEDO}]
+color = {floor_albedo}
 ambient = 0
 diffuse = 1
 specular = 0
@@ -116,10 +122,11 @@ fn mitsuba_spec(mesh: &Path, light: &TestLight) -> String {
             v(*edge_v)
         ),
     };
+    let (mesh_albedo, floor_albedo) = (rgb(MESH_ALBEDO), rgb(FLOOR_ALBEDO));
     format!(
         r#"{{"camera": {{"position": [2.2, 1.4, 2.6], "look_at": [0, -0.1, 0.1], "fov": 40, "width": {WIDTH}, "height": {HEIGHT}}},
-"mesh": {:?}, "mesh_albedo": [{MESH_ALBEDO}, {MESH_ALBEDO}, {MESH_ALBEDO}],
-"floor_y": {FLOOR_Y}, "floor_albedo": [{FLOOR_ALBEDO}, {FLOOR_ALBEDO}, {FLOOR_ALBEDO}],
+"mesh": {:?}, "mesh_albedo": {mesh_albedo},
+"floor_y": {FLOOR_Y}, "floor_albedo": {floor_albedo},
 "emitter_samples": {samples}, "spp": {spp}, "light": {light}}}"#,
         mesh.display().to_string()
     )
@@ -168,8 +175,9 @@ fn mitsuba_python() -> Option<PathBuf> {
 /// What the comparison of one scene found.
 #[derive(Debug)]
 struct Figures {
-    /// Mean of |prism / π − Mitsuba| / Mitsuba over pixels lit in both.
-    mean_rel_error: f64,
+    /// Mean of |prism / π − Mitsuba| / Mitsuba over pixels lit in both,
+    /// per channel (red, green, blue).
+    channel_rel_error: [f64; 3],
     /// Pixels lit in both.
     lit: usize,
     /// Pixels lit in one and black in the other.
@@ -189,20 +197,24 @@ fn compare(python: &Path, dir: &Path, mesh: &Path, light: &TestLight, name: &str
     assert!(run.status.success(), "Mitsuba failed: {}", String::from_utf8_lossy(&run.stderr));
     let (w, h, theirs) = prism_shade::read_exr_rgb(&out).expect("Mitsuba's EXR");
     assert_eq!((w, h), (WIDTH, HEIGHT));
-    let (mut sum, mut lit, mut mask_mismatch) = (0.0f64, 0usize, 0usize);
-    let peak = theirs.iter().copied().fold(0.0f32, f32::max);
+    let (mut sum, mut lit, mut mask_mismatch) = ([0.0f64; 3], 0usize, 0usize);
+    let peak = f64::from(theirs.iter().copied().fold(0.0f32, f32::max));
     for (p, t) in ours.pixels.iter().zip(theirs.chunks_exact(3)) {
-        let (ours, theirs) = (f64::from(p.x) / std::f64::consts::PI, f64::from(t[0]));
+        let ours = p.to_array().map(|c| f64::from(c) / std::f64::consts::PI);
+        let theirs = [t[0], t[1], t[2]].map(f64::from);
         // Black: in shadow, facing away or background (no ambient light).
-        let (a, b) = (ours > 1e-4 * f64::from(peak), theirs > 1e-4 * f64::from(peak));
+        let (a, b) = (ours.iter().sum::<f64>() > 3e-4 * peak, theirs.iter().sum::<f64>() > 3e-4 * peak);
         if a != b {
             mask_mismatch += 1;
-        } else if a && theirs > 0.02 * f64::from(peak) {
-            sum += (ours - theirs).abs() / theirs;
+        } else if a && theirs.iter().all(|&c| c > 0.02 * peak) {
+            for c in 0..3 {
+                sum[c] += (ours[c] - theirs[c]).abs() / theirs[c];
+            }
             lit += 1;
         }
     }
-    Figures { mean_rel_error: sum / lit.max(1) as f64, lit, mask_mismatch }
+    let channel_rel_error = sum.map(|s| s / lit.max(1) as f64);
+    Figures { channel_rel_error, lit, mask_mismatch }
 }
 
 #[test]
@@ -221,7 +233,7 @@ fn prism_matches_mitsuba_direct_lighting() {
     let f = compare(&python, dir.path(), &mesh, &point, "point");
     println!("point light: {f:?} of {pixels} pixels");
     assert!(f.lit > pixels / 4, "most of the image is lit: {f:?}");
-    assert!(f.mean_rel_error <= 0.01, "point light: {f:?}");
+    assert!(f.channel_rel_error.iter().all(|&e| e <= 0.01), "point light, every channel: {f:?}");
     assert!(f.mask_mismatch * 1000 <= pixels, "point light shadow masks: {f:?}");
 
     let quad = TestLight::Quad {
@@ -234,5 +246,9 @@ fn prism_matches_mitsuba_direct_lighting() {
     let f = compare(&python, dir.path(), &mesh, &quad, "quad");
     println!("quad light: {f:?} of {pixels} pixels");
     assert!(f.lit > pixels / 4, "most of the image is lit: {f:?}");
-    assert!(f.mean_rel_error <= 0.02, "quad light: {f:?}");
+    assert!(f.channel_rel_error.iter().all(|&e| e <= 0.02), "quad light, every channel: {f:?}");
+    // Penumbrae sampled differently put a few pixels at black in one
+    // render and barely lit in the other (23 of 6912 when written); a
+    // shadow that moved or lost its penumbra would put hundreds there.
+    assert!(f.mask_mismatch * 100 <= pixels, "quad light shadow masks: {f:?}");
 }
