@@ -53,7 +53,10 @@ impl SceneFile {
             let entry = e.span().and_then(|s| crate::suggest::entry_at(text, s.start, e.message()));
             let mut message = syntax_message(e.message(), entry);
             if let Some(span) = e.span() {
-                message.push_str(&unclosed_note(text, span.start, &message));
+                match empty_slot(text, span.start, &message) {
+                    Some(slot) => message = slot,
+                    None => message.push_str(&unclosed_note(text, span.start, &message)),
+                }
             }
             SceneError::Syntax { location, message }
         })
@@ -78,6 +81,35 @@ fn unclosed_note(text: &str, offset: usize, message: &str) -> String {
         return String::new();
     }
     format!("; the {what} opened at line {line}, column {column} is not closed")
+}
+
+/// For toml's message at a comma with nothing on one side of it (`[0, ,
+/// 1]`, `{ , a = 1 }`, `{ a = 1, }`), a message that says so: toml says
+/// "expected `,` or `]`" (or `}`), which sends the reader looking for a
+/// missing comma or bracket. `None` elsewhere. Only spaces, tabs and line
+/// ends are looked past.
+fn empty_slot(text: &str, offset: usize, message: &str) -> Option<String> {
+    let b = text.as_bytes();
+    if b.get(offset) != Some(&b',') {
+        return None;
+    }
+    let blank = |c: &&u8| c.is_ascii_whitespace();
+    let before = b[..offset].iter().rev().find(|c| !blank(c)).copied();
+    let after = b[offset + 1..].iter().find(|c| !blank(c)).copied();
+    if message.starts_with("invalid array") {
+        matches!(before, Some(b',' | b'['))
+            .then(|| "invalid array: a value is missing before this `,`".to_string())
+    } else if message.starts_with("invalid inline table") {
+        match (before, after) {
+            (Some(b'{' | b','), _) => Some("a `key = value` is missing before this `,`"),
+            (_, Some(b'}')) => Some("nothing follows this `,` (an inline table may not end with a comma)"),
+            (_, Some(b',')) => Some("a `key = value` is missing after this `,`"),
+            _ => None,
+        }
+        .map(|m| format!("invalid inline table: {m}"))
+    } else {
+        None
+    }
 }
 
 /// The byte offset of the innermost `[` or `{` still open at byte

@@ -396,3 +396,42 @@ fn an_unclosed_array_or_table_names_where_it_opened() {
     let err = expect_err("[[objects]]\ntype = \"sphere\"\ncenter = [0, 1 2]\n", "expected `,` or `]`");
     assert!(!err.contains("opened at"), "{err}");
 }
+
+#[test]
+fn a_comma_with_nothing_beside_it_is_named() {
+    // toml says "expected `,` or `]`" (or `}`) at such a comma; the array
+    // or table is closed, so nothing is said about where it opened.
+    let cases = [
+        ("center = [0, , 1]", "center = [0, ,", "invalid array: a value is missing before this `,`"),
+        ("center = [, 0, 1]", "center = [,", "invalid array: a value is missing before this `,`"),
+        ("center = [0,\n  , 1]", "  ,", "invalid array: a value is missing before this `,`"),
+        (
+            "transform = { translate = [0, 1, 0], , scale = 2 }",
+            "transform = { translate = [0, 1, 0],",
+            "invalid inline table: a `key = value` is missing after this `,`",
+        ),
+        (
+            "transform = { , scale = 2 }",
+            "transform = { ,",
+            "invalid inline table: a `key = value` is missing before this `,`",
+        ),
+        (
+            "transform = { scale = 2, }",
+            "transform = { scale = 2,",
+            "invalid inline table: nothing follows this `,` (an inline table may not end with a comma)",
+        ),
+    ];
+    for (line, upto, message) in cases {
+        let extra = format!("[[objects]]\ntype = \"sphere\"\nradius = 1\n{line}\n");
+        let err = parse(&format!("{BASE}{extra}")).unwrap_err().to_string();
+        let text = format!("{BASE}{extra}");
+        let at = text.find(upto).map(|i| i + upto.len() - 1).unwrap_or_default();
+        let (l, c) = crate::error::line_col(&text, at);
+        assert_eq!(err, format!("test.toml:{l}:{c}: {message}"), "{line}");
+    }
+    // A trailing comma in an array is valid TOML; a missing value with no
+    // comma after it keeps toml's message.
+    parse(&format!("{BASE}[[objects]]\ntype = \"sphere\"\nradius = 1\ncenter = [0, 1, 2, ]\n")).unwrap();
+    let err = expect_err("[[objects]]\ntype = \"sphere\"\ncenter = [0, 1 2]\n", "expected `,` or `]`");
+    assert!(!err.contains("missing"), "{err}");
+}
