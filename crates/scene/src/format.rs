@@ -53,10 +53,8 @@ impl SceneFile {
             let entry = e.span().and_then(|s| crate::suggest::entry_at(text, s.start, e.message()));
             let mut message = syntax_message(e.message(), entry);
             if let Some(span) = e.span() {
-                match empty_slot(text, span.start, &message) {
-                    Some(slot) => message = slot,
-                    None => message.push_str(&unclosed_note(text, span.start, &message)),
-                }
+                message = with_the_text(text, span.clone(), message);
+                message.push_str(&unclosed_note(text, span.start, &message));
             }
             SceneError::Syntax { location, message }
         })
@@ -68,9 +66,9 @@ impl SceneFile {
 /// was opened, if on an earlier line: `; the array opened at line 2,
 /// column 12 is not closed`. Otherwise nothing.
 fn unclosed_note(text: &str, offset: usize, message: &str) -> String {
-    let what = if message.starts_with("invalid array") {
+    let what = if message.starts_with("missing comma between array elements") {
         "array"
-    } else if message.starts_with("invalid inline table") {
+    } else if message.starts_with("missing comma between key-value pairs") {
         "inline table"
     } else {
         return String::new();
@@ -83,33 +81,49 @@ fn unclosed_note(text: &str, offset: usize, message: &str) -> String {
     format!("; the {what} opened at line {line}, column {column} is not closed")
 }
 
-/// For toml's message at a comma with nothing on one side of it (`[0, ,
-/// 1]`, `{ , a = 1 }`, `{ a = 1, }`), a message that says so: toml says
-/// "expected `,` or `]`" (or `}`), which sends the reader looking for a
-/// missing comma or bracket. `None` elsewhere. Only spaces, tabs and line
-/// ends are looked past.
-fn empty_slot(text: &str, offset: usize, message: &str) -> Option<String> {
-    let b = text.as_bytes();
-    if b.get(offset) != Some(&b',') {
-        return None;
+/// toml's messages that say less than the text at their span shows:
+/// - a value missing, or two values with no comma between them, which
+///   toml reads as one unquoted string (`a = `, `[0, 1 2]`, `a = 1 2`):
+///   it says "string values must be quoted";
+/// - a duplicate key or table, which toml does not name.
+///
+/// Other messages are returned as they are.
+fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> String {
+    let Some(at) = text.get(span.clone()) else { return message };
+    // toml 0.9 hands a date over as a table.
+    let date = |s: &str| {
+        let b = s.as_bytes();
+        b.len() >= 8 && b[..4].iter().all(u8::is_ascii_digit) && b[4] == b'-'
+            || b.len() >= 5 && b[..2].iter().all(u8::is_ascii_digit) && b[2] == b':'
+    };
+    if let Some(head) = message.strip_suffix("got a table")
+        && date(at)
+    {
+        return format!("{head}got the date {at}");
     }
-    let blank = |c: &&u8| c.is_ascii_whitespace();
-    let before = b[..offset].iter().rev().find(|c| !blank(c)).copied();
-    let after = b[offset + 1..].iter().find(|c| !blank(c)).copied();
-    if message.starts_with("invalid array") {
-        matches!(before, Some(b',' | b'['))
-            .then(|| "invalid array: a value is missing before this `,`".to_string())
-    } else if message.starts_with("invalid inline table") {
-        match (before, after) {
-            (Some(b'{' | b','), _) => Some("a `key = value` is missing before this `,`"),
-            (_, Some(b'}')) => Some("nothing follows this `,` (an inline table may not end with a comma)"),
-            (_, Some(b',')) => Some("a `key = value` is missing after this `,`"),
-            _ => None,
-        }
-        .map(|m| format!("invalid inline table: {m}"))
-    } else {
-        None
+    if message.starts_with("duplicate key") && !at.is_empty() {
+        return format!("duplicate key `{at}`: it is already defined above");
     }
+    if !message.starts_with("string values must be quoted") {
+        return message;
+    }
+    let at = at.trim();
+    if at.is_empty() {
+        return "a value is missing here (a number, a \"string\", true or false, an [array] or a { table })"
+            .into();
+    }
+    let first = at.split_whitespace().next().unwrap_or(at);
+    let a_value = first.parse::<f64>().is_ok()
+        || matches!(first, "true" | "false" | "inf" | "+inf" | "-inf" | "nan" | "+nan" | "-nan");
+    if a_value && first.len() < at.len() {
+        let wanted = match innermost_open(text, span.start).map(|o| text.as_bytes()[o]) {
+            Some(b'[') => "`,` or `]`",
+            Some(b'{') => "`,` or `}`",
+            _ => "the end of the line",
+        };
+        return format!("expected {wanted} after `{first}`");
+    }
+    format!("`{at}` is not a value: a string must be quoted (\"{at}\")")
 }
 
 /// The byte offset of the innermost `[` or `{` still open at byte
@@ -167,8 +181,9 @@ fn syntax_message(m: &str, entry: Option<crate::suggest::Entry>) -> String {
     // toml puts what it expected on a line of its own; one line reads
     // better after `file:line:column:`.
     let m = m.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(": ");
-    let m = m.replace("invalid array: expected `]`", "invalid array: expected `,` or `]`");
-    crate::suggest::friendly(&m, entry)
+    // toml 0.9 ends some messages with ", expected nothing" (`a = = 1`).
+    let m = m.strip_suffix(", expected nothing").unwrap_or(&m);
+    crate::suggest::friendly(m, entry)
 }
 
 #[derive(Deserialize, Default)]

@@ -183,6 +183,10 @@ fn got_words(g: &str) -> String {
     let g = g.trim();
     for prefix in ["floating point ", "integer "] {
         if let Some(v) = g.strip_prefix(prefix) {
+            // toml hands a whole number beyond 64 bits over as `` `N` as i128 ``.
+            if let Some(n) = v.strip_suffix(" as i128").or_else(|| v.strip_suffix(" as u128")) {
+                return format!("the whole number {}, beyond the 64-bit range", n.trim_matches('`'));
+            }
             return format!("the number {}", v.trim_matches('`'));
         }
     }

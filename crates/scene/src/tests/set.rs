@@ -60,6 +60,13 @@ fn sets_replace_values_add_keys_and_tables() {
     let fog = format!("{}[fog]\nend = 20\n", scene());
     assert!(with_sets(&fog, &[]).unwrap().settings.fog);
     assert!(!with_sets(&fog, &["fog.enabled=false"]).unwrap().settings.fog);
+    // Keys two levels below a table the file lacks (written as dotted keys,
+    // which toml 0.8 refused with "expected a borrowed string").
+    let l = with_sets(&scene(), &["objects.1.material=checks", "materials.checks.texture.type=\"checker\""])
+        .unwrap();
+    assert_eq!(l.info.materials, ["checks", "red", "(default)"]);
+    let l = with_sets(&scene(), &["materials.red.texture.type=\"checker\""]);
+    assert!(l.unwrap_err().to_string().contains("`color` or `texture`, not both"));
 }
 
 #[test]
