@@ -385,8 +385,13 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     for (settings, frame_output) in &frames {
         overwrite::check_not_an_input(frame_output, &loaded.inputs)?;
         let plan = plan.for_output(frame_output.clone());
-        for f in plan.other_files(&aovs)? {
-            overwrite::check_not_an_input(&f, &loaded.inputs)?;
+        let mut written = plan.other_files(&aovs)?;
+        for f in &written {
+            overwrite::check_not_an_input(f, &loaded.inputs)?;
+        }
+        if let Some(s) = &args.stats_json {
+            written.push(frame_output.clone());
+            overwrite::check_stats_apart(s, &written)?;
         }
         render_to(args, &loaded, settings, &plan, &aovs, load_seconds)?;
     }

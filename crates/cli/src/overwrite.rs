@@ -42,24 +42,40 @@ pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<(
     if output.is_dir() {
         bail!("{}: the output is a directory; give {}", output.display(), what.name_hint());
     }
-    let target = match std::fs::canonicalize(output) {
-        Ok(p) => Some(p),
-        Err(_) => {
-            // Not there yet: its directory (if it exists) plus its name.
-            let dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-            match (std::fs::canonicalize(dir), output.file_name()) {
-                (Ok(d), Some(name)) => Some(d.join(name)),
-                _ => None,
-            }
-        }
-    };
-    if let Some(t) = target
+    if let Some(t) = resolved(output)
         && inputs.contains(&t)
     {
         bail!(
             "{}: refusing to write {} over an input of this render (the scene, a mesh, a material library or a texture)",
             output.display(),
             what.noun()
+        );
+    }
+    Ok(())
+}
+
+/// The absolute path `path` names, links followed: the path itself if it
+/// exists, else its directory's (if that exists) joined with its name.
+fn resolved(path: &Path) -> Option<PathBuf> {
+    std::fs::canonicalize(path).ok().or_else(|| {
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        match (std::fs::canonicalize(dir), path.file_name()) {
+            (Ok(d), Some(name)) => Some(d.join(name)),
+            _ => None,
+        }
+    })
+}
+
+/// Refuses a `--stats-json` path that is also one of `images`, the files
+/// the render writes (the image, its AOV files and previews), which the
+/// statistics would replace.
+pub fn check_stats_apart(stats: &Path, images: &[PathBuf]) -> Result<()> {
+    let Some(s) = resolved(stats) else { return Ok(()) };
+    if let Some(image) = images.iter().find(|i| resolved(i).as_ref() == Some(&s)) {
+        bail!(
+            "--stats-json {}: that is also where this render writes {}; give the statistics another name",
+            stats.display(),
+            image.display()
         );
     }
     Ok(())

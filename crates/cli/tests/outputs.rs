@@ -258,3 +258,60 @@ fn bad_image_flags_are_refused_naming_the_flag() {
     }
     assert_eq!(listing(dir.path()), ["s.toml"]);
 }
+
+#[cfg(unix)]
+#[test]
+fn outputs_go_through_links_and_into_pipes_and_devices() {
+    use std::os::unix::fs::{FileTypeExt, symlink};
+    let dir = scene_dir();
+    let p = dir.path();
+    fs::create_dir(p.join("real")).unwrap();
+    symlink("real/target.png", p.join("link.png")).unwrap();
+    symlink("/dev/null", p.join("null.json")).unwrap();
+    run_ok(p, &["render", "s.toml", "-o", "link.png", "--stats-json", "null.json", "--quiet"]);
+    // The links stay links; the image is where the link points.
+    for link in ["link.png", "null.json"] {
+        assert!(fs::symlink_metadata(p.join(link)).unwrap().file_type().is_symlink(), "{link}");
+    }
+    assert_eq!(image::open(p.join("real/target.png")).unwrap().width(), 33);
+    assert!(fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    // A named pipe is written into, not replaced by a file.
+    let fifo = p.join("pipe.json");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let reader = std::thread::spawn({
+        let fifo = fifo.clone();
+        move || fs::read_to_string(fifo).unwrap()
+    });
+    run_ok(p, &["render", "s.toml", "-o", "b.png", "--stats-json", "pipe.json", "--quiet"]);
+    let json = reader.join().unwrap();
+    assert!(json.starts_with('{') && json.contains("\"rays\""), "{json}");
+    assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+    assert_eq!(
+        listing(p),
+        ["b.png", "link.png", "null.json", "pipe.json", "real", "s.toml"],
+        "no temporary file left"
+    );
+}
+
+#[test]
+fn statistics_never_replace_an_image_of_the_render() {
+    for (flags, stats) in [
+        (&[][..], "a.png"),
+        (&["--aov", "depth", "--aov-files"], "a.depth.exr"),
+        (&["--aov", "depth", "--aov-preview"], "a.depth.png"),
+        (&["--aov", "depth"], "a.aov.exr"),
+    ] {
+        let dir = scene_dir();
+        let mut args = vec!["render", "s.toml", "-o", "a.png", "--stats-json", stats];
+        args.extend(flags);
+        let out = prism(dir.path(), &args);
+        common::assert_clean_failure(stats, &out);
+        let err = text(&out.stderr);
+        assert!(
+            err.contains(&format!("--stats-json {stats}: that is also where this render writes")),
+            "{err}"
+        );
+        assert_eq!(listing(dir.path()), ["s.toml"], "{args:?}: nothing written");
+    }
+}

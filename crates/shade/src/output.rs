@@ -122,12 +122,54 @@ pub fn write_image(path: &Path, image: &Image, format: OutputFormat) -> Result<(
 /// Writes `path` atomically: `encode` fills a new temporary file next to
 /// it, which then replaces `path`; on any error the temporary file is
 /// removed and `path` is left as it was.
+///
+/// A symbolic link is followed: the file it points to is replaced (or
+/// made), never the link. A path that is neither a regular file nor
+/// missing (a device such as `/dev/null`, a named pipe) is written into
+/// directly, as a shell redirection would: renaming over it would replace
+/// the device or pipe with a regular file.
 pub(crate) fn write_atomic(
     path: &Path,
     encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
+    let target = through_links(path);
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    if let Ok(meta) = std::fs::metadata(&target)
+        && !meta.is_file()
+        && !meta.is_dir()
+    {
+        let mut w = BufWriter::new(OpenOptions::new().write(true).open(&target).map_err(io)?);
+        encode(&mut w)?;
+        return w.flush().map_err(io);
+    }
+    replace_atomically(path, &target, encode)
+}
+
+/// Where `path` leads after following its symbolic links (each relative
+/// to the folder of the link that names it), at most 40 of them; `path`
+/// itself if it is not a link. The end need not exist.
+fn through_links(path: &Path) -> PathBuf {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        let Ok(next) = std::fs::read_link(&p) else { return p };
+        p = match p.parent() {
+            Some(dir) if next.is_relative() => dir.join(next),
+            _ => next,
+        };
+    }
+    p
+}
+
+/// [`write_atomic`] of `path` (named in errors) into `target`, a regular
+/// file or a missing one: a temporary file beside `target`, renamed over it.
+fn replace_atomically(
+    path: &Path,
+    target: &Path,
+    encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    let path = target;
     let name = path.file_name().ok_or_else(|| invalid(path, "not a file path"))?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
