@@ -1,8 +1,9 @@
 //! Ctrl-C (SIGINT) during `prism render`.
 //!
 //! While the image renders, the first SIGINT sets the render's cancel
-//! flag ([`prism_shade::RenderHooks::cancel`]): the workers stop at their
-//! next row and prism exits with status 130 without writing anything, or,
+//! flag ([`prism_shade::RenderHooks::cancel`]): the workers stop before
+//! their next pixel (or within 1024 samples of a long one), dropping a row
+//! left midway, and prism exits with status 130 without writing anything, or,
 //! with `--partial`, writes the rows finished so far (the rest black) to
 //! the output path the usual atomic way and says so (still status 130: the
 //! image is not the render that was asked for). A second SIGINT exits at

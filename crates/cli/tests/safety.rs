@@ -27,7 +27,12 @@ mod signals {
     /// Starts `prism render s.toml -o img.png ARGS` in `dir` and returns once
     /// it has said that the render started (its SIGINT handler is in place).
     fn start(dir: &Path, args: &[&str]) -> (Child, BufReader<ChildStderr>, String) {
-        fs::write(dir.join("s.toml"), endless_scene()).unwrap();
+        start_scene(dir, &endless_scene(), args)
+    }
+
+    /// [`start`] with the scene `scene`.
+    fn start_scene(dir: &Path, scene: &str, args: &[&str]) -> (Child, BufReader<ChildStderr>, String) {
+        fs::write(dir.join("s.toml"), scene).unwrap();
         let mut child = prism_cmd(dir)
             .args(["render", "s.toml", "-o", "img.png", "--threads", "1"])
             .args(args)
@@ -98,6 +103,24 @@ mod signals {
         assert!(err.contains("error: interrupted (Ctrl-C)") && err.contains("nothing was written"), "{err}");
         assert!(!err.contains("panicked"), "{err}");
         assert_eq!(listing(dir.path()), ["s.toml"], "no image and no temporary file");
+    }
+
+    #[test]
+    fn sigint_stops_a_render_of_one_pixel_with_many_samples() {
+        // One row of one pixel with 2³² − 1 samples: a cancel checked only
+        // between rows would not be seen for hours.
+        let dir = tempfile::tempdir().unwrap();
+        let one = GOOD.replace("width = 32\nheight = 18\nspp = 1", "width = 1\nheight = 1\nspp = 1");
+        let many = ["-s", "4294967295", "--max-spp", "4294967295", "--partial"];
+        let (mut child, err, seen) = start_scene(dir.path(), &one, &many);
+        std::thread::sleep(Duration::from_millis(300));
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(err.contains("after 0 of 1 rows") && err.contains("wrote the partial image"), "{err}");
+        let img = image::open(dir.path().join("img.png")).expect("a valid PNG").to_rgb8();
+        assert_eq!(img.as_raw(), &[0, 0, 0], "the pixel left midway is black, as rows not rendered are");
     }
 
     #[test]

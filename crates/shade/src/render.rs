@@ -58,7 +58,9 @@ impl RenderSettings {
 pub struct RenderHooks<'a> {
     /// Called with `(rows done, rows in all)` as rows finish (from workers).
     pub progress: Option<&'a (dyn Fn(u32, u32) + Sync)>,
-    /// When set, workers stop at the next row; the result is partial.
+    /// When set, workers stop within a moment (before their next pixel,
+    /// or within 1024 samples of one); the result is partial,
+    /// a row left midway as black as a row not started.
     pub cancel: Option<&'a AtomicBool>,
 }
 
@@ -204,6 +206,10 @@ pub fn render_region(
     Ok((image, passes, stats))
 }
 
+/// A render in progress checks its cancel flag every this many samples of
+/// one pixel (and before each pixel).
+const CANCEL_EVERY: u32 = 1024;
+
 /// The one per-pixel sample loop behind every render: rows in parallel;
 /// in each pixel, samples `samples` in increasing order, each camera ray
 /// traced for the beauty sum (if `beauty`) and handed to the row's AOV
@@ -257,9 +263,15 @@ pub(crate) fn render_pixels<'a>(
     };
     let render_row = |r: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>, mut pass: Pass<'_>| {
         let j = ys.start as usize + r;
-        if hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+        let cancelled = || hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+        // Checked before each pixel and every `CANCEL_EVERY` samples within
+        // one, so that a cancel is seen within a moment even when one row
+        // takes long (a huge `spp`); a row left midway is dropped whole.
+        let sample_check = |s: u32| s % CANCEL_EVERY == CANCEL_EVERY - 1 && cancelled();
+        if cancelled() {
             return;
         }
+        let mut stopped = false;
         let mut tracer = Tracer::new(scene, settings, see_through);
         tracer.packets = choice.area_shadows;
         let mut bad = 0u64;
@@ -271,9 +283,17 @@ pub(crate) fn render_pixels<'a>(
             // a time; each sample is shaded and summed as below (bit for bit
             // the same pixels).
             let mut batch = CameraBatch { shadows: choice.camera_shadows, ..CameraBatch::default() };
-            for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+            'pixels: for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+                if cancelled() {
+                    stopped = true;
+                    break;
+                }
                 let pixel_pattern = pattern.pixel(row_start + i as u64);
                 for s in samples.clone() {
+                    if sample_check(s) {
+                        stopped = true;
+                        break 'pixels;
+                    }
                     let (dx, dy) = filter.offset(pixel_pattern.offset(s));
                     batch.push(k, cam.ray(i as f32 + dx, j as f32 + dy));
                     if batch.is_full() {
@@ -283,7 +303,11 @@ pub(crate) fn render_pixels<'a>(
             }
             batch.flush(scene, &mut tracer, row, &mut bad, &mut traced);
         } else {
-            for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+            'pixels: for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+                if cancelled() {
+                    stopped = true;
+                    break;
+                }
                 let index = row_start + i as u64;
                 let mut sum = Vec3::ZERO;
                 let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
@@ -304,6 +328,10 @@ pub(crate) fn render_pixels<'a>(
                     }
                 };
                 for s in run {
+                    if sample_check(s) {
+                        stopped = true;
+                        break 'pixels;
+                    }
                     let (dx, dy) = filter.offset(pixel_pattern.offset(s));
                     let ray = cam.ray(i as f32 + dx, j as f32 + dy);
                     let mut l = Vec3::ZERO;
@@ -336,6 +364,14 @@ pub(crate) fn render_pixels<'a>(
                     sink.end_pixel(scene, cam, i as u32, j as u32);
                 }
             }
+        }
+        if stopped {
+            // As a row skipped after the cancel: zero sums, the AOV miss values.
+            row.fill(Vec3::ZERO);
+            if let Some(sink) = sink {
+                *sink = AovRow::new(aovs, rw, spp, alpha).starting_at(xs.start);
+            }
+            return;
         }
         let aov_rays = sink.map_or(0, |s| s.rays);
         rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);
