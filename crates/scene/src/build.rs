@@ -270,6 +270,13 @@ impl<'a> Build<'a> {
         if let (None, Some(e)) = (material, &obj.material_error) {
             return Err(mtl_unusable(obj, e, named_at));
         }
+        if material.is_none() {
+            for w in &obj.unknown_materials {
+                if !self.warnings.contains(w) {
+                    self.warnings.push(w.clone());
+                }
+            }
+        }
         let Some(slot) = self.slots.get_mut(&key) else {
             return Err(not_read(named_at.clone(), &obj.path.display().to_string()));
         };

@@ -42,6 +42,9 @@ pub struct ObjFile {
     pub mtl_files: Vec<PathBuf>,
     /// What was guessed to read it (`FILE:LINE: ...`), for the user.
     pub warnings: Vec<String>,
+    /// `usemtl` lines naming no material of its libraries (`FILE:LINE:
+    /// ...`), a warning wherever its MTL materials are used.
+    pub unknown_materials: Vec<String>,
 }
 
 /// How vertex normals are chosen.
@@ -174,7 +177,45 @@ pub fn load_obj(
         ));
     }
     warnings.extend(mtl_warnings.into_inner());
-    Ok(ObjFile { path: path.to_path_buf(), models: out, materials, material_error, mtl_files, warnings })
+    let mut unknown_materials = Vec::new();
+    if material_error.is_none() && !mtl_files.is_empty() {
+        let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+        for (line, name) in unknown_usemtl(text, &names) {
+            unknown_materials.push(format!(
+                "{}:{line}: `usemtl {name}` names no material of {} (it defines: {}); those faces get the default material",
+                path.display(),
+                mtllibs.join(", "),
+                if names.is_empty() { "none".to_string() } else { names.join(", ") }
+            ));
+        }
+    }
+    Ok(ObjFile {
+        path: path.to_path_buf(),
+        models: out,
+        materials,
+        material_error,
+        mtl_files,
+        warnings,
+        unknown_materials,
+    })
+}
+
+/// The `usemtl` lines of `text` (1-based line, name) whose name is not
+/// one of `names`, the first of each name only.
+fn unknown_usemtl<'t>(text: &'t str, names: &[&str]) -> Vec<(usize, &'t str)> {
+    let mut out: Vec<(usize, &str)> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let Some(name) = line.strip_prefix("usemtl").filter(|r| r.starts_with(char::is_whitespace)) else {
+            continue;
+        };
+        let name = name.trim();
+        let known = name.is_empty() || name == wild::UNNAMED || names.contains(&name);
+        if !known && !out.iter().any(|(_, n)| *n == name) {
+            out.push((i + 1, name));
+        }
+    }
+    out
 }
 
 /// The smoothing group of every triangle the file's faces make (a face of
@@ -210,7 +251,8 @@ fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
 /// Checks the MTL lines that tobj would panic on or that prism would
 /// refuse later without a line: colours (`Ka`, `Kd`, `Ks`, `Ke`) need
 /// three numbers (one is read as grey before this, see `wild.rs`), finite
-/// and `>= 0`; `Ns`, `Ni`, `d` and `Tr` a finite number `>= 0`. Errors
+/// and `>= 0`; `Ns`, `Ni`, `d` and `Tr` a finite number `>= 0`, `Tr` at
+/// most 1. Errors
 /// carry the 1-based line.
 fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
     for (i, raw) in text.lines().enumerate() {
@@ -229,6 +271,14 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
         for v in &values[..want] {
             if !v.parse::<f32>().is_ok_and(|x| x.is_finite() && x >= 0.0) {
                 return Err((i + 1, format!("`{key}` value `{v}` must be a finite number >= 0")));
+            }
+            // `d` above 1 reads as 1 (opaque); `Tr` is 1 − d, so above 1 it
+            // would be a negative opacity.
+            if key == "Tr" && v.parse::<f32>().is_ok_and(|x| x > 1.0) {
+                return Err((
+                    i + 1,
+                    format!("`Tr` value `{v}` must be between 0 and 1 (the transparency, 1 − d)"),
+                ));
             }
         }
     }
@@ -381,6 +431,20 @@ mod tests {
         assert!(e.1.contains("`-1`"), "{}", e.1);
         assert_eq!(precheck_mtl("Ns nan\n").unwrap_err().0, 1);
         assert!(precheck_mtl("d 0.5 # half\nNs 10\n").is_ok());
+        // `Tr` above 1 would be a negative opacity; `d` above 1 reads as 1.
+        assert_eq!(
+            precheck_mtl("newmtl a\nTr 1.5\n"),
+            Err((2, "`Tr` value `1.5` must be between 0 and 1 (the transparency, 1 − d)".into()))
+        );
+        assert!(precheck_mtl("Tr 1\nTr 0.25\nd 1.5\n").is_ok());
+    }
+
+    #[test]
+    fn usemtl_names_missing_from_the_library_are_found_once() {
+        let text =
+            "usemtl a\nf 1 2 3\nusemtl b # typo\nf 1 2 3\nusemtl b\nusemtl\nusemtl_x c\n  usemtl  c \n";
+        assert_eq!(unknown_usemtl(text, &["a"]), [(3, "b"), (8, "c")]);
+        assert!(unknown_usemtl(text, &["a", "b", "c"]).is_empty());
     }
 
     #[test]

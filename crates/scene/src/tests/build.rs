@@ -45,6 +45,7 @@ fn triangle_obj(material_error: Option<&str>) -> Arc<ObjFile> {
         material_error: material_error.map(str::to_owned),
         mtl_files: Vec::new(),
         warnings: Vec::new(),
+        unknown_materials: Vec::new(),
     })
 }
 

@@ -116,6 +116,33 @@ fn a_named_material_overrides_the_mtl() {
 }
 
 #[test]
+fn a_usemtl_missing_from_the_library_is_a_warning_where_the_mtl_is_used() {
+    let dir = tempfile::tempdir().unwrap();
+    write_cube(dir.path());
+    let obj = fs::read_to_string(dir.path().join("cube.obj")).unwrap();
+    fs::write(dir.path().join("cube.obj"), obj.replace("usemtl mirror", "usemtl miror")).unwrap();
+    let line = obj.lines().position(|l| l == "usemtl mirror").unwrap() + 1;
+    let mesh = "[[objects]]\ntype = \"mesh\"\npath = \"cube.obj\"\n";
+    // Two instances: one warning.
+    let text = format!("{BASE}{mesh}{mesh}");
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("s.toml")).unwrap();
+    let about: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("miror")).collect();
+    assert_eq!(about.len(), 1, "{:?}", loaded.warnings);
+    assert!(
+        about[0].ends_with(&format!(
+            "cube.obj:{line}: `usemtl miror` names no material of cube.mtl (it defines: glass, mirror, painted); those faces get the default material"
+        )),
+        "{}",
+        about[0]
+    );
+    assert!(loaded.info.materials.iter().any(|m| m == "(default)"), "{:?}", loaded.info.materials);
+    // A material named by the object replaces the MTL's: nothing to say.
+    let text = format!("{BASE}{mesh}material = \"red\"\n");
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("s.toml")).unwrap();
+    assert!(!loaded.warnings.iter().any(|w| w.contains("miror")), "{:?}", loaded.warnings);
+}
+
+#[test]
 fn meshes_are_loaded_once_and_instanced() {
     let dir = tempfile::tempdir().unwrap();
     write_cube(dir.path());
