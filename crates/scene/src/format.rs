@@ -101,6 +101,22 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
     {
         return format!("{head}got the date {at}");
     }
+    // A transform step is a one-key table; serde's words for another count.
+    let in_transform = || {
+        innermost_open(text, span.start).is_some_and(|o| {
+            text[..o].trim_end().strip_suffix('=').is_some_and(|k| k.trim_end().ends_with("transform"))
+        })
+    };
+    if message.starts_with("wanted exactly 1 element") && in_transform() {
+        let step = "translate, rotate_x, rotate_y, rotate_z, rotate, scale, shear, shear_angle or matrix";
+        return if message.ends_with("more than 1 element") {
+            "a transform step takes one key; give each step its own table, in order: \
+             `transform = [{ scale = 2 }, { translate = [0, 1, 0] }]`"
+                .into()
+        } else {
+            format!("a transform step needs one key: {step}")
+        };
+    }
     if message.starts_with("duplicate key") && !at.is_empty() {
         return format!("duplicate key `{at}`: it is already defined above");
     }

@@ -414,6 +414,16 @@ fn toml_syntax_errors_say_what_is_wrong_and_where() {
         ("center = [, 0, 1]", ", 0", "extra comma in array, expected value"),
         ("transform = [{ , scale = 2 }]", ", scale", "extra comma in inline table, expected key"),
         ("radius = = 1", "= 1", "extra `=`"),
+        (
+            "transform = [{ translate = [1, 0, 0], scale = 2 }]",
+            "{ translate",
+            "a transform step takes one key; give each step its own table, in order: `transform = [{ scale = 2 }, { translate = [0, 1, 0] }]`",
+        ),
+        (
+            "transform = [{ scale = 2 }, {}]",
+            "{}",
+            "a transform step needs one key: translate, rotate_x, rotate_y, rotate_z, rotate, scale, shear, shear_angle or matrix",
+        ),
         ("radius = 1979-05-27", "1979", "expected a number, got the date 1979-05-27"),
         ("radius = 07:32:00", "07", "expected a number, got the date 07:32:00"),
         (
