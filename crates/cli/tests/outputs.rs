@@ -315,3 +315,21 @@ fn statistics_never_replace_an_image_of_the_render() {
         assert_eq!(listing(dir.path()), ["s.toml"], "{args:?}: nothing written");
     }
 }
+
+/// A full disk, by a link to `/dev/full` (which every write fills): both
+/// encoders report the file system's error, not an encoding one.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_is_reported_as_such_for_png_and_exr() {
+    use std::os::unix::fs::{FileTypeExt, symlink};
+    for name in ["full.png", "full.exr"] {
+        let dir = scene_dir();
+        symlink("/dev/full", dir.path().join(name)).unwrap();
+        let out = prism(dir.path(), &["render", "s.toml", "-o", name, "--quiet"]);
+        common::assert_clean_failure(name, &out);
+        let err = text(&out.stderr);
+        assert!(err.starts_with(&format!("error: cannot write {name}: No space left on device")), "{err}");
+        assert_eq!(listing(dir.path()), [name, "s.toml"], "no temporary file");
+    }
+    assert!(fs::metadata("/dev/full").unwrap().file_type().is_char_device());
+}

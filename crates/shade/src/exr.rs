@@ -14,7 +14,7 @@
 //! non-finite policy: `±∞` is stored as is, NaN as 0.
 
 use crate::PixelBounds;
-use crate::output::{OutputError, invalid, write_atomic};
+use crate::output::{OutputError, encode_into, invalid, write_atomic};
 use ::exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds,
     Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
@@ -286,11 +286,7 @@ pub fn write_layered_exr(path: &Path, image: &LayeredExr) -> Result<(), OutputEr
     );
     let display = IntegerBounds::from_dimensions(Vec2(image.width as usize, image.height as usize));
     let exr = Image::new(ImageAttributes::new(display), layer);
-    write_atomic(path, |w| {
-        exr.write()
-            .to_buffered(w)
-            .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
-    })
+    write_atomic(path, |w| encode_into(path, w, |w| exr.write().to_buffered(w)))
 }
 
 /// The first four bytes of every OpenEXR file.

@@ -17,7 +17,7 @@ use image::{ImageBuffer, ImageFormat, Rgb, Rgba};
 use prism_geometry::glam::Vec3;
 use rayon::prelude::*;
 use std::fs::{File, OpenOptions};
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -257,11 +257,61 @@ where
     check_len(path, width, height, data.len(), usize::from(P::CHANNEL_COUNT))?;
     let buffer: ImageBuffer<P, &[P::Subpixel]> =
         ImageBuffer::from_raw(width, height, data).ok_or_else(|| invalid(path, "buffer too small"))?;
-    write_atomic(path, |w| {
-        buffer
-            .write_to(w, format)
-            .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })
+    write_atomic(path, |w| encode_into(path, w, |w| buffer.write_to(w, format)))
+}
+
+/// Runs the encoder `encode` on `w` for `path`, reporting a failure of
+/// the file system underneath as [`OutputError::Io`] (the `image` crate
+/// turns one from its EXR encoder into the text "Format error decoding
+/// OpenExr: No space left on device"), and any other as
+/// [`OutputError::Image`].
+pub(crate) fn encode_into<W: Write + Seek, E: std::fmt::Display>(
+    path: &Path,
+    w: &mut W,
+    encode: impl FnOnce(&mut Watched<'_, W>) -> Result<(), E>,
+) -> Result<(), OutputError> {
+    let mut watched = Watched { inner: w, failed: None };
+    encode(&mut watched).map_err(|e| match watched.failed.take() {
+        Some(source) => OutputError::Io { path: path.to_path_buf(), source },
+        None => OutputError::Image { path: path.to_path_buf(), reason: e.to_string() },
     })
+}
+
+/// A writer that keeps the first error of the one it wraps (see
+/// [`encode_into`]).
+pub(crate) struct Watched<'a, W> {
+    inner: &'a mut W,
+    failed: Option<std::io::Error>,
+}
+
+impl<W> Watched<'_, W> {
+    fn note<T>(&mut self, r: std::io::Result<T>) -> std::io::Result<T> {
+        if let Err(e) = &r
+            && self.failed.is_none()
+        {
+            self.failed = Some(std::io::Error::new(e.kind(), e.to_string()));
+        }
+        r
+    }
+}
+
+impl<W: Write> Write for Watched<'_, W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.inner.write(buf);
+        self.note(r)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.inner.flush();
+        self.note(r)
+    }
+}
+
+impl<W: Seek> Seek for Watched<'_, W> {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        let r = self.inner.seek(pos);
+        self.note(r)
+    }
 }
 
 /// Writes a linear image as a PNG file through `options` (exposure, tone
