@@ -328,6 +328,9 @@ pub enum BlasKind {
 }
 
 impl BlasKind {
+    /// Every layout.
+    pub const ALL: [Self; 3] = [Self::Cwbvh, Self::Bvh2, Self::Wide];
+
     /// A short lower-case name (`"cwbvh"`, `"bvh2"`).
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -343,12 +346,8 @@ impl BlasKind {
     /// [`BuildOptions`] then use it, for comparisons from any front end.
     #[must_use]
     pub fn from_env() -> Option<Self> {
-        match std::env::var("PRISM_BVH_BLAS").ok()?.as_str() {
-            "cwbvh" => Some(Self::Cwbvh),
-            "bvh2" => Some(Self::Bvh2),
-            "wide" => Some(Self::Wide),
-            _ => None,
-        }
+        let named = std::env::var("PRISM_BVH_BLAS").ok()?;
+        Self::ALL.into_iter().find(|k| k.name() == named)
     }
 }
 

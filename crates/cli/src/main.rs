@@ -56,6 +56,7 @@ macro_rules! out {
 }
 
 mod completions;
+mod env;
 mod farm;
 mod frames;
 mod info;
@@ -245,6 +246,11 @@ impl LimitArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if matches!(cli.command, Command::Render(_) | Command::Info(_) | Command::View(_)) {
+        for w in env::warnings() {
+            eprintln!("warning: {w}");
+        }
+    }
     let result = match cli.command {
         Command::Render(args) => render_command(&args),
         Command::Info(args) => info_command(&args),

@@ -278,3 +278,32 @@ fn camera_chooses_a_named_camera_and_lists_the_names_when_unknown() {
     assert!(err.contains("--camera") && err.contains("`side`") && err.contains("above"), "{err}");
     assert!(!dir.path().join("c.png").exists());
 }
+
+#[test]
+fn unknown_values_of_the_tracing_variables_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    let run = |vars: &[(&str, &str)], args: &[&str]| {
+        let mut cmd = common::prism_cmd(dir.path());
+        for v in ["PRISM_BVH_KERNEL", "PRISM_PACKETS", "PRISM_BVH_BLAS", "PRISM_BVH_NO_SIMD"] {
+            cmd.env_remove(v);
+        }
+        let out = cmd.envs(vars.iter().copied()).args(args).output().unwrap();
+        assert!(out.status.success(), "{vars:?}: {}", text(&out.stderr));
+        text(&out.stderr)
+    };
+    let bad = [("PRISM_BVH_KERNEL", "sse9"), ("PRISM_PACKETS", "yes"), ("PRISM_BVH_BLAS", "bvh4")];
+    for args in [&["render", "s.toml", "-o", "a.png", "--quiet"][..], &["info", "s.toml"]] {
+        let err = run(&bad, args);
+        for needle in [
+            "warning: PRISM_BVH_KERNEL=\"sse9\" is not a kernel (portable, avx2, avx512); using ",
+            "warning: PRISM_PACKETS=\"yes\" is not one of camera, shadow, all, 0; every ray is traced alone",
+            "warning: PRISM_BVH_BLAS=\"bvh4\" is not a layout (cwbvh, bvh2, wide); using the default",
+        ] {
+            assert!(err.contains(needle), "{args:?}: {err}");
+        }
+    }
+    // Known values say nothing.
+    let good = [("PRISM_BVH_KERNEL", "portable"), ("PRISM_PACKETS", "0"), ("PRISM_BVH_BLAS", "bvh2")];
+    assert_eq!(run(&good, &["render", "s.toml", "-o", "b.png", "--quiet"]), "");
+}

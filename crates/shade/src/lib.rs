@@ -97,8 +97,8 @@ pub use output::{
     write_png_rgb8,
 };
 pub use render::{
-    Image, RenderHooks, RenderSettings, RenderStats, in_pool, linear_to_srgb8, render, render_region,
-    render_samples, sample_position,
+    Image, PACKET_MODES, RenderHooks, RenderSettings, RenderStats, in_pool, linear_to_srgb8, render,
+    render_region, render_samples, sample_position,
 };
 pub use scene::{Fog, FogMode, PointLight, Scene};
 pub use texture::{

@@ -519,6 +519,11 @@ fn packet_choice(scene: &Scene, see_through: bool) -> PacketChoice {
     }
 }
 
+/// The values of `PRISM_PACKETS` that the render knows (any
+/// other sends every ray alone, as `0` does), for a front end to check;
+/// keep the two together.
+pub const PACKET_MODES: [&str; 4] = ["camera", "shadow", "all", "0"];
+
 /// Camera rays waiting to be traced together, with the row pixel each
 /// belongs to.
 #[derive(Default)]
