@@ -166,9 +166,17 @@ impl Edited {
         let Some(loc) = e.location().filter(|l| l.file == file) else { return e };
         let Some(line) = loc.line else { return e };
         let column = loc.column.unwrap_or(1);
+        // The array or inline table that starts where the error points, if
+        // one does: an error about the whole value (`position` must be
+        // three finite numbers) is about a set that changed a part of it.
+        let at = offset_of(&self.text, line, column);
+        let whole = at.and_then(|a| value_end(&self.text, a).map(|end| a..end));
         for edit in self.edits.iter().rev() {
             let hit = if edit.lines == 0 {
-                line == edit.line && column >= edit.column
+                (line == edit.line && column >= edit.column)
+                    || whole.as_ref().is_some_and(|w| {
+                        offset_of(&self.text, edit.line, edit.column).is_some_and(|o| w.contains(&o))
+                    })
             } else {
                 (edit.line..edit.line + edit.lines).contains(&line)
             };
@@ -176,6 +184,9 @@ impl Edited {
                 let message = match &e {
                     SceneError::Syntax { message, .. } | SceneError::Invalid { message, .. } => {
                         message.clone()
+                    }
+                    SceneError::Read { what, path, reason, .. } => {
+                        format!("cannot read {what} {}: {reason}", path.display())
                     }
                     other => other.to_string(),
                 };
@@ -215,6 +226,49 @@ impl Edited {
         let location = crate::error::Location { file: file.to_path_buf(), line: Some(line), column };
         self.remap(SceneError::Invalid { location, message: message.to_owned() }, file).to_string()
     }
+}
+
+/// The byte offset of 1-based `line` and `column` (in characters) in
+/// `text`, if there is such a place.
+fn offset_of(text: &str, line: usize, column: usize) -> Option<usize> {
+    let start =
+        if line == 1 { 0 } else { text.match_indices('\n').nth(line.checked_sub(2)?).map(|(i, _)| i + 1)? };
+    let rest = &text[start..];
+    let end = rest.find('\n').unwrap_or(rest.len());
+    rest[..end].char_indices().nth(column.checked_sub(1)?).map(|(i, _)| start + i)
+}
+
+/// Where the array or inline table that opens at byte `at` of `text`
+/// closes (the byte after its bracket), strings and comments skipped;
+/// `None` if no bracket opens there or it is not closed.
+fn value_end(text: &str, at: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    if !matches!(b.get(at), Some(b'[' | b'{')) {
+        return None;
+    }
+    let mut depth = 0usize;
+    let mut i = at;
+    while i < b.len() {
+        match b[i] {
+            b'[' | b'{' => depth += 1,
+            b']' | b'}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(i + 1);
+                }
+            }
+            b'#' => i += b[i..].iter().position(|&c| c == b'\n').unwrap_or(b.len() - i),
+            q @ (b'"' | b'\'') => {
+                i += 1;
+                while i < b.len() && b[i] != q && b[i] != b'\n' {
+                    i += if b[i] == b'\\' && q == b'"' { 2 } else { 1 };
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
 }
 
 /// `keys` as a dotted key, each part quoted where TOML needs it.
@@ -316,6 +370,19 @@ fn missing(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, 
     let (last, table) = keys.split_last().ok_or_else(|| flag_error(set, "empty key"))?;
     let key = Key::new(last.as_str()).to_string();
     if here.is_empty() {
+        // The scene's lists of tables: an entry cannot be made by a set (it
+        // would be a table named `0`).
+        if let [list, entry, ..] = keys
+            && matches!(list.as_str(), "cameras" | "lights" | "objects")
+            && entry.parse::<usize>().is_ok()
+        {
+            return Err(flag_error(
+                set,
+                format!(
+                    "the scene has no `{list}`; a set changes entries of a list but cannot add one (write [[{list}]] in the file)"
+                ),
+            ));
+        }
         // The top level: a key before the first table, or a new table.
         return Ok(if table.is_empty() { Target::Top(key) } else { Target::NewTable(dotted(table), key) });
     }

@@ -96,6 +96,24 @@ fn problems_in_a_set_name_the_flag() {
         (&["render.spp.x=1"], "`render.spp` is a number, not a table"),
         (&["objects.1.radios=1"], "unknown key `radios` in a sphere; did you mean `radius`?"),
         (&["fog.enabled=false"], "--set: fog.enabled=false: linear fog needs `end`"),
+        // A part of an array set: the error about the whole array is the set's.
+        (
+            &["camera.position.1=nan"],
+            "--set: camera.position.1=nan: camera position must be three finite numbers, got [0.0, NaN, 10.0]",
+        ),
+        (
+            &["objects.1.center.0=1e39"],
+            "--set: objects.1.center.0=1e39: sphere center must be three finite numbers, got [1e39, 1.0, 0.0]",
+        ),
+        // A file the set names: the message is the set's, with no place in the file.
+        (
+            &["objects.1.material=m", "materials.m.texture={type=\"image\",path=\"nope.png\"}"],
+            "--set: materials.m.texture={type=\"image\",path=\"nope.png\"}: cannot read texture ./nope.png: no such file",
+        ),
+        (
+            &["cameras.0.name=top"],
+            "--set: cameras.0.name=top: the scene has no `cameras`; a set changes entries of a list but cannot add one (write [[cameras]] in the file)",
+        ),
     ] {
         let err = set_err(&scene(), sets);
         assert!(err.starts_with("--set: ") && err.contains(words), "{sets:?}: {err}");
