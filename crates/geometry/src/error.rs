@@ -14,8 +14,9 @@ pub enum GeometryError {
     },
     /// The transform's linear part is not invertible.
     SingularTransform {
-        /// Its determinant.
-        det: f32,
+        /// Its determinant (computed in `f64`, so that a scale far from 1
+        /// neither overflows nor vanishes).
+        det: f64,
     },
     /// A 4×4 matrix whose last row is not `(0, 0, 0, 1)`.
     NotAffine,

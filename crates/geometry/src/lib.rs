@@ -67,3 +67,34 @@ pub use shapes::{
     Triangles4, azimuth_u, sphere_uv,
 };
 pub use transform::{Shear, Transform};
+
+/// `v` scaled to length 1, or `None` where it is zero or not finite.
+/// Unlike `Vec3::try_normalize`, any finite vector works: it is divided by
+/// its largest component first, so that its squared length neither
+/// overflows (from about 1.8e19) nor vanishes (below about 1e-19).
+#[must_use]
+pub fn unit(v: glam::Vec3) -> Option<glam::Vec3> {
+    let largest = v.abs().max_element();
+    if !(largest > 0.0 && largest.is_finite()) {
+        return None;
+    }
+    (v / largest).try_normalize()
+}
+
+#[cfg(test)]
+mod unit_tests {
+    use super::unit;
+    use glam::Vec3;
+
+    #[test]
+    fn unit_vectors_of_any_finite_size() {
+        for s in [1e30f32, 1e20, 1.0, 1e-20, 1e-40] {
+            let u = unit(Vec3::new(3.0, -4.0, 0.0) * s).unwrap_or_else(|| panic!("{s}"));
+            assert!((u - Vec3::new(0.6, -0.8, 0.0)).length() < 1e-6, "{s}: {u}");
+        }
+        assert_eq!(unit(Vec3::new(0.0, -1e38, -1e38)), Some(Vec3::new(0.0, -1.0, -1.0).normalize()));
+        for v in [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::new(f32::NAN, 1.0, 0.0)] {
+            assert_eq!(unit(v), None, "{v}");
+        }
+    }
+}

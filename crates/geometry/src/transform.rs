@@ -1,7 +1,7 @@
 //! Affine transforms that place shapes in the world.
 
 use crate::{Aabb, GeometryError, Hit, Ray};
-use glam::{Affine3A, Mat3, Mat3A, Mat4, Vec3, Vec3A};
+use glam::{Affine3A, DMat3, Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
 /// Smallest |determinant| of the linear part, relative to the product of
 /// its column lengths, accepted as invertible.
@@ -59,17 +59,26 @@ impl Transform {
         if !m.is_finite() {
             return Err(GeometryError::NonFinite("transform"));
         }
-        let det = m.matrix3.determinant();
+        // In f64: the determinant of a scale of 1e13 (or 1e-13) is past
+        // f32's range, and the inverse would be lost with it.
+        let d = DMat3::from_cols(
+            m.matrix3.x_axis.as_dvec3(),
+            m.matrix3.y_axis.as_dvec3(),
+            m.matrix3.z_axis.as_dvec3(),
+        );
+        let det = d.determinant();
         // Relative test: |det| against the volume the columns could span at
         // most (Hadamard's bound), so that a small uniform scale (a model in
         // millimetres) is accepted while a flattening map is not.
-        let hadamard = m.matrix3.x_axis.length() * m.matrix3.y_axis.length() * m.matrix3.z_axis.length();
-        if !(det.abs() > MIN_REL_DET * hadamard) {
+        let hadamard = d.x_axis.length() * d.y_axis.length() * d.z_axis.length();
+        if !(det.abs() > f64::from(MIN_REL_DET) * hadamard) {
             return Err(GeometryError::SingularTransform { det });
         }
-        let inv = m.inverse();
+        let d_inv = d.inverse();
+        let inv =
+            Affine3A::from_mat3_translation(d_inv.as_mat3(), (-(d_inv * m.translation.as_dvec3())).as_vec3());
         if !inv.is_finite() {
-            return Err(GeometryError::SingularTransform { det });
+            return Err(GeometryError::NonFinite("inverse transform (the scale is too far from 1)"));
         }
         Ok(Self::from_parts(m, inv, inv.matrix3.transpose()))
     }
@@ -429,6 +438,22 @@ mod tests {
         let h = b.intersect(&Ray::new(Vec3::new(3.0, 0.0, -5.0), Vec3::NEG_X)).unwrap();
         close3(h.geo_normal, Vec3::X, 1e-6);
         assert!(h.front_face);
+    }
+
+    #[test]
+    fn uniform_scales_far_from_one_are_invertible() {
+        // Their determinants (1e60, 1e-60) are past f32's range; the check
+        // and the inverse are made in f64.
+        for s in [1e20f32, 1e13, 1e-13, 1e-20] {
+            let m = Transform::scale(Vec3::splat(s)).unwrap_or_else(|e| panic!("scale {s}: {e}"));
+            let m = m.then(&t(Vec3::new(1.0, 2.0, 3.0) * s));
+            let p = Vec3::new(0.5, -0.25, 2.0);
+            let back = m.ray_to_object(&Ray::new(m.point(p), Vec3::X)).origin;
+            close3(back, p, 1e-5 * p.length());
+        }
+        // A scale whose inverse is past f32's range is refused as such.
+        let tiny = Transform::scale(Vec3::new(1e-39, 1.0, 1.0));
+        assert!(matches!(tiny, Err(GeometryError::SingularTransform { .. } | GeometryError::NonFinite(_))));
     }
 
     #[test]

@@ -53,7 +53,7 @@ pub(crate) fn light(ctx: &Ctx, l: &Spanned<LightDef>) -> Result<Light> {
     };
     let direction = |v: &Option<V3>| -> Result<Vec3> {
         let dir = need(v, "direction")?;
-        dir.try_normalize().filter(|d| d.is_finite()).ok_or_else(|| {
+        prism_geometry::unit(dir).ok_or_else(|| {
             ctx.invalid(
                 &span_of(v).unwrap_or(span.clone()),
                 format!("{name} light direction must not be zero"),
@@ -136,7 +136,13 @@ fn area(ctx: &Ctx, d: &LightDef, kind: LightKindDef, span: &Range<usize>) -> Res
             let (edge_u, _) = need_vec(&d.edge_u, "edge_u")?;
             let (edge_v, v_span) = need_vec(&d.edge_v, "edge_v")?;
             let area = edge_u.cross(edge_v).length();
-            if !(area > 0.0 && area.is_finite()) {
+            if area.is_infinite() {
+                return Err(ctx.invalid(
+                    &v_span,
+                    format!("a quad light's area overflows 32-bit floats (edges {edge_u} and {edge_v}); use shorter edges"),
+                ));
+            }
+            if !(area > 0.0) {
                 return Err(ctx.invalid(
                     &v_span,
                     "a quad light has zero area: edge_u and edge_v must be non-zero and not parallel",
@@ -147,9 +153,7 @@ fn area(ctx: &Ctx, d: &LightDef, kind: LightKindDef, span: &Range<usize>) -> Res
         LightKindDef::Disk => {
             let center = ctx.opt_vec3(d.center.as_ref(), "disk light center", Vec3::ZERO)?;
             let (normal, n_span) = need_vec(&d.normal, "normal")?;
-            let normal = normal
-                .try_normalize()
-                .filter(|n| n.is_finite())
+            let normal = prism_geometry::unit(normal)
                 .ok_or_else(|| ctx.invalid(&n_span, "disk light normal must not be zero"))?;
             AreaShape::Disk { center, normal, radius: radius()? }
         }

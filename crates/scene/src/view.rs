@@ -115,7 +115,7 @@ pub(crate) fn camera(
         None
     };
     let forward = look_at - position;
-    if forward.length_squared() == 0.0 || !forward.is_finite() {
+    let Some(f) = prism_geometry::unit(forward) else {
         return Err(match moved {
             Some(flag) => SceneError::Option {
                 flag,
@@ -128,9 +128,8 @@ pub(crate) fn camera(
                 message: "camera look_at must differ from the camera position".into(),
             },
         });
-    }
-    let f = forward.normalize();
-    if up.length_squared() == 0.0 || f.cross(up.normalize()).length() < 1e-6 {
+    };
+    if prism_geometry::unit(up).is_none_or(|u| f.cross(u).length() < 1e-6) {
         let message = format!(
             "camera up {up} is zero or parallel to the view direction {f}; choose an up vector across it"
         );

@@ -67,10 +67,12 @@ impl Camera {
         if width == 0 || height == 0 {
             return Err(ShadeError::Camera(format!("image size must be at least 1×1, got {width}×{height}")));
         }
-        let forward = (look_at - position)
-            .try_normalize()
+        // `unit` where `try_normalize` fails: a direction of any finite size
+        // (a camera 1e20 away) is a direction.
+        let unit = |v: Vec3| v.try_normalize().filter(|u| u.is_finite()).or_else(|| prism_geometry::unit(v));
+        let forward = unit(look_at - position)
             .ok_or_else(|| ShadeError::Camera("camera position and look_at are the same point".into()))?;
-        let right = forward.cross(up).try_normalize().filter(|r| r.is_finite()).ok_or_else(|| {
+        let right = unit(forward.cross(up)).ok_or_else(|| {
             ShadeError::Camera("up vector is zero or parallel to the view direction".into())
         })?;
         let true_up = right.cross(forward);
@@ -86,7 +88,11 @@ impl Camera {
             tan_half: (vfov_deg.to_radians() * 0.5).tan(),
             projection: Projection::Perspective,
             aperture: 0.0,
-            focus_distance: (look_at - position).length(),
+            // Past 1.8e19 apart the squared length overflows; along the
+            // unit forward the same distance does not.
+            focus_distance: Some((look_at - position).length())
+                .filter(|d| d.is_finite())
+                .unwrap_or_else(|| forward.dot(look_at - position)),
         })
     }
 

@@ -470,3 +470,25 @@ fn dotted_keys_are_read_as_tables() {
     );
     assert_at(&err, "[[objects]]\ntype = \"sphere\"\ncenter.x = 1\n", "center.x");
 }
+
+#[test]
+fn large_finite_values_are_not_mistaken_for_zero() {
+    // Squared lengths past f32's range (about 1.8e19 and up) once made these
+    // "zero", "parallel" or "singular".
+    let far = BASE.replace("position = [0, 2, 10]", "position = [1e20, 2, 10]");
+    assert_ne!(far, BASE);
+    let loaded = parse(&far).unwrap();
+    assert!(loaded.settings.camera.focus_distance().is_finite());
+    parse(&BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nup = [0, 1e30, 0]")).unwrap();
+    parse(&format!("{BASE}[[lights]]\ntype = \"directional\"\ndirection = [0, -1e30, -1e30]\n")).unwrap();
+    for scale in ["1e20", "1e-20"] {
+        parse(&format!(
+            "{BASE}[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{{ scale = {scale} }}]\n"
+        ))
+        .unwrap();
+    }
+    let quad =
+        "[[lights]]\ntype = \"quad\"\ncorner = [0, 5, 0]\nedge_u = [1e20, 0, 0]\nedge_v = [0, 0, 1e20]\n";
+    let err = expect_err(quad, "a quad light's area overflows 32-bit floats");
+    assert_at(&err, quad, "edge_v");
+}
