@@ -92,9 +92,13 @@ impl Edited {
         if value.contains('\n') {
             return Err(flag_error(set, "the value must be on one line"));
         }
-        // A TOML value as written, or else a string (`material=blue`).
+        // A TOML value as written, or else a string (`material=blue`); but
+        // a whole number TOML cannot hold is not meant as a string.
         let repr = match value.parse::<Value>() {
             Ok(_) => value.to_owned(),
+            Err(_) if value.parse::<i128>().is_ok() => {
+                return Err(flag_error(set, format!("{value} is beyond the 64-bit range of whole numbers")));
+            }
             Err(_) => Value::from(value).to_string().trim().to_owned(),
         };
         let doc = ImDocument::parse(self.text.as_str()).map_err(|e| {

@@ -111,6 +111,10 @@ fn problems_in_a_set_name_the_flag() {
             "--set: materials.m.texture={type=\"image\",path=\"nope.png\"}: cannot read texture ./nope.png: no such file",
         ),
         (
+            &["render.spp=18446744073709551615"],
+            "--set: render.spp=18446744073709551615: 18446744073709551615 is beyond the 64-bit range of whole numbers",
+        ),
+        (
             &["cameras.0.name=top"],
             "--set: cameras.0.name=top: the scene has no `cameras`; a set changes entries of a list but cannot add one (write [[cameras]] in the file)",
         ),
