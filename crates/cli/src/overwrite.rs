@@ -42,7 +42,7 @@ pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<(
     if output.is_dir() {
         bail!("{}: the output is a directory; give {}", output.display(), what.name_hint());
     }
-    if let Some(t) = resolved(output)
+    if let Some(t) = written(output)
         && inputs.contains(&t)
     {
         bail!(
@@ -52,6 +52,17 @@ pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<(
         );
     }
     Ok(())
+}
+
+/// The absolute path of the file writing `path` replaces (links followed
+/// as the writer follows them, `prism_shade::output_target`); `None` for
+/// a device or pipe, which replaces no file.
+fn written(path: &Path) -> Option<PathBuf> {
+    match prism_shade::output_target(path) {
+        Ok(prism_shade::OutputTarget::Replace(target)) => resolved(&target),
+        Ok(prism_shade::OutputTarget::Into) => None,
+        Err(_) => resolved(path),
+    }
 }
 
 /// The absolute path `path` names, links followed: the path itself if it
@@ -70,8 +81,8 @@ fn resolved(path: &Path) -> Option<PathBuf> {
 /// the render writes (the image, its AOV files and previews), which the
 /// statistics would replace.
 pub fn check_stats_apart(stats: &Path, images: &[PathBuf]) -> Result<()> {
-    let Some(s) = resolved(stats) else { return Ok(()) };
-    if let Some(image) = images.iter().find(|i| resolved(i).as_ref() == Some(&s)) {
+    let Some(s) = written(stats) else { return Ok(()) };
+    if let Some(image) = images.iter().find(|i| written(i).as_ref() == Some(&s)) {
         bail!(
             "--stats-json {}: that is also where this render writes {}; give the statistics another name",
             stats.display(),

@@ -15,7 +15,13 @@ use std::path::Path;
 /// yet are not created here.
 pub fn check_writable(output: &Path) -> Result<()> {
     let shown = output.display();
-    let dir = existing_dir(output)?;
+    // The file the writer will replace (through links); a device or pipe
+    // is written into, and a path that cannot be followed is refused here.
+    let target = match prism_shade::output_target(output)? {
+        prism_shade::OutputTarget::Replace(t) => t,
+        prism_shade::OutputTarget::Into => return Ok(()),
+    };
+    let dir = existing_dir(&target)?;
     let probe = dir.join(format!(".prism-write-check-{}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
         Ok(_) => {
@@ -85,7 +91,11 @@ fn judge(available: u64, needed: u64) -> Space {
 /// is full, a warning (returned) if the files may not fit. Where the
 /// system does not tell (not Unix, or statvfs fails), nothing is checked.
 pub fn check_space(output: &Path, needed: u64) -> Result<Option<String>> {
-    let dir = existing_dir(output)?;
+    let target = match prism_shade::output_target(output)? {
+        prism_shade::OutputTarget::Replace(t) => t,
+        prism_shade::OutputTarget::Into => return Ok(None),
+    };
+    let dir = existing_dir(&target)?;
     let Some(available) = available_bytes(dir) else { return Ok(None) };
     let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
     match judge(available, needed) {

@@ -284,6 +284,14 @@ fn outputs_go_through_links_and_into_pipes_and_devices() {
         move || fs::read_to_string(fifo).unwrap()
     });
     run_ok(p, &["render", "s.toml", "-o", "b.png", "--stats-json", "pipe.json", "--quiet"]);
+    if !reader.is_finished() {
+        // prism did not write into the pipe (it replaced it?): open its
+        // other end so that the reader ends, and the checks below fail.
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        if !reader.is_finished() {
+            let _ = fs::OpenOptions::new().write(true).open(&fifo);
+        }
+    }
     let json = reader.join().unwrap();
     assert!(json.starts_with('{') && json.contains("\"rays\""), "{json}");
     assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
@@ -292,6 +300,25 @@ fn outputs_go_through_links_and_into_pipes_and_devices() {
         ["b.png", "link.png", "null.json", "pipe.json", "real", "s.toml"],
         "no temporary file left"
     );
+    // Standard output, as a path: the statistics go down the pipe.
+    let out = common::prism_cmd(p)
+        .args(["render", "s.toml", "-o", "c.png", "--stats-json", "/dev/stdout", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).trim_start().starts_with('{') && text(&out.stdout).contains("\"rays\""));
+    // A loop of links is refused before the render, and left as it was.
+    symlink("loop.png", p.join("loop.png")).unwrap();
+    let out = prism(p, &["render", "s.toml", "-o", "loop.png"]);
+    common::assert_clean_failure("loop", &out);
+    let err = text(&out.stderr);
+    assert!(err.contains("loop.png") && err.contains("symbolic links"), "{err}");
+    assert!(fs::symlink_metadata(p.join("loop.png")).unwrap().file_type().is_symlink());
+    // A link to an image of the render, not made yet, is that image.
+    symlink("d.png", p.join("d.json")).unwrap();
+    let out = prism(p, &["render", "s.toml", "-o", "d.png", "--stats-json", "d.json"]);
+    common::assert_clean_failure("stats through a link", &out);
+    assert!(!p.join("d.png").exists());
 }
 
 #[test]

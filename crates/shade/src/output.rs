@@ -121,43 +121,103 @@ pub fn write_image(path: &Path, image: &Image, format: OutputFormat) -> Result<(
 
 /// Writes `path` atomically: `encode` fills a new temporary file next to
 /// it, which then replaces `path`; on any error the temporary file is
-/// removed and `path` is left as it was.
-///
-/// A symbolic link is followed: the file it points to is replaced (or
-/// made), never the link. A path that is neither a regular file nor
-/// missing (a device such as `/dev/null`, a named pipe) is written into
-/// directly, as a shell redirection would: renaming over it would replace
-/// the device or pipe with a regular file.
+/// removed and `path` is left as it was. Where it writes is
+/// [`output_target`]'s choice: the file a symbolic link points to (the
+/// link kept), or, for a device, pipe or descriptor, into it directly.
 pub(crate) fn write_atomic(
     path: &Path,
     encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
-    let target = through_links(path);
-    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
-    if let Ok(meta) = std::fs::metadata(&target)
-        && !meta.is_file()
-        && !meta.is_dir()
-    {
-        let mut w = BufWriter::new(OpenOptions::new().write(true).open(&target).map_err(io)?);
-        encode(&mut w)?;
-        return w.flush().map_err(io);
+    match output_target(path)? {
+        OutputTarget::Replace(target) => replace_atomically(path, &target, encode),
+        OutputTarget::Into => {
+            let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+            let mut w = BufWriter::new(OpenOptions::new().write(true).open(path).map_err(io)?);
+            encode(&mut w)?;
+            w.flush().map_err(io)
+        }
     }
-    replace_atomically(path, &target, encode)
 }
 
-/// Where `path` leads after following its symbolic links (each relative
-/// to the folder of the link that names it), at most 40 of them; `path`
-/// itself if it is not a link. The end need not exist.
-fn through_links(path: &Path) -> PathBuf {
-    let mut p = path.to_path_buf();
-    for _ in 0..40 {
-        let Ok(next) = std::fs::read_link(&p) else { return p };
-        p = match p.parent() {
-            Some(dir) if next.is_relative() => dir.join(next),
-            _ => next,
-        };
+/// Where an output path leads ([`output_target`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum OutputTarget {
+    /// A regular file, or none yet, at this path (symbolic links
+    /// followed): replaced atomically, by a temporary file in its folder
+    /// renamed over it.
+    Replace(PathBuf),
+    /// A device, a named pipe or a descriptor (`/dev/null`, `/dev/stdout`,
+    /// a FIFO): written into through the path given, as a shell
+    /// redirection would, since renaming over it would replace it with a
+    /// regular file. A pipe with no reader waits for one.
+    Into,
+}
+
+/// Where writing `path` goes: for the writers, and for the checks a
+/// front end makes before rendering (the folder to probe, the files that
+/// must not be the same).
+///
+/// A path under `/dev` or `/proc` (`/dev/stdout`, `/dev/fd/3`) and any
+/// existing path that is not a regular file or a folder are written into.
+/// Otherwise symbolic links are followed to the file they name, even one
+/// not made yet, except a link in a shared sticky folder (such as `/tmp`)
+/// that the folder's owner did not make, which could point anywhere
+/// (the kernel's `protected_symlinks` rule, made stricter).
+///
+/// # Errors
+/// [`OutputError::Io`] for a loop of links (more than 40), a link in a
+/// shared folder as above, or a path that cannot be examined.
+pub fn output_target(path: &Path) -> Result<OutputTarget, OutputError> {
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    if path.starts_with("/dev") || path.starts_with("/proc") {
+        return Ok(OutputTarget::Into);
     }
-    p
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() && !m.is_dir() => return Ok(OutputTarget::Into),
+        Ok(_) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(io(e)),
+    }
+    let mut p = path.to_path_buf();
+    for _ in 0..=40 {
+        let link = match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => m,
+            _ => return Ok(OutputTarget::Replace(p)),
+        };
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if shared_folder_link(&dir, &link) {
+            return Err(io(std::io::Error::other(format!(
+                "a symbolic link in the shared folder {}, not made by its owner: prism does not follow it \
+                 (give the path of the file it points to)",
+                dir.display()
+            ))));
+        }
+        p = dir.join(std::fs::read_link(&p).map_err(io)?);
+    }
+    Err(io(std::io::Error::other("too many levels of symbolic links")))
+}
+
+/// Whether `dir` is sticky and writable by all (such as `/tmp`) and the
+/// link, of metadata `link`, is not its owner's.
+#[cfg(unix)]
+fn shared_folder_link(dir: &Path, link: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(dir).is_ok_and(|d| not_followed(d.mode(), d.uid(), link.uid()))
+}
+
+/// [`shared_folder_link`]'s rule on a folder's mode and owner and a link's
+/// owner: sticky (`0o1000`) and writable by all (`0o0002`), and another's.
+#[cfg(unix)]
+fn not_followed(dir_mode: u32, dir_owner: u32, link_owner: u32) -> bool {
+    dir_mode & 0o1002 == 0o1002 && link_owner != dir_owner
+}
+
+#[cfg(not(unix))]
+fn shared_folder_link(_: &Path, _: &std::fs::Metadata) -> bool {
+    false
 }
 
 /// [`write_atomic`] of `path` (named in errors) into `target`, a regular
@@ -588,6 +648,34 @@ pub fn write_aov_preview_png(path: &Path, pass: &AovImage) -> Result<(), OutputE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn links_in_shared_sticky_folders_are_followed_only_if_the_owner_made_them() {
+        // /tmp: 0o1777, root's. A link made by user 1000 there is not followed.
+        assert!(not_followed(0o41777, 0, 1000));
+        assert!(!not_followed(0o41777, 0, 0), "root's own link in /tmp");
+        assert!(!not_followed(0o40755, 0, 1000), "not writable by all");
+        assert!(!not_followed(0o40777, 0, 1000), "not sticky");
+    }
+
+    #[test]
+    fn output_targets_follow_links_and_write_into_devices() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        assert_eq!(output_target(&p.join("new.png")).unwrap(), OutputTarget::Replace(p.join("new.png")));
+        assert_eq!(output_target(Path::new("/dev/stdout")).unwrap(), OutputTarget::Into);
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink("b.png", p.join("a.png")).unwrap();
+            std::os::unix::fs::symlink("sub/c.png", p.join("b.png")).unwrap();
+            assert_eq!(output_target(&p.join("a.png")).unwrap(), OutputTarget::Replace(p.join("sub/c.png")));
+            std::os::unix::fs::symlink("loop.png", p.join("loop.png")).unwrap();
+            let e = output_target(&p.join("loop.png")).unwrap_err().to_string();
+            assert!(e.contains("loop.png") && e.to_lowercase().contains("symbolic links"), "{e}");
+            assert_eq!(output_target(Path::new("/dev/null")).unwrap(), OutputTarget::Into);
+        }
+    }
     use prism_geometry::glam::Vec3;
 
     fn listing(dir: &Path) -> Vec<std::ffi::OsString> {
