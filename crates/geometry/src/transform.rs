@@ -78,7 +78,9 @@ impl Transform {
         let inv =
             Affine3A::from_mat3_translation(d_inv.as_mat3(), (-(d_inv * m.translation.as_dvec3())).as_vec3());
         if !inv.is_finite() {
-            return Err(GeometryError::NonFinite("inverse transform (the scale is too far from 1)"));
+            return Err(GeometryError::Degenerate(
+                "transform's inverse is past the range of 32-bit floats (a scale too far from 1)",
+            ));
         }
         Ok(Self::from_parts(m, inv, inv.matrix3.transpose()))
     }
@@ -453,7 +455,7 @@ mod tests {
         }
         // A scale whose inverse is past f32's range is refused as such.
         let tiny = Transform::scale(Vec3::new(1e-39, 1.0, 1.0));
-        assert!(matches!(tiny, Err(GeometryError::SingularTransform { .. } | GeometryError::NonFinite(_))));
+        assert!(matches!(tiny, Err(GeometryError::SingularTransform { .. } | GeometryError::Degenerate(_))));
     }
 
     #[test]

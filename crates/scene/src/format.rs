@@ -129,8 +129,8 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
             .into();
     }
     let first = at.split_whitespace().next().unwrap_or(at);
-    let a_value = first.parse::<f64>().is_ok()
-        || matches!(first, "true" | "false" | "inf" | "+inf" | "-inf" | "nan" | "+nan" | "-nan");
+    // A value by TOML's own rules (`1_000`, `0x10`, `inf`; not `Infinity`).
+    let a_value = toml::from_str::<toml::Table>(&format!("v = {first}")).is_ok();
     if a_value && first.len() < at.len() {
         let wanted = match innermost_open(text, span.start).map(|o| text.as_bytes()[o]) {
             Some(b'[') => "`,` or `]`",
@@ -139,7 +139,7 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
         };
         return format!("expected {wanted} after `{first}`");
     }
-    format!("`{at}` is not a value: a string must be quoted (\"{at}\")")
+    format!("`{at}` is not a value: a string must be quoted ({})", toml::Value::String(at.to_owned()))
 }
 
 /// The byte offset of the innermost `[` or `{` still open at byte

@@ -96,7 +96,7 @@ impl Edited {
         // a whole number TOML cannot hold is not meant as a string.
         let repr = match value.parse::<Value>() {
             Ok(_) => value.to_owned(),
-            Err(_) if value.parse::<i128>().is_ok() => {
+            Err(_) if toml_integer_digits(value) => {
                 return Err(flag_error(set, format!("{value} is beyond the 64-bit range of whole numbers")));
             }
             Err(_) => Value::from(value).to_string().trim().to_owned(),
@@ -230,6 +230,16 @@ impl Edited {
         let location = crate::error::Location { file: file.to_path_buf(), line: Some(line), column };
         self.remap(SceneError::Invalid { location, message: message.to_owned() }, file).to_string()
     }
+}
+
+/// Whether `value` is written as a TOML decimal integer (an optional sign,
+/// then `0` or digits not starting with `0`), whatever its size: one
+/// toml cannot hold is a number too large, not a string (`007` is a name).
+fn toml_integer_digits(value: &str) -> bool {
+    let digits = value.strip_prefix(['+', '-']).unwrap_or(value);
+    !digits.is_empty()
+        && digits.bytes().all(|b| b.is_ascii_digit())
+        && (digits == "0" || !digits.starts_with('0'))
 }
 
 /// The byte offset of 1-based `line` and `column` (in characters) in

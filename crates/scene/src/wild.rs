@@ -40,10 +40,11 @@ fn unixify(path: &str) -> Option<String> {
 }
 
 /// Rewrites the OBJ lines tobj cannot take: `mtllib` with Windows
-/// separators, `usemtl` without a name. Returns the text and the warnings
+/// separators, `usemtl` without a name or with more than `usemtl NAME`
+/// on its line (a comment, indentation). Returns the text and the warnings
 /// (`line N: ...`).
 pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
-    fix_lines(text, |no, key, rest| match key {
+    fix_lines(text, |no, key, rest, body| match key {
         "mtllib" => unixify(rest).map(|p| {
             (
                 format!("mtllib {p}"),
@@ -54,6 +55,16 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
             format!("usemtl {UNNAMED}"),
             format!("line {no}: `usemtl` without a name; using the material named `{UNNAMED}`"),
         )),
+        // tobj takes everything after the line's first space as the name
+        // (a comment, the keyword of an indented line): the name alone.
+        "usemtl" if body != format!("usemtl {rest}") => Some((
+            format!("usemtl {rest}"),
+            format!(
+                "line {no}: `{}`{} read as `usemtl {rest}`",
+                body.trim(),
+                if body.starts_with(char::is_whitespace) { " (indented)" } else { "" }
+            ),
+        )),
         _ => None,
     })
 }
@@ -62,7 +73,7 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
 /// `newmtl` without a name, texture paths with Windows separators.
 /// Returns the text and the warnings (`line N: ...`).
 pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
-    fix_lines(text, |no, key, rest| match key {
+    fix_lines(text, |no, key, rest, _| match key {
         "Ka" | "Kd" | "Ks" | "Ke" | "Tf" if rest.split_whitespace().count() == 1 => Some((
             format!("{key} {rest} {rest} {rest}"),
             format!("line {no}: `{key} {rest}` has one value; read as grey `{key} {rest} {rest} {rest}`"),
@@ -82,7 +93,7 @@ pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
 /// line; a `Some((new line, warning))` replaces the line.
 fn fix_lines(
     text: &str,
-    fix: impl Fn(usize, &str, &str) -> Option<(String, String)>,
+    fix: impl Fn(usize, &str, &str, &str) -> Option<(String, String)>,
 ) -> (Cow<'_, str>, Vec<String>) {
     let mut warnings = Vec::new();
     let mut out: Option<String> = None;
@@ -92,7 +103,7 @@ fn fix_lines(
         let trimmed = body.trim_start();
         let key = trimmed.split_whitespace().next().unwrap_or("");
         let rest = trimmed[key.len()..].split('#').next().unwrap_or("").trim();
-        if let Some((new, warning)) = fix(i + 1, key, rest) {
+        if let Some((new, warning)) = fix(i + 1, key, rest, body) {
             let o = out.get_or_insert_with(|| String::with_capacity(text.len() + 64));
             let start = line.as_ptr() as usize - text.as_ptr() as usize;
             o.push_str(&text[done..start]);
@@ -133,6 +144,17 @@ mod tests {
         assert!(w[0].starts_with("line 2:") && w[1].starts_with("line 3:"), "{w:?}");
         let (t, w) = fix_obj("v 0 0 0\nf 1 1 1");
         assert!(matches!(t, Cow::Borrowed(_)) && w.is_empty());
+        // tobj would read `red # body` and `usemtl red` as the names.
+        let (t, w) = fix_obj("usemtl red # body\n  usemtl red\nusemtl\tred\nusemtl red\n");
+        assert_eq!(t, "usemtl red\nusemtl red\nusemtl red\nusemtl red\n");
+        assert_eq!(
+            w,
+            [
+                "line 1: `usemtl red # body` read as `usemtl red`",
+                "line 2: `usemtl red` (indented) read as `usemtl red`",
+                "line 3: `usemtl\tred` read as `usemtl red`"
+            ]
+        );
     }
 
     #[test]

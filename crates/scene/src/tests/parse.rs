@@ -408,6 +408,13 @@ fn toml_syntax_errors_say_what_is_wrong_and_where() {
             "a value is missing here (a number, a \"string\", true or false, an [array] or a { table })",
         ),
         ("material = red", "red", "`red` is not a value: a string must be quoted (\"red\")"),
+        (
+            "material = Infinity Blue",
+            "Inf",
+            "`Infinity Blue` is not a value: a string must be quoted (\"Infinity Blue\")",
+        ),
+        ("center = [1_000 2]", "1_0", "expected `,` or `]` after `1_000`"),
+        ("material = a\\b", "a\\", "`a\\b` is not a value: a string must be quoted ('a\\b')"),
         ("radius = 1\nradius = 2", "radius = 2", "duplicate key `radius`: it is already defined above"),
         ("radius = 1e999999999999999999999", "1e9", "floating-point number overflowed"),
         ("center = [0, , 1]", ", 1]", "extra comma in array, expected value"),

@@ -111,6 +111,12 @@ fn problems_in_a_set_name_the_flag() {
             "--set: materials.m.texture={type=\"image\",path=\"nope.png\"}: cannot read texture ./nope.png: no such file",
         ),
         (
+            &["render.spp=123456789012345678901234567890123456789012345"],
+            "is beyond the 64-bit range of whole numbers",
+        ),
+        // Leading zeros: not a TOML number, so a string.
+        (&["render.spp=010"], "expected a whole number (0 or more), got the string \"010\""),
+        (
             &["render.spp=18446744073709551615"],
             "--set: render.spp=18446744073709551615: 18446744073709551615 is beyond the 64-bit range of whole numbers",
         ),
