@@ -15,7 +15,7 @@
 use crate::error::SceneError;
 use std::ops::Range;
 use std::path::Path;
-use toml_edit::{ImDocument, Item, Key, Table, Value};
+use toml_edit::{Document, Item, Key, Table, Value};
 
 /// The flag, in messages.
 const FLAG: &str = "--set";
@@ -101,7 +101,7 @@ impl Edited {
             }
             Err(_) => Value::from(value).to_string().trim().to_owned(),
         };
-        let doc = ImDocument::parse(self.text.as_str()).map_err(|e| {
+        let doc = Document::parse(self.text.as_str()).map_err(|e| {
             let location = match e.span() {
                 Some(s) => crate::error::Location::at_span(file, &self.text, &s),
                 None => crate::error::Location::file(file),

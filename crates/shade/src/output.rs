@@ -157,26 +157,30 @@ pub enum OutputTarget {
 /// front end makes before rendering (the folder to probe, the files that
 /// must not be the same).
 ///
-/// A path under `/dev` or `/proc` (`/dev/stdout`, `/dev/fd/3`) and any
-/// existing path that is not a regular file or a folder are written into.
+/// An existing path under `/dev` or `/proc` (`/dev/stdout`, `/dev/fd/3`)
+/// and any existing path that is not a regular file or a folder are
+/// written into.
 /// Otherwise symbolic links are followed to the file they name, even one
 /// not made yet, except a link in a shared sticky folder (such as `/tmp`)
 /// that the folder's owner did not make, which could point anywhere
 /// (the kernel's `protected_symlinks` rule, made stricter).
 ///
 /// # Errors
-/// [`OutputError::Io`] for a loop of links (more than 40), a link in a
-/// shared folder as above, or a path that cannot be examined.
+/// [`OutputError::Io`] for a loop of links (more than 40) or a link in a
+/// shared folder as above.
 pub fn output_target(path: &Path) -> Result<OutputTarget, OutputError> {
     let io = |source| OutputError::Io { path: path.to_path_buf(), source };
-    if path.starts_with("/dev") || path.starts_with("/proc") {
+    let exists = std::fs::symlink_metadata(path).is_ok();
+    if exists && (path.starts_with("/dev") || path.starts_with("/proc")) {
         return Ok(OutputTarget::Into);
     }
-    match std::fs::metadata(path) {
-        Ok(m) if !m.is_file() && !m.is_dir() => return Ok(OutputTarget::Into),
-        Ok(_) => {}
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-        Err(e) => return Err(io(e)),
+    // (A path that cannot be examined is left to the walk below and to
+    // the writer, which say why: a loop of links, a folder that is a file.)
+    if let Ok(m) = std::fs::metadata(path)
+        && !m.is_file()
+        && !m.is_dir()
+    {
+        return Ok(OutputTarget::Into);
     }
     let mut p = path.to_path_buf();
     for _ in 0..=40 {

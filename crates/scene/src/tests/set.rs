@@ -70,6 +70,17 @@ fn sets_replace_values_add_keys_and_tables() {
 }
 
 #[test]
+fn sets_read_the_scene_as_toml_1_1_as_the_load_does() {
+    // A trailing comma and a line break inside an inline table (TOML 1.1).
+    let text = scene().replace("radius = 1\n", "radius = 1\ntransform = [{\n  scale = 2,\n}]\n");
+    assert_ne!(text, scene());
+    with_sets(&text, &[]).unwrap();
+    let l = with_sets(&text, &["render.spp=4", "objects.1.transform.0.scale=3"]).unwrap();
+    assert_eq!(l.settings.spp, 4);
+    assert_eq!(l.info.bounds.max.x, 3.0, "the sphere scaled by 3 about the origin");
+}
+
+#[test]
 fn problems_in_a_set_name_the_flag() {
     for (sets, words) in [
         (&["render.spp=0"][..], "--set: render.spp=0: spp (samples per pixel) must be at least 1"),
