@@ -157,42 +157,40 @@ pub enum OutputTarget {
 /// front end makes before rendering (the folder to probe, the files that
 /// must not be the same).
 ///
-/// An existing path under `/dev` or `/proc` (`/dev/stdout`, `/dev/fd/3`)
-/// and any existing path that is not a regular file or a folder are
-/// written into.
-/// Otherwise symbolic links are followed to the file they name, even one
-/// not made yet, except a link in a shared sticky folder (such as `/tmp`)
-/// that the folder's owner did not make, which could point anywhere
-/// (the kernel's `protected_symlinks` rule, made stricter).
+/// Symbolic links are followed to the file they name, even one not made
+/// yet, except a link in a shared sticky folder (such as `/tmp`) that the
+/// folder's owner did not make, which could point anywhere (the kernel's
+/// `protected_symlinks` rule, made stricter). Where they lead to an
+/// existing path under `/dev` or `/proc` (`/dev/stdout`, `/dev/fd/3`), or
+/// to one that is not a regular file or a folder, it is written into.
 ///
 /// # Errors
 /// [`OutputError::Io`] for a loop of links (more than 40) or a link in a
 /// shared folder as above.
 pub fn output_target(path: &Path) -> Result<OutputTarget, OutputError> {
     let io = |source| OutputError::Io { path: path.to_path_buf(), source };
-    let exists = std::fs::symlink_metadata(path).is_ok();
-    if exists && (path.starts_with("/dev") || path.starts_with("/proc")) {
-        return Ok(OutputTarget::Into);
-    }
-    // (A path that cannot be examined is left to the walk below and to
-    // the writer, which say why: a loop of links, a folder that is a file.)
-    if let Ok(m) = std::fs::metadata(path)
-        && !m.is_file()
-        && !m.is_dir()
-    {
-        return Ok(OutputTarget::Into);
-    }
     let mut p = path.to_path_buf();
     for _ in 0..=40 {
-        let link = match std::fs::symlink_metadata(&p) {
-            Ok(m) if m.file_type().is_symlink() => m,
-            _ => return Ok(OutputTarget::Replace(p)),
+        let Ok(here) = std::fs::symlink_metadata(&p) else {
+            // Not there yet (or a folder on the way is a file, which the
+            // writer reports): a new file.
+            return Ok(OutputTarget::Replace(p));
         };
+        // The kernel's own links (`/dev/stdout` → `/proc/self/fd/1` →
+        // `pipe:[…]`) are followed by opening, not by reading them.
+        if p.starts_with("/dev") || p.starts_with("/proc") {
+            return Ok(OutputTarget::Into);
+        }
+        if !here.file_type().is_symlink() {
+            let regular = here.is_file() || here.is_dir();
+            return Ok(if regular { OutputTarget::Replace(p) } else { OutputTarget::Into });
+        }
         let dir = match p.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        if shared_folder_link(&dir, &link) {
+        // Checked before any link is followed, into a device as well.
+        if shared_folder_link(&dir, &here) {
             return Err(io(std::io::Error::other(format!(
                 "a symbolic link in the shared folder {}, not made by its owner: prism does not follow it \
                  (give the path of the file it points to)",
