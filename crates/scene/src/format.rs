@@ -4,6 +4,7 @@
 
 use crate::error::{Location, SceneError};
 use crate::obj::NormalMode;
+use crate::scan::innermost_open;
 use prism_shade::Wrap;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
@@ -140,50 +141,6 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
         return format!("expected {wanted} after `{first}`");
     }
     format!("`{at}` is not a value: a string must be quoted ({})", toml::Value::String(at.to_owned()))
-}
-
-/// The byte offset of the innermost `[` or `{` still open at byte
-/// `offset` of TOML `text`, brackets inside strings and comments left
-/// out. Only ASCII bytes are compared, so a multi-byte character never
-/// matches.
-fn innermost_open(text: &str, offset: usize) -> Option<usize> {
-    let b = &text.as_bytes()[..offset.min(text.len())];
-    let mut open = Vec::new();
-    let mut i = 0;
-    // The end of a string that starts at `i` with quote `q`: after the
-    // closing quote, or at the line's end (or `b`'s) if it is not closed.
-    let string_end = |i: usize, q: u8| -> usize {
-        let triple = b.get(i..i + 3) == Some(&[q, q, q][..]);
-        let mut j = if triple { i + 3 } else { i + 1 };
-        while j < b.len() {
-            match b[j] {
-                b'\\' if q == b'"' => j += 2,
-                c if c == q && (!triple || b.get(j..j + 3) == Some(&[q, q, q][..])) => {
-                    return j + if triple { 3 } else { 1 };
-                }
-                b'\n' if !triple => return j,
-                _ => j += 1,
-            }
-        }
-        b.len()
-    };
-    while i < b.len() {
-        match b[i] {
-            b'#' => i = b[i..].iter().position(|&c| c == b'\n').map_or(b.len(), |n| i + n),
-            q @ (b'"' | b'\'') => i = string_end(i, q),
-            c => {
-                match c {
-                    b'[' | b'{' => open.push(i),
-                    b']' | b'}' => {
-                        open.pop();
-                    }
-                    _ => {}
-                }
-                i += 1;
-            }
-        }
-    }
-    open.pop()
 }
 
 /// toml's messages, made to say what was expected in scene terms

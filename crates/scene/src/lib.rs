@@ -61,6 +61,7 @@ mod obj_view;
 mod object;
 mod overrides;
 mod read;
+mod scan;
 mod set;
 mod settings;
 mod suggest;

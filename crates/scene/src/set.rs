@@ -13,6 +13,7 @@
 //! an error that names the flag.
 
 use crate::error::SceneError;
+use crate::scan::value_end;
 use std::ops::Range;
 use std::path::Path;
 use toml_edit::{Document, Item, Key, Table, Value};
@@ -250,39 +251,6 @@ fn offset_of(text: &str, line: usize, column: usize) -> Option<usize> {
     let rest = &text[start..];
     let end = rest.find('\n').unwrap_or(rest.len());
     rest[..end].char_indices().nth(column.checked_sub(1)?).map(|(i, _)| start + i)
-}
-
-/// Where the array or inline table that opens at byte `at` of `text`
-/// closes (the byte after its bracket), strings and comments skipped;
-/// `None` if no bracket opens there or it is not closed.
-fn value_end(text: &str, at: usize) -> Option<usize> {
-    let b = text.as_bytes();
-    if !matches!(b.get(at), Some(b'[' | b'{')) {
-        return None;
-    }
-    let mut depth = 0usize;
-    let mut i = at;
-    while i < b.len() {
-        match b[i] {
-            b'[' | b'{' => depth += 1,
-            b']' | b'}' => {
-                depth -= 1;
-                if depth == 0 {
-                    return Some(i + 1);
-                }
-            }
-            b'#' => i += b[i..].iter().position(|&c| c == b'\n').unwrap_or(b.len() - i),
-            q @ (b'"' | b'\'') => {
-                i += 1;
-                while i < b.len() && b[i] != q && b[i] != b'\n' {
-                    i += if b[i] == b'\\' && q == b'"' { 2 } else { 1 };
-                }
-            }
-            _ => {}
-        }
-        i += 1;
-    }
-    None
 }
 
 /// `keys` as a dotted key, each part quoted where TOML needs it.
