@@ -216,8 +216,9 @@ const CANCEL_EVERY: u32 = 1024;
 /// sink (if `aovs` is not empty; it then sees every sample, `samples`
 /// being `0..spp`). Returns the per-pixel beauty *sums* (an empty image
 /// without `beauty`), one AOV row per image row (empty without `aovs`),
-/// and the statistics. Rows skipped after a cancel hold zero sums and the
-/// AOV miss values. With a `region`, only its pixels are rendered, into an
+/// and the statistics. Rows skipped or left midway after a cancel hold
+/// zero sums and the AOV miss values (under adaptive sampling, a row whose
+/// refine pass did not finish too). With a `region`, only its pixels are rendered, into an
 /// image (and rows) of its size; each keeps its place in the full image
 /// for its camera rays and samples.
 /// With `alpha`, the rows' sinks also gather coverage and the
@@ -268,8 +269,16 @@ pub(crate) fn render_pixels<'a>(
         // one, so that a cancel is seen within a moment even when one row
         // takes long (a huge `spp`); a row left midway is dropped whole.
         let sample_check = |s: u32| s % CANCEL_EVERY == CANCEL_EVERY - 1 && cancelled();
+        // A row not started is black too: under adaptive sampling, the
+        // refine pass's row still holds the base pass's sums.
+        let stop = |row: &mut [Vec3], sink: Option<&mut AovRow<'a>>| {
+            row.fill(Vec3::ZERO);
+            if let Some(sink) = sink {
+                *sink = AovRow::new(aovs, rw, spp, alpha).starting_at(xs.start);
+            }
+        };
         if cancelled() {
-            return;
+            return stop(row, sink);
         }
         let mut stopped = false;
         let mut tracer = Tracer::new(scene, settings, see_through);
@@ -367,11 +376,7 @@ pub(crate) fn render_pixels<'a>(
         }
         if stopped {
             // As a row skipped after the cancel: zero sums, the AOV miss values.
-            row.fill(Vec3::ZERO);
-            if let Some(sink) = sink {
-                *sink = AovRow::new(aovs, rw, spp, alpha).starting_at(xs.start);
-            }
-            return;
+            return stop(row, sink);
         }
         let aov_rays = sink.map_or(0, |s| s.rays);
         rays.fetch_add(tracer.rays + aov_rays, Ordering::Relaxed);

@@ -105,15 +105,56 @@ fn renders_are_identical_on_any_number_of_threads_with_every_filter_and_adaptive
     }
 }
 
+/// Looking down at a checker floor of squares of 4 from above: every
+/// pixel sees the floor, and pixels on square edges see two colours.
+fn floor_from_above(w: u32, h: u32) -> Shot {
+    let checker = Texture::Checker { a: A, b: B, size: 4.0, world: true };
+    let plane = Plane::new(Vec3::ZERO, Vec3::Y).expect("valid").into();
+    let cam = camera(Vec3::new(0.37, 5.0, 0.21), Vec3::new(0.37, 0.0, 0.2), Vec3::Y, 60.0, w, h);
+    scene(vec![(plane, Transform::IDENTITY, flat_texture(checker))], vec![], cam)
+}
+
+#[test]
+fn an_adaptive_render_cancelled_keeps_finished_rows_and_blacks_the_rest() {
+    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+    let (w, h) = (24, 24);
+    let shot = floor_from_above(w, h);
+    let set = settings(&shot, 9, Antialias { adaptive: Some(0.1), ..Antialias::default() }, 1);
+    let full = render_with(&shot, &set);
+    let rows = |img: &Image| img.pixels.chunks(w as usize).map(<[Vec3]>::to_vec).collect::<Vec<_>>();
+    assert!(rows(&full).iter().all(|r| r.iter().all(|p| p.min_element() > 0.0)));
+    // Progress counts the base pass's rows, then the refine pass's; one
+    // thread renders them in turn, so a cancel at `done` stops the rest.
+    for refined in [0, 5, h - 1] {
+        let cancel = AtomicBool::new(false);
+        let progress = |done: u32, all: u32| {
+            assert_eq!(all, 2 * h);
+            if done == h + refined {
+                cancel.store(true, Relaxed);
+            }
+        };
+        let hooks = RenderHooks { progress: Some(&progress), cancel: Some(&cancel) };
+        let (img, stats) = prism_shade::render(&shot, &set, hooks);
+        assert!(stats.cancelled);
+        let mut kept = 0;
+        for (j, (row, whole)) in rows(&img).iter().zip(rows(&full)).enumerate() {
+            if *row == whole {
+                kept += 1;
+            } else {
+                // Not the base pass's dim sums: a row not refined is black.
+                assert!(row.iter().all(|p| *p == Vec3::ZERO), "{refined} refined, row {j}: {row:?}");
+            }
+        }
+        assert_eq!(kept, refined, "rows finished before the cancel");
+    }
+}
+
 #[test]
 fn adaptive_sampling_refines_only_where_samples_disagree() {
     // Looking down at the floor from above: squares of 4 under a camera
     // that sees ~6 units across 24 pixels; only pixels on square edges
     // see two colours (and they and their neighbours are refined).
-    let checker = Texture::Checker { a: A, b: B, size: 4.0, world: true };
-    let plane = Plane::new(Vec3::ZERO, Vec3::Y).expect("valid").into();
-    let cam = camera(Vec3::new(0.37, 5.0, 0.21), Vec3::new(0.37, 0.0, 0.2), Vec3::Y, 60.0, 24, 24);
-    let shot = scene(vec![(plane, Transform::IDENTITY, flat_texture(checker))], vec![], cam);
+    let shot = floor_from_above(24, 24);
     let spp = 16;
     let aa = Antialias { adaptive: Some(0.1), point_textures: true, ..Antialias::default() };
     let (adaptive, stats) = prism_shade::render(&shot, &settings(&shot, spp, aa, 2), RenderHooks::default());
