@@ -81,6 +81,19 @@ pub fn unit(v: glam::Vec3) -> Option<glam::Vec3> {
     (v / largest).try_normalize()
 }
 
+/// The unit vector from `from` towards `to`, or `None` where they are the
+/// same point or not finite. Any two finite points work: past f32's range
+/// apart (about 3.4e38), where `to - from` overflows, their halves'
+/// difference points the same way.
+#[must_use]
+pub fn unit_between(from: glam::Vec3, to: glam::Vec3) -> Option<glam::Vec3> {
+    if !(from.is_finite() && to.is_finite()) {
+        return None;
+    }
+    let d = to - from;
+    unit(if d.is_finite() { d } else { to * 0.5 - from * 0.5 })
+}
+
 #[cfg(test)]
 mod unit_tests {
     use super::unit;
@@ -96,5 +109,16 @@ mod unit_tests {
         for v in [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::new(f32::NAN, 1.0, 0.0)] {
             assert_eq!(unit(v), None, "{v}");
         }
+    }
+
+    #[test]
+    fn units_between_points_any_distance_apart() {
+        use super::unit_between;
+        let (a, b) = (Vec3::new(3e38, 1.0, 0.0), Vec3::new(-3e38, 1.0, 0.0));
+        assert_eq!(unit_between(a, b), Some(Vec3::NEG_X));
+        assert_eq!(unit_between(b, a), Some(Vec3::X));
+        assert_eq!(unit_between(Vec3::ONE, Vec3::new(1.0, 1.0, 3.0)), Some(Vec3::Z));
+        assert_eq!(unit_between(a, a), None);
+        assert_eq!(unit_between(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::ZERO), None);
     }
 }

@@ -114,13 +114,12 @@ pub(crate) fn camera(
     } else {
         None
     };
-    let forward = look_at - position;
-    let Some(f) = prism_geometry::unit(forward) else {
+    let Some(f) = prism_geometry::unit_between(position, look_at) else {
         return Err(match moved {
             Some(flag) => SceneError::Option {
                 flag,
                 message: format!(
-                    "the camera position {position} and the look-at point {look_at} must differ (and be less than 1e38 apart)"
+                    "the camera position {position} and the look-at point {look_at} must differ"
                 ),
             },
             None => SceneError::Invalid {

@@ -70,7 +70,9 @@ impl Camera {
         // `unit` where `try_normalize` fails: a direction of any finite size
         // (a camera 1e20 away) is a direction.
         let unit = |v: Vec3| v.try_normalize().filter(|u| u.is_finite()).or_else(|| prism_geometry::unit(v));
-        let forward = unit(look_at - position)
+        let d = look_at - position;
+        let forward = unit(d)
+            .or_else(|| prism_geometry::unit_between(position, look_at))
             .ok_or_else(|| ShadeError::Camera("camera position and look_at are the same point".into()))?;
         let right = unit(forward.cross(up)).ok_or_else(|| {
             ShadeError::Camera("up vector is zero or parallel to the view direction".into())
@@ -89,10 +91,10 @@ impl Camera {
             projection: Projection::Perspective,
             aperture: 0.0,
             // Past 1.8e19 apart the squared length overflows; along the
-            // unit forward the same distance does not.
-            focus_distance: Some((look_at - position).length())
-                .filter(|d| d.is_finite())
-                .unwrap_or_else(|| forward.dot(look_at - position)),
+            // unit forward the same distance does not, up to f32's range.
+            focus_distance: Some(d.length())
+                .filter(|l| l.is_finite())
+                .unwrap_or_else(|| forward.dot(d).min(f32::MAX)),
         })
     }
 

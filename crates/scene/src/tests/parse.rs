@@ -486,6 +486,14 @@ fn large_finite_values_are_not_mistaken_for_zero() {
     assert_ne!(far, BASE);
     let loaded = parse(&far).unwrap();
     assert!(loaded.settings.camera.focus_distance().is_finite());
+    // Past f32's range apart: a direction all the same, not "the same point".
+    let farther = BASE
+        .replace("position = [0, 2, 10]", "position = [3e38, 2, 10]")
+        .replace("look_at = [0, 1, 0]", "look_at = [-3e38, 1, 0]");
+    let camera = parse(&farther).unwrap().settings.camera;
+    assert_eq!(camera.focus_distance(), f32::MAX);
+    let sideways = camera.ray(0.5 * camera.size().0 as f32, 0.5 * camera.size().1 as f32).dir;
+    assert!((sideways.normalize() - Vec3::NEG_X).length() < 1e-3, "{sideways}");
     parse(&BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nup = [0, 1e30, 0]")).unwrap();
     parse(&format!("{BASE}[[lights]]\ntype = \"directional\"\ndirection = [0, -1e30, -1e30]\n")).unwrap();
     for scale in ["1e20", "1e-20"] {
