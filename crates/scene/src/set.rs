@@ -12,7 +12,7 @@
 //! into the file's own line numbers, or, for an error in a set value, into
 //! an error that names the flag.
 
-use crate::error::SceneError;
+use crate::error::{Location, SceneError};
 use crate::scan::value_end;
 use std::ops::Range;
 use std::path::Path;
@@ -168,8 +168,53 @@ impl Edited {
     /// problem at a set value names the flag and the set; any other
     /// place's line is the file's own.
     pub(crate) fn remap(&self, e: SceneError, file: &Path) -> SceneError {
-        let Some(loc) = e.location().filter(|l| l.file == file) else { return e };
-        let Some(line) = loc.line else { return e };
+        // An asset's own place stays; where the scene names it is mapped.
+        if let SceneError::Asset { location, message, mut referenced_at } = e {
+            return match self.place(&referenced_at, file) {
+                Some(Place::Set(set)) => flag_error(set, format!("{location}: {message}")),
+                Some(Place::Line(line)) => {
+                    referenced_at.line = Some(line);
+                    SceneError::Asset { location, message, referenced_at }
+                }
+                None => SceneError::Asset { location, message, referenced_at },
+            };
+        }
+        let Some(place) = e.location().and_then(|l| self.place(l, file)) else { return e };
+        let mut e = e;
+        match place {
+            Place::Set(set) => {
+                let message = match &e {
+                    SceneError::Syntax { message, .. } | SceneError::Invalid { message, .. } => {
+                        message.clone()
+                    }
+                    SceneError::Read { what, path, reason, .. } => {
+                        format!("cannot read {what} {}: {reason}", path.display())
+                    }
+                    other => other.to_string(),
+                };
+                return flag_error(set, message);
+            }
+            Place::Line(line) => {
+                if let SceneError::Syntax { location, .. }
+                | SceneError::Invalid { location, .. }
+                | SceneError::Read { location, .. } = &mut e
+                {
+                    location.line = Some(line);
+                }
+            }
+        }
+        e
+    }
+
+    /// What place `loc` of the edited text is in the file's terms: a set
+    /// (at its value, or in an array or inline table starting at `loc`
+    /// that holds it) or the file's own line; `None` for a place in
+    /// another file or without a line.
+    fn place(&self, loc: &Location, file: &Path) -> Option<Place<'_>> {
+        if loc.file != file {
+            return None;
+        }
+        let line = loc.line?;
         let column = loc.column.unwrap_or(1);
         // The array or inline table that starts where the error points, if
         // one does: an error about the whole value (`position` must be
@@ -186,28 +231,20 @@ impl Edited {
                 (edit.line..edit.line + edit.lines).contains(&line)
             };
             if hit {
-                let message = match &e {
-                    SceneError::Syntax { message, .. } | SceneError::Invalid { message, .. } => {
-                        message.clone()
-                    }
-                    SceneError::Read { what, path, reason, .. } => {
-                        format!("cannot read {what} {}: {reason}", path.display())
-                    }
-                    other => other.to_string(),
-                };
-                return flag_error(&edit.set, message);
+                return Some(Place::Set(&edit.set));
             }
         }
         let shift: usize = self.edits.iter().filter(|d| d.lines > 0 && d.line < line).map(|d| d.lines).sum();
-        let mut e = e;
-        if let SceneError::Syntax { location, .. }
-        | SceneError::Invalid { location, .. }
-        | SceneError::Read { location, .. } = &mut e
-        {
-            location.line = Some(line - shift.min(line - 1));
-        }
-        e
+        Some(Place::Line(line - shift.min(line - 1)))
     }
+}
+
+/// A place of the edited text in the file's terms ([`Edited::remap`]).
+enum Place<'a> {
+    /// At or in the value of this set (`KEY=VALUE` as given).
+    Set(&'a str),
+    /// The file's own line.
+    Line(usize),
 }
 
 impl Edited {

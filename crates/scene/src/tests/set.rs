@@ -202,3 +202,25 @@ fn an_obj_scene_refuses_sets() {
     let err = load_path(&obj, &opts).unwrap_err().to_string();
     assert!(err.starts_with("--set: render.spp=2:") && err.contains("OBJ"), "{err}");
 }
+
+#[test]
+fn an_asset_error_names_where_the_file_or_a_set_names_the_asset() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("good.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    fs::write(dir.path().join("bad.obj"), "v 0 0 0\nf 1 2 3\n").unwrap();
+    let load = |text: &str, sets: &[&str]| {
+        let opts =
+            LoadOptions { sets: sets.iter().map(|s| (*s).to_owned()).collect(), ..LoadOptions::default() };
+        parse_scene_str_with(text, dir.path(), Path::new("s.toml"), &opts).unwrap_err().to_string()
+    };
+    // Named in the file, with lines added above it by sets: the file's line.
+    let bad = format!("{}[[objects]]\ntype = \"mesh\"\npath = \"bad.obj\"\n", scene());
+    let plain = load(&bad, &[]);
+    assert!(plain.ends_with(&format!("(used at {})", place(&bad, "\"bad.obj"))), "{plain}");
+    assert_eq!(load(&bad, &["render.max_depth=2", "fog.density=0.1", "fog.mode=\"exponential\""]), plain);
+    // Named by a set: the set, then the asset's own place.
+    let good = bad.replace("bad.obj", "good.obj");
+    let err = load(&good, &["render.max_depth=2", "objects.2.path=\"bad.obj\""]);
+    assert!(err.starts_with("--set: objects.2.path=\"bad.obj\": ") && err.contains("bad.obj:2"), "{err}");
+    assert!(!err.contains("used at"), "{err}");
+}
