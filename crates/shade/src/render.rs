@@ -236,10 +236,10 @@ pub(crate) fn render_pixels<'a>(
 ) -> (Image, Vec<AovRow<'a>>, RenderStats) {
     let start = std::time::Instant::now();
     let cam = &settings.camera;
-    let (w, _) = cam.size();
+    let (w, h) = cam.size();
     let (xs, ys) = match region {
         Some(b) => (b.x0()..b.x1(), b.y0()..b.y1()),
-        None => (0..w, 0..cam.size().1),
+        None => (0..w, 0..h),
     };
     let (rw, rh) = (xs.len() as u32, ys.len() as u32);
     let spp = settings.spp.max(1);
@@ -249,6 +249,14 @@ pub(crate) fn render_pixels<'a>(
     let adaptive = settings.antialias.adaptive.filter(|_| {
         beauty && aovs.is_empty() && !alpha && samples == (0..spp) && spp > crate::ADAPTIVE_BASE_SAMPLES
     });
+    // Adaptive sampling's base pass: the region and a border of one pixel
+    // (within the image), whose means its edge pixels compare with.
+    let grow = u32::from(adaptive.is_some());
+    let base_cols = xs.start.saturating_sub(grow) as usize..xs.end.saturating_add(grow).min(w) as usize;
+    let base_rows = ys.start.saturating_sub(grow) as usize..ys.end.saturating_add(grow).min(h) as usize;
+    // Rows the progress counts: adaptive sampling renders its base rows,
+    // then refines the region's.
+    let all_rows = rh + if adaptive.is_some() { base_rows.len() as u32 } else { 0 };
     let see_through = beauty && Tracer::scene_is_see_through(scene);
     let choice = packet_choice(scene, see_through);
     let packets = choice.camera && beauty && aovs.is_empty() && !alpha && adaptive.is_none();
@@ -262,8 +270,12 @@ pub(crate) fn render_pixels<'a>(
     } else {
         (0..rh).map(|_| AovRow::new(aovs, rw, spp, alpha).starting_at(xs.start)).collect()
     };
-    let render_row = |r: usize, row: &mut [Vec3], mut sink: Option<&mut AovRow<'a>>, mut pass: Pass<'_>| {
-        let j = ys.start as usize + r;
+    // Row `j` of the full image, its pixels `cols` (`row` holds their sums).
+    let render_row = |j: usize,
+                      cols: Range<usize>,
+                      row: &mut [Vec3],
+                      mut sink: Option<&mut AovRow<'a>>,
+                      mut pass: Pass<'_>| {
         let cancelled = || hooks.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
         // Checked before each pixel and every `CANCEL_EVERY` samples within
         // one, so that a cancel is seen within a moment even when one row
@@ -292,7 +304,7 @@ pub(crate) fn render_pixels<'a>(
             // a time; each sample is shaded and summed as below (bit for bit
             // the same pixels).
             let mut batch = CameraBatch { shadows: choice.camera_shadows, ..CameraBatch::default() };
-            'pixels: for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+            'pixels: for (k, i) in cols.clone().enumerate() {
                 if cancelled() {
                     stopped = true;
                     break;
@@ -312,7 +324,7 @@ pub(crate) fn render_pixels<'a>(
             }
             batch.flush(scene, &mut tracer, row, &mut bad, &mut traced);
         } else {
-            'pixels: for (k, i) in (xs.start as usize..xs.end as usize).enumerate() {
+            'pixels: for (k, i) in cols.clone().enumerate() {
                 if cancelled() {
                     stopped = true;
                     break;
@@ -389,44 +401,54 @@ pub(crate) fn render_pixels<'a>(
         }
         let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = hooks.progress {
-            // Adaptive sampling renders every row twice (base, then refine).
-            p(done as u32, rh * if adaptive.is_some() { 2 } else { 1 });
+            p(done as u32, all_rows);
         }
     };
     let row_len = rw as usize;
+    let (x0, y0) = (xs.start as usize, ys.start as usize);
+    let cols = x0..xs.end as usize;
     in_pool(settings.threads, || match (beauty, aov_rows.is_empty()) {
-        (true, true) => match adaptive {
-            None => {
-                pixels
-                    .par_chunks_mut(row_len)
-                    .enumerate()
-                    .for_each(|(j, row)| render_row(j, row, None, Pass::All));
+        (true, true) => {
+            match adaptive {
+                None => {
+                    pixels
+                        .par_chunks_mut(row_len)
+                        .enumerate()
+                        .for_each(|(r, row)| render_row(y0 + r, cols.clone(), row, None, Pass::All));
+                }
+                Some(threshold) => {
+                    // The base pass covers a border of one pixel around a
+                    // region too, so that its pixels on the edge compare
+                    // with the same neighbours as in the full image.
+                    let (bx, by) = (base_cols.clone(), base_rows.clone());
+                    let mut sums = vec![Vec3::ZERO; bx.len() * by.len()];
+                    let mut ranges = vec![[Vec3::ZERO; 2]; sums.len()];
+                    sums.par_chunks_mut(bx.len()).zip(ranges.par_chunks_mut(bx.len())).enumerate().for_each(
+                        |(r, (row, g))| render_row(by.start + r, bx.clone(), row, None, Pass::Base(g)),
+                    );
+                    let flags = refine_flags(&sums, &ranges, bx.len(), threshold);
+                    let mut refine = Vec::with_capacity(pixels.len());
+                    for (r, row) in pixels.chunks_mut(row_len).enumerate() {
+                        let from = (y0 - by.start + r) * bx.len() + (x0 - bx.start);
+                        row.copy_from_slice(&sums[from..from + row_len]);
+                        refine.extend_from_slice(&flags[from..from + row_len]);
+                    }
+                    pixels.par_chunks_mut(row_len).zip(refine.par_chunks(row_len)).enumerate().for_each(
+                        |(r, (row, f))| render_row(y0 + r, cols.clone(), row, None, Pass::Refine(f)),
+                    );
+                }
             }
-            Some(threshold) => {
-                let mut ranges = vec![[Vec3::ZERO; 2]; pixels.len()];
-                pixels
-                    .par_chunks_mut(row_len)
-                    .zip(ranges.par_chunks_mut(row_len))
-                    .enumerate()
-                    .for_each(|(j, (row, r))| render_row(j, row, None, Pass::Base(r)));
-                let refine = refine_flags(&pixels, &ranges, row_len, threshold);
-                pixels
-                    .par_chunks_mut(row_len)
-                    .zip(refine.par_chunks(row_len))
-                    .enumerate()
-                    .for_each(|(j, (row, f))| render_row(j, row, None, Pass::Refine(f)));
-            }
-        },
+        }
         (true, false) => pixels
             .par_chunks_mut(row_len)
             .zip(aov_rows.par_iter_mut())
             .enumerate()
-            .for_each(|(j, (row, sink))| render_row(j, row, Some(sink), Pass::All)),
+            .for_each(|(r, (row, sink))| render_row(y0 + r, cols.clone(), row, Some(sink), Pass::All)),
         (false, false) => {
             aov_rows
                 .par_iter_mut()
                 .enumerate()
-                .for_each(|(j, sink)| render_row(j, &mut [], Some(sink), Pass::All));
+                .for_each(|(r, sink)| render_row(y0 + r, cols.clone(), &mut [], Some(sink), Pass::All));
         }
         // Nothing asked for.
         (false, true) => {}

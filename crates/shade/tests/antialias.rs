@@ -105,6 +105,45 @@ fn renders_are_identical_on_any_number_of_threads_with_every_filter_and_adaptive
     }
 }
 
+#[test]
+fn adaptive_regions_are_bit_identical_to_the_full_render() {
+    // A region's edge pixels compare with neighbours outside it (a farm
+    // tile's), as they do in the full image.
+    use prism_shade::{PixelBounds, render_region};
+    let (w, h) = (37, 23);
+    let shot = floor(w, h);
+    let aa = Antialias { adaptive: Some(0.05), ..Antialias::default() };
+    let full = render_with(&shot, &settings(&shot, 9, aa, 2));
+    let mut rng = prism_testkit::rng::Rng::new(7);
+    let mut regions: Vec<_> = (0..16)
+        .map(|_| {
+            let (xa, xb) = (rng.below(w as usize) as u32, rng.below(w as usize) as u32);
+            let (ya, yb) = (rng.below(h as usize) as u32, rng.below(h as usize) as u32);
+            PixelBounds::new(xa.min(xb), xa.max(xb) + 1, ya.min(yb), ya.max(yb) + 1).unwrap()
+        })
+        .collect();
+    // Rows of tiles as a farm splits them, and the image's own corners.
+    regions.extend((0..4).map(|k| PixelBounds::new(0, w, k * h / 4, (k + 1) * h / 4).unwrap()));
+    regions.push(PixelBounds::new(0, 1, 0, 1).unwrap());
+    regions.push(PixelBounds::new(w - 1, w, h - 1, h).unwrap());
+    for (k, b) in regions.into_iter().enumerate() {
+        let set = settings(&shot, 9, aa, 1 + k % 3);
+        let (img, _, _) = render_region(&shot, &set, b, &[], RenderHooks::default()).unwrap();
+        for y in 0..b.height() {
+            for x in 0..b.width() {
+                let (i, j) = (b.x0() + x, b.y0() + y);
+                let mean = img.pixels[(y * b.width() + x) as usize];
+                let want = full.pixels[(j * w + i) as usize];
+                assert_eq!(
+                    mean.to_array().map(f32::to_bits),
+                    want.to_array().map(f32::to_bits),
+                    "{b} at ({i}, {j})"
+                );
+            }
+        }
+    }
+}
+
 /// Looking down at a checker floor of squares of 4 from above: every
 /// pixel sees the floor, and pixels on square edges see two colours.
 fn floor_from_above(w: u32, h: u32) -> Shot {
