@@ -12,10 +12,11 @@ use std::sync::Arc;
 /// An equirectangular environment image turned about +Y.
 ///
 /// Direction `d` (unit) reads the image at
-/// `u = ½ + atan2(d.x, −d.z) / 2π − rotation / 360°` (wrapped), `v =
+/// `u = ½ + atan2(d.x, −d.z) / 2π + rotation / 360°` (wrapped), `v =
 /// acos(d.y) / π`: the image's centre column is the −Z direction (where the
 /// default camera looks), its top row straight up, and a positive rotation
-/// turns the picture counter-clockwise seen from above.
+/// turns the picture counter-clockwise seen from above, as a transform's
+/// `rotate_y` turns an object (what was at +X comes to −Z at 90°).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
     /// The image, linear RGB.
@@ -31,7 +32,7 @@ impl Environment {
     #[must_use]
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
         let d = dir.normalize_or(Vec3::Y);
-        let u = 0.5 + d.x.atan2(-d.z) / TAU - self.rotation_deg / 360.0;
+        let u = 0.5 + d.x.atan2(-d.z) / TAU + self.rotation_deg / 360.0;
         let v = d.y.clamp(-1.0, 1.0).acos() / PI;
         self.image.sample(Vec2::new(u - u.floor(), v))
     }
@@ -62,9 +63,27 @@ mod tests {
         assert!((e.radiance(at(45.0)) - Vec3::Z).length() < 1e-5);
         assert!((e.radiance(at(-45.0)) - Vec3::Y).length() < 1e-5);
         assert!((e.radiance(at(135.0)) - Vec3::ONE).length() < 1e-5);
-        // Rotating the picture by +90° moves what was at −45° to +45°.
+        // Rotating the picture by +90° moves what was at +45° (toward +X)
+        // to −45° (toward −X): counter-clockwise seen from above.
         let r = env(90.0);
-        assert!((r.radiance(at(45.0)) - e.radiance(at(-45.0))).length() < 1e-5);
+        assert!((r.radiance(at(-45.0)) - e.radiance(at(45.0))).length() < 1e-5);
         assert!(e.radiance(Vec3::ZERO).is_finite());
+    }
+
+    #[test]
+    fn rotation_turns_the_picture_as_rotate_y_turns_an_object() {
+        // What the turned picture shows along `d` is what the picture
+        // showed along the direction `rotate_y` carries to `d`.
+        let e = env(0.0);
+        for deg in [30.0f32, 90.0, -135.0] {
+            let turn = prism_geometry::Transform::rotate_y(deg.to_radians());
+            let r = env(deg);
+            for k in 0..16 {
+                let a = (k as f32 * 22.5 + 3.0).to_radians();
+                let before = Vec3::new(a.sin(), 0.3, -a.cos());
+                let after = turn.vector(before);
+                assert!((r.radiance(after) - e.radiance(before)).length() < 1e-4, "{deg}° at {before}");
+            }
+        }
     }
 }
