@@ -315,8 +315,22 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
         };
         match key {
             "v" => {
-                // x y z [w] or x y z r g b (vertex colours).
-                numbers(3, 7, "x y z")?;
+                // x y z, x y z w, or x y z r g b (vertex colours, which
+                // `wild::fix_obj` has dropped by now).
+                let vals: Vec<&str> = words.collect();
+                if !matches!(vals.len(), 3 | 4 | 6) {
+                    return Err((
+                        line_no,
+                        format!(
+                            "`v` needs 3 numbers (x y z), 4 (x y z w) or 6 (x y z r g b), found {}",
+                            vals.len()
+                        ),
+                    ));
+                }
+                numbers(3, 4, "x y z [w]")?;
+                if vals.get(3).and_then(|w| w.parse::<f32>().ok()) == Some(0.0) {
+                    return Err((line_no, "`v` weight w is 0; x, y and z are divided by it".into()));
+                }
                 nv += 1;
             }
             "vt" => {

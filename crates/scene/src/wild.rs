@@ -17,9 +17,13 @@ pub(crate) fn decode_text(bytes: &[u8]) -> Result<(Cow<'_, str>, Option<String>)
         return Err("the file is UTF-16 text; expected UTF-8 (or ASCII) text".into());
     }
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    if let Some(at) = bytes.iter().position(|&b| b == 0) {
+        let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        return Err(format!("line {line} holds a NUL byte; is it a binary file? (expected text)"));
+    }
     match std::str::from_utf8(bytes) {
         Ok(t) => Ok((Cow::Borrowed(t), None)),
-        Err(e) if !bytes.contains(&0) => {
+        Err(e) => {
             let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
             let text: String = bytes.iter().map(|&b| char::from(b)).collect();
             Ok((
@@ -27,10 +31,6 @@ pub(crate) fn decode_text(bytes: &[u8]) -> Result<(Cow<'_, str>, Option<String>)
                 Some(format!("line {line}: the text is not UTF-8; read it as Latin-1 (ISO 8859-1)")),
             ))
         }
-        Err(e) => Err(format!(
-            "the file is not UTF-8 text (invalid byte at offset {}); is it a binary file?",
-            e.valid_up_to()
-        )),
     }
 }
 
@@ -39,31 +39,41 @@ fn unixify(path: &str) -> Option<String> {
     path.contains('\\').then(|| path.replace('\\', "/"))
 }
 
-/// Rewrites the OBJ lines tobj cannot take: `mtllib` with Windows
-/// separators, `usemtl` without a name or with more than `usemtl NAME`
-/// on its line (a comment, indentation). Returns the text and the warnings
-/// (`line N: ...`).
+/// Rewrites the OBJ lines tobj cannot take: `mtllib` without a name or
+/// with Windows separators, `usemtl` without a name or with more than
+/// `usemtl NAME` on its line (a comment, indentation); and, silently, two
+/// valid forms it refuses: `vt u` (read as `vt u 0`) and vertex colours
+/// (`v x y z r g b`, read as `v x y z`: prism does not use them, and tobj
+/// refuses a file where only some vertices have them). Returns the text
+/// and the warnings (`line N: ...`).
 pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
     fix_lines(text, |no, key, rest, body| match key {
+        "mtllib" if rest.is_empty() => {
+            Some((String::new(), Some(format!("line {no}: `mtllib` without a file name; ignored"))))
+        }
         "mtllib" => unixify(rest).map(|p| {
             (
                 format!("mtllib {p}"),
-                format!("line {no}: `mtllib {rest}` has Windows separators; read as `{p}`"),
+                Some(format!("line {no}: `mtllib {rest}` has Windows separators; read as `{p}`")),
             )
         }),
+        "vt" if rest.split_whitespace().count() == 1 => Some((format!("vt {rest} 0"), None)),
+        "v" if rest.split_whitespace().count() == 6 => {
+            Some((format!("v {}", rest.split_whitespace().take(3).collect::<Vec<_>>().join(" ")), None))
+        }
         "usemtl" if rest.is_empty() => Some((
             format!("usemtl {UNNAMED}"),
-            format!("line {no}: `usemtl` without a name; using the material named `{UNNAMED}`"),
+            Some(format!("line {no}: `usemtl` without a name; using the material named `{UNNAMED}`")),
         )),
         // tobj takes everything after the line's first space as the name
         // (a comment, the keyword of an indented line): the name alone.
         "usemtl" if body != format!("usemtl {rest}") => Some((
             format!("usemtl {rest}"),
-            format!(
+            Some(format!(
                 "line {no}: `{}`{} read as `usemtl {rest}`",
                 body.trim(),
                 if body.starts_with(char::is_whitespace) { " (indented)" } else { "" }
-            ),
+            )),
         )),
         _ => None,
     })
@@ -76,14 +86,19 @@ pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
     fix_lines(text, |no, key, rest, _| match key {
         "Ka" | "Kd" | "Ks" | "Ke" | "Tf" if rest.split_whitespace().count() == 1 => Some((
             format!("{key} {rest} {rest} {rest}"),
-            format!("line {no}: `{key} {rest}` has one value; read as grey `{key} {rest} {rest} {rest}`"),
+            Some(format!(
+                "line {no}: `{key} {rest}` has one value; read as grey `{key} {rest} {rest} {rest}`"
+            )),
         )),
         "newmtl" if rest.is_empty() => Some((
             format!("newmtl {UNNAMED}"),
-            format!("line {no}: `newmtl` without a name; naming the material `{UNNAMED}`"),
+            Some(format!("line {no}: `newmtl` without a name; naming the material `{UNNAMED}`")),
         )),
         k if k.starts_with("map_") || k == "bump" || k == "disp" || k == "decal" => unixify(rest).map(|p| {
-            (format!("{key} {p}"), format!("line {no}: `{key} {rest}` has Windows separators; read as `{p}`"))
+            (
+                format!("{key} {p}"),
+                Some(format!("line {no}: `{key} {rest}` has Windows separators; read as `{p}`")),
+            )
         }),
         _ => None,
     })
@@ -93,7 +108,7 @@ pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
 /// line; a `Some((new line, warning))` replaces the line.
 fn fix_lines(
     text: &str,
-    fix: impl Fn(usize, &str, &str, &str) -> Option<(String, String)>,
+    fix: impl Fn(usize, &str, &str, &str) -> Option<(String, Option<String>)>,
 ) -> (Cow<'_, str>, Vec<String>) {
     let mut warnings = Vec::new();
     let mut out: Option<String> = None;
@@ -110,7 +125,7 @@ fn fix_lines(
             o.push_str(&new);
             o.push_str(&line[body.len()..]);
             done = start + line.len();
-            warnings.push(warning);
+            warnings.extend(warning);
         }
     }
     match out {
@@ -132,7 +147,11 @@ mod tests {
         assert_eq!(t, "# café\nusemtl métal\n");
         assert!(w.unwrap().starts_with("line 1:"));
         assert_eq!(decode_text(b"\xEF\xBB\xBFv 1 2 3").unwrap(), (Cow::Borrowed("v 1 2 3"), None));
-        assert!(decode_text(&[0x80, 0x81, 0x00]).unwrap_err().contains("not UTF-8"));
+        assert_eq!(
+            decode_text(&[0x80, 0x81, 0x00]).unwrap_err(),
+            "line 1 holds a NUL byte; is it a binary file? (expected text)"
+        );
+        assert!(decode_text(b"v 0 0 0\nf 1 2 3\0\x01\n").unwrap_err().starts_with("line 2 holds a NUL byte"));
         assert!(decode_text(&[0xFF, 0xFE, b'v', 0]).unwrap_err().contains("UTF-16"));
     }
 
@@ -144,6 +163,10 @@ mod tests {
         assert!(w[0].starts_with("line 2:") && w[1].starts_with("line 3:"), "{w:?}");
         let (t, w) = fix_obj("v 0 0 0\nf 1 1 1");
         assert!(matches!(t, Cow::Borrowed(_)) && w.is_empty());
+        // Valid forms tobj refuses, read silently; `mtllib` alone dropped.
+        let (t, w) = fix_obj("v 1 2 3 0.5 0.5 0.5 # rgb\nv 1 2 3 2\nvt 0.5\nvt 0.5 1\nmtllib\r\nf 1 2 3\n");
+        assert_eq!(t, "v 1 2 3\nv 1 2 3 2\nvt 0.5 0\nvt 0.5 1\n\r\nf 1 2 3\n");
+        assert_eq!(w, ["line 5: `mtllib` without a file name; ignored"]);
         // tobj would read `red # body` and `usemtl red` as the names.
         let (t, w) = fix_obj("usemtl red # body\n  usemtl red\nusemtl\tred\nusemtl red\n");
         assert_eq!(t, "usemtl red\nusemtl red\nusemtl red\nusemtl red\n");

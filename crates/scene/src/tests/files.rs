@@ -2,7 +2,7 @@
 //! meshes read once and instanced, MTL materials, textures, malformed files.
 
 use super::*;
-use prism_geometry::glam::Vec3;
+use prism_geometry::glam::{Vec2, Vec3};
 use prism_shade::{Mapping, Texture};
 
 #[test]
@@ -170,7 +170,7 @@ fn meshes_are_loaded_once_and_instanced() {
 #[test]
 fn malformed_objs_are_reported_with_their_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[u8], &str); 6] = [
+    let cases: [(&str, &[u8], &str); 9] = [
         (
             "range.obj",
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
@@ -184,7 +184,14 @@ fn malformed_objs_are_reported_with_their_line() {
         ("two.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\n", "two.obj:3: a face needs at least 3 corners"),
         ("lines.obj", b"v 0 0 0\nv 1 0 0\nl 1 2\n", "no faces"),
         ("empty.obj", b"", "no faces"),
-        ("garbage.obj", b"\x00\xff\xfe\x80binary", "not UTF-8"),
+        ("garbage.obj", b"\x00\xff\xfe\x80binary", "holds a NUL byte"),
+        ("nul.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\x00\x01\n", "nul.obj: line 4 holds a NUL byte"),
+        (
+            "five.obj",
+            b"v 0 0 0\nv 1 0 0 1 1\n",
+            "five.obj:2: `v` needs 3 numbers (x y z), 4 (x y z w) or 6 (x y z r g b), found 5",
+        ),
+        ("w.obj", b"v 0 0 0 0\n", "w.obj:1: `v` weight w is 0"),
     ];
     for (name, bytes, words) in cases {
         fs::write(dir.path().join(name), bytes).unwrap();
@@ -199,6 +206,29 @@ fn malformed_objs_are_reported_with_their_line() {
             "{name}: {err}"
         );
     }
+}
+
+#[test]
+fn valid_obj_forms_tobj_refuses_are_read() {
+    // `vt u` (v is 0), colours on some vertices only (prism does not use
+    // them), `mtllib` with no name (a warning).
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "mtllib\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0\nvt 0.25\nvt 0.5 0.5\n\
+               f 1/1 2/2 3/1\nf 2/2 4/1 3/1\n";
+    fs::write(dir.path().join("c.obj"), obj).unwrap();
+    let text = format!("{BASE}[[objects]]\ntype = \"mesh\"\npath = \"c.obj\"\n");
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("s.toml")).unwrap();
+    assert_eq!(loaded.info.stored_triangles, 2);
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(
+        loaded.warnings[0].contains("c.obj:1: `mtllib` without a file name; ignored"),
+        "{:?}",
+        loaded.warnings
+    );
+    let mesh = &loaded.scene.accel.meshes()[0];
+    let uvs = mesh.uvs().unwrap();
+    // Flipped to prism's v: `vt 0.25` is (0.25, 1).
+    assert!(uvs.contains(&Vec2::new(0.25, 1.0)) && uvs.contains(&Vec2::new(0.5, 0.5)), "{uvs:?}");
 }
 
 #[test]
