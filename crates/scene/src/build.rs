@@ -387,7 +387,7 @@ impl<'a> Build<'a> {
         settings: Settings,
         camera: &CameraSource,
         lights: Vec<Light>,
-        fog: Option<(Fog, bool)>,
+        fog: Option<(Option<Fog>, bool)>,
     ) -> Result<LoadedScene> {
         if self.objects.is_empty() {
             self.warn("the scene has no objects");
@@ -468,19 +468,18 @@ impl<'a> Build<'a> {
     fn camera_and_fog(
         &mut self,
         camera: &CameraSource,
-        fog: Option<(Fog, bool)>,
+        fog: Option<(Option<Fog>, bool)>,
         (width, height): (u32, u32),
         bounds: Aabb,
     ) -> Result<(Camera, Option<Fog>, bool)> {
         let camera = view::camera(&self.ctx, camera, &self.overrides, width, height)?;
-        let (mut medium, file_on) = match fog {
-            Some((f, on)) => (Some(f), on),
-            None => (None, false),
-        };
+        let table = fog.is_some();
+        let (mut medium, file_on) = fog.unwrap_or((None, false));
         let on = self.overrides.fog.unwrap_or(file_on);
         if on && medium.is_none() {
             let end = view::default_fog_end(camera.position(), bounds);
-            self.warn(&format!("the scene has no [fog]; --fog uses linear white fog from 0 to {end:.1}"));
+            let why = if table { "[fog] gives only `enabled`" } else { "the scene has no [fog]" };
+            self.warn(&format!("{why}; --fog uses linear white fog from 0 to {end:.1}"));
             medium = Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end } });
         }
         Ok((camera, medium, on))

@@ -232,10 +232,23 @@ pub(crate) fn environment(
     Ok(Some(Environment { image: image(&e.image)?, rotation_deg }))
 }
 
-/// The fog of a `[fog]` table, checked.
-/// The fog's medium, and whether the file turns it on (`enabled`, default on).
-pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Fog, bool)> {
+/// The fog of a `[fog]` table, checked: the fog's medium, and whether the
+/// file turns it on (`enabled`, default on). A table of `enabled` alone
+/// gives no medium (the build then adds the default one, as `--fog` does
+/// without `[fog]`).
+pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Option<Fog>, bool)> {
     let d = f.get_ref();
+    let on = d.enabled.unwrap_or(true);
+    let FogDef { mode, measure, start, end, density, color, enabled: _ } = d;
+    if mode.is_none()
+        && measure.is_none()
+        && start.is_none()
+        && end.is_none()
+        && density.is_none()
+        && color.is_none()
+    {
+        return Ok((None, on));
+    }
     let mode = d.mode.as_ref().map_or(FogModeDef::Linear, |m| *m.get_ref());
     let color = ctx.opt_color(d.color.as_ref(), "fog color", Vec3::ONE)?;
     let mode = match mode {
@@ -288,7 +301,7 @@ pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Fog, bool)> {
             }
         }
     };
-    Ok((Fog { color, mode }, d.enabled.unwrap_or(true)))
+    Ok((Some(Fog { color, mode }), on))
 }
 
 /// The end of the fog `--fog` adds to a scene without `[fog]`: 1.5 times

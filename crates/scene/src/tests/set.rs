@@ -106,7 +106,7 @@ fn problems_in_a_set_name_the_flag() {
         (&["render=3"], "`render` is a table; set its keys one by one"),
         (&["render.spp.x=1"], "`render.spp` is a number, not a table"),
         (&["objects.1.radios=1"], "unknown key `radios` in a sphere; did you mean `radius`?"),
-        (&["fog.enabled=false"], "--set: fog.enabled=false: linear fog needs `end`"),
+        (&["fog.start=1"], "--set: fog.start=1: linear fog needs `end`"),
         // A part of an array set: the error about the whole array is the set's.
         (
             &["camera.position.1=nan"],
@@ -223,4 +223,20 @@ fn an_asset_error_names_where_the_file_or_a_set_names_the_asset() {
     let err = load(&good, &["render.max_depth=2", "objects.2.path=\"bad.obj\""]);
     assert!(err.starts_with("--set: objects.2.path=\"bad.obj\": ") && err.contains("bad.obj:2"), "{err}");
     assert!(!err.contains("used at"), "{err}");
+}
+
+#[test]
+fn a_fog_of_enabled_alone_is_the_switch_without_a_medium() {
+    // `--set fog.enabled=false` on a scene without [fog]: no fog, no error.
+    let off = with_sets(&scene(), &["fog.enabled=false"]).unwrap();
+    assert!(!off.settings.fog && off.warnings.is_empty(), "{:?}", off.warnings);
+    // On alone: the default fog `--fog` adds, with its warning.
+    for text in [format!("{}[fog]\nenabled = true\n", scene()), format!("{}[fog]\n", scene())] {
+        let on = with_sets(&text, &[]).unwrap();
+        assert!(on.settings.fog, "{text}");
+        let fog = on.scene.fog.unwrap();
+        assert!(matches!(fog.mode, prism_shade::FogMode::Linear { start: 0.0, .. }), "{fog:?}");
+        assert_eq!(fog.color, prism_geometry::glam::Vec3::ONE);
+        assert!(on.warnings.iter().any(|w| w.contains("[fog] gives only `enabled`")), "{:?}", on.warnings);
+    }
 }
