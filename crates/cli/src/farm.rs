@@ -156,6 +156,12 @@ fn sh(s: &str) -> String {
     }
 }
 
+/// `p` as a part of a Slurm file name pattern (`--output`), where `%`
+/// starts a replacement (`%j`, `%a`) and `%%` is a `%`.
+fn slurm_literal(p: &Path) -> String {
+    p.to_string_lossy().replace('%', "%%")
+}
+
 fn absolute(p: &Path) -> Result<PathBuf> {
     Ok(if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) })
 }
@@ -186,7 +192,7 @@ fn tasks_script(job: &Job, command: &str) -> String {
     let mut s = String::from("#!/bin/bash\n");
     let _ = writeln!(s, "#SBATCH --job-name=prism-{}", if job.tiles { "tiles" } else { "frames" });
     let _ = writeln!(s, "#SBATCH --array=0-{}", job.count - 1);
-    let _ = writeln!(s, "#SBATCH --output={}", sh(&w.join("logs/task-%a.log").to_string_lossy()));
+    let _ = writeln!(s, "#SBATCH --output={}", sh(&format!("{}/logs/task-%a.log", slurm_literal(w))));
     let _ = writeln!(s, "#SBATCH --chdir={}", sh(&w.to_string_lossy()));
     let _ = writeln!(s, "# The task index: Slurm's array index (or a Kubernetes Indexed Job's).");
     let _ = writeln!(s, "i=${{{}:-${}}}", INDEX_VARIABLES[0], INDEX_VARIABLES[1]);
@@ -200,7 +206,7 @@ fn tasks_script(job: &Job, command: &str) -> String {
 fn merge_script(job: &Job, prism: &str, image_flags: &[String]) -> String {
     let w = &job.work;
     let mut s = String::from("#!/bin/bash\n#SBATCH --job-name=prism-merge\n");
-    let _ = writeln!(s, "#SBATCH --output={}", sh(&w.join("logs/merge.log").to_string_lossy()));
+    let _ = writeln!(s, "#SBATCH --output={}", sh(&format!("{}/logs/merge.log", slurm_literal(w))));
     let _ = writeln!(s, "#SBATCH --chdir={}", sh(&w.to_string_lossy()));
     let tiles: Vec<String> = job.tile_files.iter().map(|t| sh(&t.to_string_lossy())).collect();
     let _ = writeln!(
@@ -529,6 +535,7 @@ mod tests {
         assert_eq!(sh("it's here"), r"'it'\''s here'");
         assert_eq!(sh(""), "''");
         assert_eq!(sh("$HOME"), "'$HOME'");
+        assert_eq!(slurm_literal(Path::new("/w/50%j.farm")), "/w/50%%j.farm");
     }
 
     #[test]

@@ -235,9 +235,10 @@ fn tiles_frames_and_a_failing_task_on_a_single_node_slurm() {
     assert_eq!(float_bits(&w.join("farm.aov.exr")), float_bits(&w.join("one.aov.exr")), "depth pass");
     assert_eq!(listing(&w.join("farm.farm/tiles")).len(), 4);
 
-    // A 3-frame turntable.
+    // A 3-frame turntable, named with a `%`, which Slurm's `--output`
+    // would read as a pattern (`%j`, the job id) if it were not escaped.
     let out = run(&[
-        &["farm", "slurm", &scene, "--frames", "3", "--orbit", "30", "-o", "turn.png", "--wait"][..],
+        &["farm", "slurm", &scene, "--frames", "3", "--orbit", "30", "-o", "turn%j.png", "--wait"][..],
         &SMALL,
     ]
     .concat());
@@ -247,7 +248,7 @@ fn tiles_frames_and_a_failing_task_on_a_single_node_slurm() {
             .concat());
     assert!(local.status.success(), "{}", text(&local.stderr));
     for i in 0..3 {
-        let (f, l) = (w.join(format!("turn.000{i}.png")), w.join(format!("local.000{i}.png")));
+        let (f, l) = (w.join(format!("turn%j.000{i}.png")), w.join(format!("local.000{i}.png")));
         assert_eq!(rgb8(&f), rgb8(&l), "frame {i}");
     }
 
