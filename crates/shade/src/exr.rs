@@ -14,7 +14,7 @@
 //! non-finite policy: `±∞` is stored as is, NaN as 0.
 
 use crate::PixelBounds;
-use crate::output::{OutputError, encode_into, invalid, write_atomic};
+use crate::output::{OutputError, invalid, write_atomic};
 use ::exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds,
     Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
@@ -286,7 +286,63 @@ pub fn write_layered_exr(path: &Path, image: &LayeredExr) -> Result<(), OutputEr
     );
     let display = IntegerBounds::from_dimensions(Vec2(image.width as usize, image.height as usize));
     let exr = Image::new(ImageAttributes::new(display), layer);
-    write_atomic(path, |w| encode_into(path, w, |w| exr.write().to_buffered(w)))
+    // Encoded in memory first: the exr crate writes custom attributes in
+    // its hash map's order, which changes from run to run, and the same
+    // image should be the same bytes.
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    exr.write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })?;
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes);
+    write_atomic(path, |w| {
+        std::io::Write::write_all(w, &bytes)
+            .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
+    })
+}
+
+/// Puts the header attributes of a single-part OpenEXR file `b` in the
+/// order of their names, in place. The header keeps its length, so the
+/// offsets after it stay right. Other files (multi-part, deep) and a
+/// header that does not parse are left as they are.
+fn sort_header_attributes(b: &mut [u8]) {
+    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    const MULTIPART_OR_DEEP: u32 = 0x1000 | 0x800;
+    let Some(flags) = b.get(4..8).and_then(|f| <[u8; 4]>::try_from(f).ok()).map(u32::from_le_bytes) else {
+        return;
+    };
+    if b[..4] != MAGIC || flags & MULTIPART_OR_DEEP != 0 {
+        return;
+    }
+    // Each attribute: name NUL, type NUL, a 4-byte size, the value; a NUL
+    // where a name would start ends the header.
+    let zero_from = |i: usize| b.get(i..)?.iter().position(|&c| c == 0).map(|n| i + n);
+    let mut spans = Vec::new();
+    let mut i = 8;
+    let end = loop {
+        match b.get(i) {
+            Some(0) => break i,
+            Some(_) => {}
+            None => return,
+        }
+        let Some(name_end) = zero_from(i) else { return };
+        let Some(type_end) = zero_from(name_end + 1) else { return };
+        let size = type_end + 1;
+        let Some(len) =
+            b.get(size..size + 4).and_then(|l| <[u8; 4]>::try_from(l).ok()).map(u32::from_le_bytes)
+        else {
+            return;
+        };
+        let next = size + 4 + len as usize;
+        if next > b.len() {
+            return;
+        }
+        spans.push((i, name_end, next));
+        i = next;
+    };
+    spans.sort_by(|x, y| b[x.0..x.1].cmp(&b[y.0..y.1]));
+    let sorted: Vec<u8> = spans.iter().flat_map(|&(start, _, next)| b[start..next].to_vec()).collect();
+    b[8..end].copy_from_slice(&sorted);
 }
 
 /// The first four bytes of every OpenEXR file.
@@ -434,6 +490,27 @@ mod tests {
         let back = read_layered_exr(&p).unwrap();
         assert_eq!((back.width, back.height, back.data_window), (10, 6, img.data_window));
         assert_eq!(back.attributes, img.attributes);
+        // The same image is the same bytes: the header's attributes are in
+        // the order of their names, whatever order the exr crate's hash map
+        // gave them.
+        let bytes = std::fs::read(&p).unwrap();
+        let mut names = Vec::new();
+        let mut i = 8;
+        while bytes[i] != 0 {
+            let name_end = i + bytes[i..].iter().position(|&c| c == 0).unwrap();
+            let size = name_end + 1 + bytes[name_end + 1..].iter().position(|&c| c == 0).unwrap() + 1;
+            names.push(String::from_utf8(bytes[i..name_end].to_vec()).unwrap());
+            i = size + 4 + u32::from_le_bytes(bytes[size..size + 4].try_into().unwrap()) as usize;
+        }
+        assert!(
+            names.contains(&"prism:spp".to_owned()) && names.contains(&"dataWindow".to_owned()),
+            "{names:?}"
+        );
+        assert!(names.is_sorted(), "{names:?}");
+        for _ in 0..4 {
+            write_layered_exr(&p, &img).unwrap();
+            assert_eq!(std::fs::read(&p).unwrap(), bytes);
+        }
         for layer in &img.layers {
             for c in &layer.channels {
                 assert_eq!(back.channel(&layer.name, &c.name), Some(&c.samples), "{}.{}", layer.name, c.name);
