@@ -326,7 +326,10 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let early = args.output.clone().or_else(|| default_output(&args.scene).ok());
     if let Some(o) = &early {
         OutputFormat::from_path(o)?;
-        writable::check_writable(o)?;
+        writable::check_writable(o, "the image")?;
+    }
+    if let Some(s) = &args.stats_json {
+        writable::check_writable(s, "the statistics").context("--stats-json")?;
     }
     let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 

@@ -9,11 +9,12 @@
 use anyhow::{Result, bail};
 use std::path::Path;
 
-/// Checks that `output` can be written: the deepest existing directory
-/// on its path is a directory (not a file) and accepts a new file (a
-/// probe, created and removed at once). Directories that do not exist
-/// yet are not created here.
-pub fn check_writable(output: &Path) -> Result<()> {
+/// Checks that `output` (`what` it holds: "the image", "the statistics")
+/// can be written: the deepest existing directory on its path is a
+/// directory (not a file) and accepts a new file (a probe, created and
+/// removed at once). Directories that do not exist yet are not created
+/// here; a symbolic link must lead into one that exists.
+pub fn check_writable(output: &Path, what: &str) -> Result<()> {
     let shown = output.display();
     // The file the writer will replace (through links); a device or pipe
     // is written into, and a path that cannot be followed is refused here.
@@ -21,7 +22,12 @@ pub fn check_writable(output: &Path) -> Result<()> {
         prism_shade::OutputTarget::Replace(t) => t,
         prism_shade::OutputTarget::Into => return Ok(()),
     };
-    let dir = existing_dir(&target)?;
+    let dir = existing_dir(&target, what)?;
+    if target != output && target.parent().is_some_and(|p| p != dir && !p.as_os_str().is_empty()) {
+        // Folders are made for an output's own path, not at the far end
+        // of a link.
+        bail!("{shown}: cannot write {what}: it links to {}, whose folder does not exist", target.display());
+    }
     let probe = dir.join(format!(".prism-write-check-{}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
         Ok(_) => {
@@ -36,20 +42,20 @@ pub fn check_writable(output: &Path) -> Result<()> {
                 std::io::ErrorKind::StorageFull => "the disk is full".to_owned(),
                 _ => e.to_string(),
             };
-            bail!("{shown}: cannot write the image: no file can be created in {} ({why})", dir.display())
+            bail!("{shown}: cannot write {what}: no file can be created in {} ({why})", dir.display())
         }
     }
 }
 
 /// The deepest directory on `output`'s path that exists (`.` if none is
 /// named); an error if a part of the path is a file.
-fn existing_dir(output: &Path) -> Result<&Path> {
+fn existing_dir<'p>(output: &'p Path, what: &str) -> Result<&'p Path> {
     let mut dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     loop {
         match std::fs::metadata(dir) {
             Ok(m) if m.is_dir() => return Ok(dir),
             Ok(_) => bail!(
-                "{}: cannot write the image there: {} is a file, not a directory",
+                "{}: cannot write {what} there: {} is a file, not a directory",
                 output.display(),
                 dir.display()
             ),
@@ -95,7 +101,7 @@ pub fn check_space(output: &Path, needed: u64) -> Result<Option<String>> {
         prism_shade::OutputTarget::Replace(t) => t,
         prism_shade::OutputTarget::Into => return Ok(None),
     };
-    let dir = existing_dir(&target)?;
+    let dir = existing_dir(&target, "the image")?;
     let Some(available) = available_bytes(dir) else { return Ok(None) };
     let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
     match judge(available, needed) {
@@ -146,7 +152,7 @@ mod tests {
     fn the_space_of_an_existing_directory_is_read() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("not/yet/img.png");
-        assert_eq!(existing_dir(&out).unwrap(), dir.path());
+        assert_eq!(existing_dir(&out, "the image").unwrap(), dir.path());
         if cfg!(unix) {
             let free = available_bytes(dir.path()).expect("statvfs answers for a temporary directory");
             assert!(free > 0);

@@ -182,9 +182,13 @@ fn an_unwritable_output_fails_before_the_scene_is_read_or_rendered() {
     } else {
         "ro/sub/img.png".to_owned()
     };
+    #[cfg(unix)]
+    std::os::unix::fs::symlink("/proc/prism-no-such-dir/img.png", dir.path().join("dangling.png")).unwrap();
     for (target, words) in [
         (ro_target.as_str(), "cannot write the image: no file can be created in"),
         ("s.toml/img.png", "s.toml is a file, not a directory"),
+        #[cfg(unix)]
+        ("dangling.png", "links to /proc/prism-no-such-dir/img.png, whose folder does not exist"),
     ] {
         let out = prism(dir.path(), &["render", "s.toml", "-o", target]);
         let err = text(&out.stderr);
@@ -209,14 +213,29 @@ fn a_bad_stats_json_path_fails_before_the_render() {
     for (target, words) in [
         (".", ".: the output is a directory; give a file name such as stats.json"),
         ("s.toml", "s.toml: refusing to write the statistics over an input of this render"),
-        ("s.toml/x.json", "--stats-json: cannot create the directory s.toml"),
+        ("s.toml/x.json", "--stats-json: s.toml/x.json: cannot write the statistics there: s.toml is a file"),
+        (
+            "/proc/prism-no-such-dir/s.json",
+            "--stats-json: /proc/prism-no-such-dir/s.json: cannot write the statistics: no file can be created in /proc",
+        ),
+        // A link into a folder that does not exist: not made at the far end.
+        (
+            "dangling.json",
+            "--stats-json: dangling.json: cannot write the statistics: it links to /proc/prism-no-such-dir/s.json, \
+             whose folder does not exist",
+        ),
     ] {
+        #[cfg(unix)]
+        if target == "dangling.json" {
+            std::os::unix::fs::symlink("/proc/prism-no-such-dir/s.json", dir.path().join(target)).unwrap();
+        }
         let out = prism(dir.path(), &["render", "s.toml", "-o", "img.png", "--stats-json", target]);
         let err = text(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{target}: {err}");
         assert!(err.starts_with("error: ") && err.contains(words), "{target}: {err}");
         assert!(!err.contains("rendering"), "{target}: {err}");
         // No image either: the render never started.
+        let _ = fs::remove_file(dir.path().join("dangling.json"));
         assert_eq!(listing(dir.path()), ["s.toml"], "{target}");
     }
     // A missing directory is made, as the image's is.
