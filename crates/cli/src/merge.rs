@@ -72,10 +72,19 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
     Ok(())
 }
 
-/// The first `, `-separated item where two settings texts differ, for a
-/// message (`spp: 4` against `spp: 16`).
+/// The first item where two settings texts differ, for a message (`spp:
+/// 4` against `spp: 16`): items are separated by `, ` or `; `, and shown
+/// without the names and braces of the structures around them.
 fn first_difference(a: &str, b: &str) -> (String, String) {
-    let split = |s: &str| s.split(", ").map(str::to_owned).collect::<Vec<_>>();
+    let split = |s: &str| {
+        s.split("; ")
+            .flat_map(|part| part.split(", "))
+            .map(|item| {
+                let item = item.rsplit_once("{ ").map_or(item, |(_, inner)| inner);
+                item.trim_end_matches(" }").trim_end_matches(" }").to_owned()
+            })
+            .collect::<Vec<_>>()
+    };
     let (sa, sb) = (split(a), split(b));
     for (x, y) in sa.iter().zip(&sb) {
         if x != y {
@@ -83,6 +92,29 @@ fn first_difference(a: &str, b: &str) -> (String, String) {
         }
     }
     (a.to_owned(), b.to_owned())
+}
+
+/// What differs between two tiles' inputs (`DIGEST; set [...]; obj ...`,
+/// as `render` records them): the files, the `--set` flags or the OBJ
+/// options, for a message.
+fn inputs_difference(a: &str, b: &str) -> String {
+    // `DIGEST; set SETS; obj OBJ`; the digest is hex and OBJ's words hold
+    // no `; obj `, so the parts split cleanly.
+    let parts = |s: &str| -> (String, String, String) {
+        let (digest, rest) = s.split_once("; set ").unwrap_or((s, ""));
+        let (sets, obj) = rest.rsplit_once("; obj ").unwrap_or((rest, ""));
+        (digest.to_owned(), sets.to_owned(), obj.to_owned())
+    };
+    let ((da, sa, oa), (db, sb, ob)) = (parts(a), parts(b));
+    if da != db {
+        "the files they read differ".to_owned()
+    } else if sa != sb {
+        format!("their --set flags differ: {sa} and {sb}")
+    } else if oa != ob {
+        format!("their OBJ options (--view, --light, --floor) differ: {oa} and {ob}")
+    } else {
+        "what they read differs".to_owned()
+    }
 }
 
 /// Checks that `tiles` make one image, and makes it: the beauty and the
@@ -101,9 +133,10 @@ pub fn assemble(tiles: &[(PathBuf, Tile)]) -> Result<(Image, AovImages)> {
         let (a, b) = (&first.header, &t.header);
         if a.inputs != b.inputs {
             bail!(
-                "{f} and {p} are tiles of different scenes ({} and {}: the files they read differ); merge tiles of one render only",
+                "{f} and {p} are tiles of different scenes ({} and {}: {}); merge tiles of one render only",
                 a.scene,
-                b.scene
+                b.scene,
+                inputs_difference(&a.inputs, &b.inputs)
             );
         }
         if (first.width, first.height) != (t.width, t.height) {
@@ -292,10 +325,47 @@ mod tests {
             e.starts_with("t0-0.exr and t2-0.exr are tiles of different scenes (s.toml and t.toml"),
             "{e}"
         );
+        // The same files with other sets or OBJ options: named as such.
+        for (a, b, words) in [
+            ("0a; set []; obj None", "0b; set []; obj None", "the files they read differ"),
+            (
+                r#"0a; set ["render.spp=1"]; obj None"#,
+                "0a; set []; obj None",
+                r#"their --set flags differ: ["render.spp=1"] and []"#,
+            ),
+            (
+                "0a; set []; obj None",
+                "0a; set []; obj Some(Floor)",
+                "their OBJ options (--view, --light, --floor) differ",
+            ),
+        ] {
+            let (mut x, mut y) = (tile(0, 3), tile(1, 3));
+            (x.1.header.inputs, y.1.header.inputs) = (a.into(), b.into());
+            let e = err(&[x, y]);
+            assert!(e.contains(&format!("(s.toml and s.toml: {words}")), "{e}");
+        }
+        // A settings difference inside a nested structure, or in the AOVs,
+        // is shown without the structures' names.
+        assert_eq!(
+            first_difference(
+                "RenderSettings { spp: 4, antialias: Antialias { filter: Box, point_textures: false } }; aov [\"depth\"]",
+                "RenderSettings { spp: 4, antialias: Antialias { filter: Box, point_textures: false } }; aov []"
+            ),
+            ("aov [\"depth\"]".to_owned(), "aov []".to_owned())
+        );
+        assert_eq!(
+            first_difference("S { a: A { filter: Box, x: 1 } }", "S { a: A { filter: Gaussian, x: 1 } }"),
+            ("filter: Box".to_owned(), "filter: Gaussian".to_owned())
+        );
         let mut spp = tile(1, 3);
         spp.1.header.settings = "RenderSettings { spp: 16, fog: true }".into();
         let e = err(&[tile(0, 3), spp]);
-        assert!(e.contains("t0-0.exr and t2-0.exr were rendered with different settings (`RenderSettings { spp: 4` and `RenderSettings { spp: 16`)"), "{e}");
+        assert!(
+            e.contains(
+                "t0-0.exr and t2-0.exr were rendered with different settings (`spp: 4` and `spp: 16`)"
+            ),
+            "{e}"
+        );
         let mut version = tile(2, 3);
         version.1.header.version = "9.9.9".into();
         assert!(err(&[tile(0, 3), version]).contains("different prism versions (0.1.0 and 9.9.9)"));
