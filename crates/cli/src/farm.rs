@@ -268,6 +268,9 @@ fn shared_check(paths: &[PathBuf]) -> Result<String> {
 }
 
 fn slurm(a: &SlurmArgs) -> Result<()> {
+    if a.scene == Path::new("-") {
+        bail!("a farm job needs its scene in a file (every task reads it), not on standard input");
+    }
     // Checked here so that a bad list fails before anything is submitted.
     a.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
     let opts = LoadOptions {
@@ -286,9 +289,11 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
         (None, Some(n)) if n > 0 => (false, n),
         _ => bail!("--frames 0: a turntable needs at least 1 frame"),
     };
-    if let Some(o) = a.orbit.filter(|o| !o.is_finite()) {
-        bail!("--orbit {o}: the angle must be a finite number of degrees");
+    if a.orbit.is_some() && a.frames.is_none() {
+        // clap's `requires` lets it through beside --tiles.
+        bail!("--orbit turns the camera over a turntable's frames; give --frames N (tiles do not orbit)");
     }
+    crate::frames::check_orbit(a.orbit.unwrap_or(360.0))?;
     let output = absolute(&a.output)?;
     prism_shade::OutputFormat::from_path(&output)?;
     check_not_an_input(&output, &loaded.inputs)?;

@@ -31,6 +31,18 @@ pub struct FrameArgs {
     pub frame_from_env: bool,
 }
 
+/// Refuses an `--orbit` that is not a finite number of degrees (one past
+/// f32's range reads as infinite: it is not named as "inf").
+pub fn check_orbit(orbit: f32) -> Result<()> {
+    if orbit.is_nan() {
+        bail!("--orbit NaN: the angle must be a finite number of degrees");
+    }
+    if orbit.is_infinite() {
+        bail!("--orbit: the angle must be a finite number of degrees, at most about 3.4e38");
+    }
+    Ok(())
+}
+
 /// The camera of frame `index` of `count` turning `orbit` degrees in all.
 ///
 /// # Errors
@@ -71,9 +83,7 @@ pub fn plan(
         bail!("--frames 0: a turntable needs at least 1 frame");
     }
     let orbit = args.orbit.unwrap_or(360.0);
-    if !orbit.is_finite() {
-        bail!("--orbit {orbit}: the angle must be a finite number of degrees");
-    }
+    check_orbit(orbit)?;
     let only = match (args.frame, args.frame_from_env) {
         (Some(i), _) => Some(("--frame", i)),
         (None, true) => Some(("--frame-from-env", task_index("--frame-from-env")?)),

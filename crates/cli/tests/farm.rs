@@ -354,4 +354,17 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
     assert!(e.contains("--alpha: tiles hold no alpha"), "{e}");
     let e = fails(d, &["farm", "slurm", "a.toml", "-o", "x.png", "--dry-run"]);
     assert!(e.contains("required arguments were not provided") && e.contains("--tiles"), "{e}");
+    let e =
+        fails(d, &["farm", "slurm", "a.toml", "--tiles", "2", "--orbit", "30", "-o", "x.png", "--dry-run"]);
+    assert!(e.contains("--orbit turns the camera over a turntable's frames; give --frames N"), "{e}");
+    let e = fails(
+        d,
+        &["farm", "slurm", "a.toml", "--frames", "2", "--orbit", "1e40", "-o", "x.png", "--dry-run"],
+    );
+    assert!(e.contains("--orbit: the angle must be a finite number of degrees, at most about 3.4e38"), "{e}");
+    let e = fails(d, &["farm", "slurm", "-", "--tiles", "2", "-o", "x.png", "--dry-run"]);
+    assert!(
+        e.contains("a farm job needs its scene in a file (every task reads it), not on standard input"),
+        "{e}"
+    );
 }
