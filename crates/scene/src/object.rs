@@ -163,6 +163,16 @@ fn cuboid(ctx: &Ctx, d: &ObjectDef, ospan: &Range<usize>) -> Result<Shape> {
             }
             Cuboid::from_center_size(center, s).map_err(|e| ctx.geometry(&size.span(), e))?
         }
+        (min, max, Some(size)) if min.is_some() || max.is_some() => {
+            return Err(ctx.invalid(
+                &size.span(),
+                "a cuboid takes `min` and `max`, or `size` (and `center`), not both",
+            ));
+        }
+        (Some(one), None, None) | (None, Some(one), None) => {
+            let (given, missing) = if d.min.is_some() { ("min", "max") } else { ("max", "min") };
+            return Err(ctx.invalid(&one.span(), format!("a cuboid with `{given}` needs `{missing}` too")));
+        }
         _ => {
             return Err(ctx.invalid(
                 ospan,

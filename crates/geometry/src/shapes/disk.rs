@@ -24,7 +24,8 @@ impl Disk {
     /// If the radius is not positive, the normal is zero, or a value is not
     /// finite.
     pub fn new(center: Vec3, normal: Vec3, radius: f32) -> Result<Self, GeometryError> {
-        let plane = crate::Plane::new(center, normal)?;
+        let plane =
+            crate::Plane::named(center, normal, ["disk centre", "disk normal", "disk normal is zero"])?;
         Ok(Self {
             center: check_finite("disk centre", center)?,
             normal: plane.normal(),
@@ -147,6 +148,12 @@ mod tests {
         let s = 0.5f32.sqrt();
         assert!((b.max - Vec3::new(s, s, 1.0)).abs().max_element() < 1e-6, "{b:?}");
         assert!(Disk::new(Vec3::ZERO, Vec3::Y, 0.0).is_err());
-        assert!(Disk::new(Vec3::ZERO, Vec3::ZERO, 1.0).is_err());
+        // Errors name the disk, not the plane it lies in.
+        let zero = Disk::new(Vec3::ZERO, Vec3::ZERO, 1.0).unwrap_err().to_string();
+        assert!(zero.contains("disk normal is zero"), "{zero}");
+        let nan = Disk::new(Vec3::NAN, Vec3::Y, 1.0).unwrap_err().to_string();
+        assert!(nan.contains("disk centre"), "{nan}");
+        // A normal of any finite size is a direction.
+        assert_eq!(Disk::new(Vec3::ZERO, Vec3::Y * 1e-30, 1.0).unwrap().normal(), Vec3::Y);
     }
 }

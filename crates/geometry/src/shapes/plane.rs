@@ -27,10 +27,18 @@ impl Plane {
     /// # Errors
     /// If `normal` is zero or a value is not finite.
     pub fn new(point: Vec3, normal: Vec3) -> Result<Self, GeometryError> {
-        let point = check_finite("plane point", point)?;
-        let normal = check_finite("plane normal", normal)?
-            .try_normalize()
-            .ok_or(GeometryError::Degenerate("plane normal is zero"))?;
+        Self::named(point, normal, ["plane point", "plane normal", "plane normal is zero"])
+    }
+
+    /// [`Plane::new`], its errors naming the point, the normal and a zero
+    /// normal as `names` say (a disk's plane is the disk's).
+    pub(crate) fn named(point: Vec3, normal: Vec3, names: [&'static str; 3]) -> Result<Self, GeometryError> {
+        let [point_name, normal_name, zero] = names;
+        let point = check_finite(point_name, point)?;
+        let normal = check_finite(normal_name, normal)?;
+        // Any finite size: `unit` where the squared length under- or overflows.
+        let normal =
+            normal.try_normalize().or_else(|| crate::unit(normal)).ok_or(GeometryError::Degenerate(zero))?;
         // Tangent: +X projected onto the plane, or +Z when the normal is ~X.
         let seed = if normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Z };
         let tangent = (seed - normal * normal.dot(seed)).normalize();
@@ -146,6 +154,7 @@ mod tests {
     fn rejects_zero_normal() {
         assert!(Plane::new(Vec3::ZERO, Vec3::ZERO).is_err());
         assert!(Plane::new(Vec3::NAN, Vec3::Y).is_err());
+        assert_eq!(Plane::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 3e-25)).unwrap().normal(), Vec3::Z);
         assert_eq!(floor().bounds(), Aabb::INFINITE);
     }
 }

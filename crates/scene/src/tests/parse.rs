@@ -183,6 +183,21 @@ fn missing_required_keys_are_named() {
     refused(&[
         ("[[objects]]\ntype = \"sphere\"\n", "a sphere needs `radius`", Some("[[objects]]")),
         ("[[objects]]\ntype = \"cuboid\"\n", "a cuboid needs `size`", None),
+        (
+            "[[objects]]\ntype = \"cuboid\"\nmax = [1, 1, 1]\n",
+            "a cuboid with `max` needs `min` too",
+            Some("[1"),
+        ),
+        (
+            "[[objects]]\ntype = \"cuboid\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nsize = 2\n",
+            "a cuboid takes `min` and `max`, or `size` (and `center`), not both",
+            Some("size = 2"),
+        ),
+        (
+            "[[objects]]\ntype = \"disk\"\nradius = 1\nnormal = [0, 0, 0]\n",
+            "disk normal is zero",
+            Some("[0, 0"),
+        ),
         ("[[objects]]\ntype = \"mesh\"\n", "a mesh needs `path`", None),
     ]);
 }
