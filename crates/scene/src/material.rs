@@ -118,6 +118,12 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
     Ok(m)
 }
 
+/// The keys of a checker texture besides `type`.
+pub(crate) const CHECKER_KEYS: [&str; 4] = ["a", "b", "size", "space"];
+
+/// The keys of an image texture besides `type`.
+pub(crate) const IMAGE_KEYS: [&str; 5] = ["path", "mapping", "wrap", "scale", "tint"];
+
 /// The texture of a `texture = { ... }` table.
 fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Texture> {
     let d = t.get_ref();
@@ -134,8 +140,8 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
         ("tint", span_of(&d.tint)),
     ];
     let (kname, allowed): (_, &[&str]) = match kind {
-        TextureKind::Checker => ("checker", &["a", "b", "size", "space"]),
-        TextureKind::Image => ("image", &["path", "mapping", "wrap", "scale", "tint"]),
+        TextureKind::Checker => ("checker", &CHECKER_KEYS),
+        TextureKind::Image => ("image", &IMAGE_KEYS),
     };
     if let Some((key, span)) = first_foreign(&keys, allowed) {
         let allowed = allowed.join(", ");

@@ -44,20 +44,6 @@ impl Entry {
     }
 }
 
-/// The candidate closest to `word`, if it is close enough to be what was
-/// meant: at most one edit in four characters (at least one edit), or
-/// one of the two is a prefix of the other (`fov_deg` → `fov`).
-pub(crate) fn closest<'c>(word: &str, candidates: &[&'c str]) -> Option<&'c str> {
-    let lower = word.to_ascii_lowercase();
-    let (best, dist) =
-        candidates.iter().map(|c| (*c, strsim::damerau_levenshtein(&lower, c))).min_by_key(|&(_, d)| d)?;
-    let limit = (word.chars().count() / 4).max(1);
-    if dist <= limit {
-        return Some(best);
-    }
-    candidates.iter().copied().find(|c| c.len() >= 2 && (lower.starts_with(c) || c.starts_with(&lower)))
-}
-
 /// The object or light whose entry holds byte `offset` of the scene
 /// `text` (the last `[[objects]]` or `[[lights]]` entry starting before
 /// it), if `message` is about an unknown key of one (serde then lists
@@ -90,10 +76,7 @@ pub(crate) fn entry_at(text: &str, offset: usize, message: &str) -> Option<Entry
     None
 }
 
-/// ` Did you mean `x`?` for `word` among `candidates`, or nothing.
-fn did_you_mean(word: &str, candidates: &[&str]) -> String {
-    closest(word, candidates).map_or_else(String::new, |c| format!("; did you mean `{c}`?"))
-}
+use prism_shade::did_you_mean;
 
 /// The words between backticks in `s`, in order.
 fn backticked(s: &str) -> Vec<&str> {
@@ -147,6 +130,20 @@ fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
     }
     if expected.is_empty() {
         return format!("unknown {what} `{word}`: this table takes no keys");
+    }
+    // A texture's keys are those of both kinds: list them by kind.
+    let (checker, image) = (crate::material::CHECKER_KEYS, crate::material::IMAGE_KEYS);
+    let mut texture: Vec<&str> = std::iter::once("type").chain(checker).chain(image).collect();
+    let mut given = expected.clone();
+    texture.sort_unstable();
+    given.sort_unstable();
+    if given == texture {
+        return format!(
+            "unknown key `{word}`{} (a checker texture takes: type, {}; an image texture: type, {})",
+            did_you_mean(word, &expected),
+            checker.join(", "),
+            image.join(", ")
+        );
     }
     format!(
         "unknown {what} `{word}`{} (expected one of: {})",
@@ -206,18 +203,6 @@ fn got_words(g: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn close_words_are_suggested_and_far_ones_are_not() {
-        let keys = ["center", "radius", "type", "material"];
-        assert_eq!(closest("radios", &keys), Some("radius"));
-        assert_eq!(closest("centre", &keys), Some("center"));
-        assert_eq!(closest("Radius", &keys), Some("radius"));
-        assert_eq!(closest("colour", &keys), None);
-        assert_eq!(closest("fov_deg", &["fov", "up"]), Some("fov"));
-        assert_eq!(closest("x", &["fov", "up"]), None);
-        assert_eq!(closest("x", &[]), None);
-    }
 
     #[test]
     fn serde_words_become_scene_words() {

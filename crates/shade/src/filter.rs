@@ -88,7 +88,11 @@ impl fmt::Display for PixelFilter {
 
 /// An unknown filter name.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown pixel filter `{0}` (expected box, gaussian or blackman-harris)")]
+#[error(
+    "unknown pixel filter `{name}`{hint} (expected box, gaussian or blackman-harris)",
+    name = .0,
+    hint = crate::names::did_you_mean(.0, &PixelFilter::ALL.map(PixelFilter::name))
+)]
 pub struct FilterParseError(pub String);
 
 impl FromStr for PixelFilter {

@@ -54,6 +54,17 @@ fn a_misspelt_key_gets_a_suggestion_and_the_keys_of_its_shape() {
         "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ rotatey = 3 }]\n",
         "did you mean `rotate_y`?",
     );
+    // A texture's keys, listed by kind.
+    expect_err(
+        "[materials.m]\ntexture = { type = \"checker\", sise = 2 }\n",
+        "unknown key `sise`; did you mean `size`? (a checker texture takes: type, a, b, size, space; \
+         an image texture: type, path, mapping, wrap, scale, tint)",
+    );
+    // Pass and filter names.
+    let with =
+        |line: &str| parse(&BASE.replace("spp = 2", &format!("spp = 2\n{line}"))).unwrap_err().to_string();
+    assert!(with("aov = [\"depht\"]").contains("unknown AOV pass `depht`; did you mean `depth`?"));
+    assert!(with("filter = \"gauss\"").contains("unknown pixel filter `gauss`; did you mean `gaussian`?"));
 }
 
 #[test]
