@@ -104,6 +104,24 @@ impl fmt::Display for Interrupted {
 
 impl std::error::Error for Interrupted {}
 
+/// `e` with the turntable's frame named, if it is an interrupt: frame
+/// `index` (`output`) was the one stopped, and the `written` frames before
+/// it were written whole.
+pub fn in_frame(e: anyhow::Error, index: usize, output: &Path, written: usize) -> anyhow::Error {
+    match e.downcast::<Interrupted>() {
+        Ok(i) => {
+            let before = match written {
+                0 => "no frame before it was written".to_owned(),
+                1 => "the frame before it was written".to_owned(),
+                n => format!("the {n} frames before it were written"),
+            };
+            Interrupted { message: format!("frame {index} ({}): {}; {before}", output.display(), i.message) }
+                .into()
+        }
+        Err(e) => e,
+    }
+}
+
 /// The exit status for a failed command: 130 after an interrupt, else 1.
 pub fn exit_code(e: &anyhow::Error) -> ExitCode {
     if e.downcast_ref::<Interrupted>().is_some() {

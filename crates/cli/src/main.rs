@@ -391,7 +391,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             "--stats-json describes one render; with --frames, give --frame I (or --frame-from-env)"
         ));
     }
-    for (settings, frame_output) in &frames {
+    let several = frames.len() > 1;
+    for (k, (settings, frame_output)) in frames.iter().enumerate() {
         overwrite::check_not_an_input(frame_output, &loaded.inputs)?;
         let plan = plan.for_output(frame_output.clone());
         let mut written = plan.other_files(&aovs)?;
@@ -402,7 +403,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             written.push(frame_output.clone());
             overwrite::check_stats_apart(s, &written)?;
         }
-        render_to(args, &loaded, settings, &plan, &aovs, load_seconds)?;
+        render_to(args, &loaded, settings, &plan, &aovs, load_seconds)
+            .map_err(|e| if several { interrupt::in_frame(e, k, frame_output, k) } else { e })?;
     }
     Ok(())
 }
@@ -453,9 +455,13 @@ fn render_to(
     if bar.is_none() && !args.quiet {
         eprintln!("rendering {w}×{h} at {} spp (Ctrl-C stops)", settings.spp);
     }
-    let progress = |done: u32, _total: u32| {
-        interrupt.note_rows(done);
+    let rows = region.map_or(h, |r| r.0.height());
+    let progress = |done: u32, total: u32| {
+        // Adaptive sampling counts its base pass's rows first: the image's
+        // rows are finished in the refine pass, the last `rows` counted.
+        interrupt.note_rows(done.saturating_sub(total.saturating_sub(rows)));
         if let Some(b) = &bar {
+            b.set_length(u64::from(total));
             b.set_position(u64::from(done));
         }
     };

@@ -124,6 +124,27 @@ mod signals {
     }
 
     #[test]
+    fn sigint_in_a_turntable_names_the_frame_and_the_frames_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let (mut child, mut err, mut seen) =
+            start_scene(dir.path(), GOOD, &["--frames", "3", "-s", "20000", "--max-spp", "20000"]);
+        // Frame 0 done: the second frame says it is rendering.
+        assert!(read_until_started(&mut err, &mut seen), "{seen}");
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(
+            err.contains("error: frame 1 (img.0001.png): interrupted (Ctrl-C) after")
+                && err.contains(
+                    "nothing was written (--partial writes the rows done); the frame before it was written"
+                ),
+            "{err}"
+        );
+        assert_eq!(listing(dir.path()), ["img.0000.png", "s.toml"]);
+    }
+
+    #[test]
     fn sigint_with_partial_writes_a_valid_image() {
         let dir = tempfile::tempdir().unwrap();
         let (mut child, err, seen) = start(dir.path(), &["--partial"]);
