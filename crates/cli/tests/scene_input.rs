@@ -111,4 +111,8 @@ fn a_scene_on_standard_input_renders_with_paths_from_the_current_directory() {
     // --set works on it too.
     let out = run(&["info", "-", "--set", "render.spp=6"], &scene);
     assert!(out.status.success() && text(&out.stdout).contains("6 spp"), "{}", text(&out.stdout));
+    // Named as messages name it.
+    assert!(text(&out.stdout).starts_with("scene      <stdin>\n"), "{}", text(&out.stdout));
+    let out = run(&["info", "-", "--json"], &scene);
+    assert!(text(&out.stdout).contains("\"scene\": \"<stdin>\""), "{}", text(&out.stdout));
 }
