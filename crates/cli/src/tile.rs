@@ -89,8 +89,11 @@ fn parse_tile(s: &str) -> Result<(u32, u32), String> {
 /// # Errors
 /// Neither variable set, or not a whole number.
 pub fn task_index(flag: &str) -> Result<u32> {
+    // An empty variable is unset, as the job script's `${VAR:-…}` reads it.
     for var in INDEX_VARIABLES {
-        if let Ok(v) = std::env::var(var) {
+        if let Ok(v) = std::env::var(var).map(|v| v.trim().to_owned())
+            && !v.is_empty()
+        {
             return v
                 .trim()
                 .parse()

@@ -246,6 +246,13 @@ fn tile_from_env_reads_slurm_then_kubernetes_indices() {
         let read = |f: &str| prism_shade::read_layered_exr(&d.join(f)).unwrap();
         assert!(read("env.exr") == read("flag.exr"), "{var}");
     }
+    // An empty Slurm variable is unset, as the job script reads it.
+    let mut cmd = prism_cmd(d);
+    cmd.args(["render", "a.toml", "-q", "--tile-from-env", "3", "-o", "empty.exr"]);
+    cmd.env("SLURM_ARRAY_TASK_ID", "").env("JOB_COMPLETION_INDEX", "2");
+    assert!(cmd.status().unwrap().success());
+    let read = |f: &str| prism_shade::read_layered_exr(&d.join(f)).unwrap();
+    assert!(read("empty.exr") == read("flag.exr"));
 }
 
 #[test]
