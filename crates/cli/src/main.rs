@@ -441,6 +441,11 @@ fn render_to(
             "warning: a tile holds no AOV previews; prism merge --aov-preview writes them for the whole image"
         );
     }
+    if tile_file && plan.aov_files() {
+        eprintln!(
+            "warning: a tile holds its passes as layers; prism merge --aov-files writes them as files of their own"
+        );
+    }
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(u64::from(region.map_or(h, |r| r.0.height())));

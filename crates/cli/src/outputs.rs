@@ -68,6 +68,11 @@ impl Plan {
         self.previews
     }
 
+    /// Whether the passes go to files of their own (`--aov-files`).
+    pub fn aov_files(&self) -> bool {
+        self.aov_files
+    }
+
     /// The size in bytes of every file of a `width × height` render with
     /// `aovs`, uncompressed: an upper bound for the free-space check.
     pub fn uncompressed_bytes(&self, width: u32, height: u32, aovs: &[prism_shade::Aov]) -> u64 {

@@ -230,6 +230,16 @@ fn bad_parts_are_refused_naming_the_flag() {
         "{e}"
     );
     assert_eq!(listing(d), ["a.toml"], "nothing written");
+    // Flags that a tile cannot honour, and the merge can, are warned of.
+    let out = prism_cmd(d)
+        .args(["render", "a.toml", "-q", "--tile", "0/2", "--aov", "depth", "--aov-files", "--aov-preview"])
+        .args(["-o", "w.exr"])
+        .output()
+        .unwrap();
+    let e = text(&out.stderr);
+    assert!(out.status.success(), "{e}");
+    assert!(e.contains("prism merge --aov-files writes them as files of their own"), "{e}");
+    assert!(e.contains("prism merge --aov-preview writes them for the whole image"), "{e}");
 }
 
 #[test]
