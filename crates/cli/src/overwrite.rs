@@ -45,8 +45,9 @@ pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<(
     if let Some(t) = written(output)
         && inputs.contains(&t)
     {
+        let named = if t.as_path() == output { String::new() } else { format!(" ({})", t.display()) };
         bail!(
-            "{}: refusing to write {} over an input of this render (the scene, a mesh, a material library or a texture)",
+            "{}: refusing to write {} over an input of this command{named}, a file it reads",
             output.display(),
             what.noun()
         );

@@ -212,7 +212,7 @@ fn a_bad_stats_json_path_fails_before_the_render() {
     fs::write(dir.path().join("s.toml"), GOOD).unwrap();
     for (target, words) in [
         (".", ".: the output is a directory; give a file name such as stats.json"),
-        ("s.toml", "s.toml: refusing to write the statistics over an input of this render"),
+        ("s.toml", "s.toml: refusing to write the statistics over an input of this command"),
         ("s.toml/x.json", "--stats-json: s.toml/x.json: cannot write the statistics there: s.toml is a file"),
         (
             "/proc/prism-no-such-dir/s.json",

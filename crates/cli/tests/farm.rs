@@ -136,6 +136,8 @@ fn pixel_bounds_tiles_of_one_scene_only_merge() {
         let name = format!("p{k}.exr");
         ok(d, &["render", "a.toml", "-q", "--spp", "4", "--pixel-bounds", b, "--threads", "2", "-o", &name]);
     }
+    let e = fails(d, &["merge", "p3.exr", "p1.exr", "p0.exr", "p2.exr", "-o", "p0.exr"]);
+    assert!(e.contains("p0.exr: refusing to write the image over an input of this command"), "{e}");
     ok(d, &["merge", "-q", "p3.exr", "p1.exr", "p0.exr", "p2.exr", "-o", "m.png"]);
     assert_eq!(rgb8(&d.join("m.png")), rgb8(&d.join("full.png")));
     let e = fails(d, &["merge", "p0.exr", "p1.exr", "p3.exr", "-o", "m2.png"]);
