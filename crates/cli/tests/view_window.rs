@@ -116,6 +116,20 @@ fn no_display_fails_clearly() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("no display: set DISPLAY or use `prism render`"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
+    // A missing scene or a bad --save-dir is named first, display or not.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    for (args, words) in [
+        (&["view", "no-such.toml"][..], "no-such.toml"),
+        (
+            &["view", "scenes/seed.toml", "--save-dir", "README.md"],
+            "--save-dir README.md: it is a file, not a directory",
+        ),
+    ] {
+        let out = Command::new(BIN).args(args).current_dir(&root).env_remove("DISPLAY").output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(words) && !err.contains("no display"), "{args:?}: {err}");
+    }
 }
 
 #[test]

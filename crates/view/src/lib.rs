@@ -71,6 +71,14 @@ pub enum ViewError {
     /// A snapshot could not be saved (the error names the file).
     #[error("cannot save a snapshot: {0}")]
     Save(#[from] prism_shade::OutputError),
+    /// The folder for snapshots cannot be used.
+    #[error("--save-dir {}: {reason}", path.display())]
+    SaveDir {
+        /// The folder given.
+        path: PathBuf,
+        /// Why it cannot hold snapshots.
+        reason: String,
+    },
 }
 
 /// The loader's message, prefixed with the file unless it names it already.
@@ -174,10 +182,29 @@ pub fn run(opts: ViewOptions) -> Result<(), ViewError> {
 /// # Errors
 /// As [`run`].
 pub fn run_with_loader(opts: ViewOptions, loader: Arc<SceneLoader>) -> Result<(), ViewError> {
-    check_display()?;
+    // What is wrong with the user's files and flags first, then the display.
     let setup =
         loader(&opts.scene).map_err(|message| ViewError::Scene { path: opts.scene.clone(), message })?;
+    if let Some(dir) = &opts.save_dir {
+        save_dir_ready(dir)?;
+    }
+    check_display()?;
     window::run(opts, loader, setup)
+}
+
+/// Makes `dir` (where `s` saves snapshots) if it is missing, as `prism
+/// render` makes an output's folder, so that a bad `--save-dir` is found
+/// before the window opens rather than at the first snapshot.
+///
+/// # Errors
+/// [`ViewError::SaveDir`] if `dir` is a file or cannot be made.
+pub fn save_dir_ready(dir: &Path) -> Result<(), ViewError> {
+    let bad = |reason: String| ViewError::SaveDir { path: dir.to_path_buf(), reason };
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(bad("it is a file, not a directory".into())),
+        Err(_) => std::fs::create_dir_all(dir).map_err(|e| bad(e.to_string())),
+    }
 }
 
 /// `Ok` if an X display is named in the environment.
@@ -201,6 +228,19 @@ mod tests {
         assert_eq!(e.to_string(), "a.toml:3:1: bad");
         let e = ViewError::Scene { path: "a.toml".into(), message: "bad".into() };
         assert_eq!(e.to_string(), "cannot load scene a.toml: bad");
+    }
+
+    #[test]
+    fn a_save_dir_is_made_or_refused_before_the_window() {
+        let tmp = tempfile::tempdir().unwrap();
+        let made = tmp.path().join("a/b");
+        save_dir_ready(&made).unwrap();
+        assert!(made.is_dir());
+        let file = tmp.path().join("f");
+        std::fs::write(&file, b"").unwrap();
+        let e = save_dir_ready(&file).unwrap_err().to_string();
+        assert!(e.ends_with("f: it is a file, not a directory"), "{e}");
+        assert!(save_dir_ready(&file.join("sub")).is_err());
     }
 
     #[test]
