@@ -371,7 +371,23 @@ impl<'a> Build<'a> {
             }
             _ => raw,
         };
-        let image = || self.image_at(found, named_at.clone(), raw.diffuse_texture.as_deref().unwrap_or(""));
+        // A texture that cannot be decoded: which material of which OBJ
+        // file names it (tobj keeps no MTL line).
+        let image = || {
+            self.image_at(found, named_at.clone(), raw.diffuse_texture.as_deref().unwrap_or("")).map_err(
+                |e| match e {
+                    SceneError::Asset { location, message, referenced_at } => SceneError::Asset {
+                        location,
+                        message: format!(
+                            "{message} (the map_Kd of material `{}` in {obj_name}'s MTL)",
+                            raw.name
+                        ),
+                        referenced_at,
+                    },
+                    other => other,
+                },
+            )
+        };
         let m = material::from_mtl(raw, &Location::file(&obj.path), named_at, image)?;
         let i = self.materials.add(format!("{obj_name}/{}", raw.name), m);
         if let Some(slot) = self.slots.get_mut(key).and_then(|s| s.mtl_materials.get_mut(k)) {

@@ -242,6 +242,17 @@ fn corrupt_textures_are_reported() {
     assert!(err.contains("bad.png") && err.contains("cannot use this texture"), "{err}");
     assert!(err.contains("cannot use this texture: the PNG data is corrupt or cut short ("), "{err}");
     assert!(err.contains(&format!("used at test.toml:{}:", line_of(extra, "bad.png"))), "{err}");
+    // Named by an MTL file: which material of which OBJ file.
+    fs::write(dir.path().join("t.mtl"), "newmtl shiny\nKd 1 1 1\nmap_Kd bad.png\n").unwrap();
+    fs::write(dir.path().join("t.obj"), "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl shiny\nf 1 2 3\n")
+        .unwrap();
+    let text = format!("{BASE}[[objects]]\ntype = \"mesh\"\npath = \"t.obj\"\n");
+    let err = parse_scene_str(&text, dir.path(), Path::new("test.toml")).unwrap_err().to_string();
+    assert!(
+        err.contains("the PNG data is corrupt")
+            && err.contains("(the map_Kd of material `shiny` in t.obj's MTL)"),
+        "{err}"
+    );
 }
 
 #[test]
