@@ -265,9 +265,13 @@ impl<'a> Tracer<'a> {
         }
         let pre = std::mem::take(self.pre.get_mut(index)?);
         if pre != PreShadow::Unknown {
+            self.packet_rays += 1;
+        }
+        // An occluded ray of a see-through scene is traced again, and
+        // counted, by [`Tracer::shadow`]: one shadow ray, not two.
+        if let PreShadow::Known(_) = pre {
             self.rays += 1;
             self.shadow_rays += 1;
-            self.packet_rays += 1;
         }
         match pre {
             PreShadow::Known(s) => Some(s),
@@ -568,7 +572,8 @@ impl<'a> Tracer<'a> {
                 *o = match (occ, self.see_through) {
                     (false, _) => Vec3::ONE,
                     (true, false) => Vec3::ZERO,
-                    (true, true) => self.shadow(hit, *t),
+                    // Counted above, with the packet.
+                    (true, true) => self.transmittance(hit, *t),
                 };
             }
         }
@@ -590,9 +595,14 @@ impl<'a> Tracer<'a> {
     /// come unordered); a segment that starts inside a solid counts from its
     /// start, one that ends inside (a light in the glass) up to its end.
     fn shadow(&mut self, hit: &Hit, target: Target) -> Vec3 {
-        let ray = shadow_ray(hit, target);
         self.rays += 1;
         self.shadow_rays += 1;
+        self.transmittance(hit, target)
+    }
+
+    /// [`Tracer::shadow`]'s value, the ray not counted (a packet counted it).
+    fn transmittance(&mut self, hit: &Hit, target: Target) -> Vec3 {
+        let ray = shadow_ray(hit, target);
         let scene = self.scene;
         if !self.see_through {
             return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };
