@@ -108,7 +108,7 @@ pub fn task_index(flag: &str) -> Result<u32> {
 /// What a tile file's header records, for `prism merge` to check.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TileHeader {
-    /// The prism version that rendered it.
+    /// The prism version and git commit that rendered it.
     pub version: String,
     /// The scene, as named on the command line (for messages only).
     pub scene: String,
@@ -138,7 +138,8 @@ impl TileHeader {
             aovs.iter().map(|a| a.name()).collect::<Vec<_>>()
         );
         Self {
-            version: env!("CARGO_PKG_VERSION").to_owned(),
+            // The commit too: two builds of one version may render differently.
+            version: format!("{} (commit {})", env!("CARGO_PKG_VERSION"), crate::version::COMMIT),
             scene: scene.display().to_string(),
             inputs,
             settings: settings_text,

@@ -89,7 +89,13 @@ fn tiles_on_any_thread_count_merge_to_the_one_machine_render() {
     assert_eq!((t.width, t.height), (61, 37));
     assert_eq!(t.data_window, prism_shade::PixelBounds::tile(61, 37, 2, 5).unwrap());
     assert_eq!((t.int("prism:tile"), t.int("prism:tiles"), t.int("prism:spp")), (Some(2), Some(5), Some(3)));
-    assert_eq!(t.text("prism:version"), Some(env!("CARGO_PKG_VERSION")));
+    // The version and the commit `prism --version` shows.
+    let version = ok(d, &["--version"]);
+    let commit = version.lines().find_map(|l| l.strip_prefix("commit: ")).unwrap().trim();
+    assert_eq!(
+        t.text("prism:version"),
+        Some(format!("{} (commit {commit})", env!("CARGO_PKG_VERSION")).as_str())
+    );
     assert!(t.channel("", "Z").is_some() && t.channel("N", "Y").is_some() && t.channel("", "id").is_some());
     // Merged in any order, to PNG and EXR.
     let rev: Vec<&str> = tiles.iter().rev().map(String::as_str).collect();
