@@ -160,6 +160,14 @@ fn the_scene_file_can_ask_for_passes() {
     let out = prism(dir.path(), &["render", "s.toml", "-o", "y.exr", "--aov-files", "--aov", "normal"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(dir.path().join("y.normal.exr").is_file() && !dir.path().join("y.depth.exr").exists());
+    // --aov none clears it (the scene's previews then make nothing, with a warning).
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "z.png", "--aov", "none"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        listing(dir.path()).iter().all(|f| !f.starts_with("z.") || f == "z.png"),
+        "{:?}",
+        listing(dir.path())
+    );
     let out = prism(dir.path(), &["info", "s.toml"]);
     assert!(
         text(&out.stdout).contains("aov        depth, object_id, with PNG previews"),

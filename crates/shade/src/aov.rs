@@ -65,14 +65,17 @@ impl Aov {
 
     /// Parses a comma-separated list such as `"depth,normal,object_id"`
     /// (the form of a `--aov` flag). Spaces around names are ignored, `all`
-    /// stands for every pass, repeated names count once, and the passes
-    /// keep their first order of appearance.
+    /// stands for every pass, `none` (alone) for no pass, repeated names
+    /// count once, and the passes keep their first order of appearance.
     ///
     /// # Errors
     /// [`AovParseError`] naming the first item that is not a pass name
     /// (an empty item included).
     pub fn parse_list(list: &str) -> Result<Vec<Aov>, AovParseError> {
         let mut out = Vec::new();
+        if list.trim() == "none" {
+            return Ok(out);
+        }
         for item in list.split(',') {
             let item = item.trim();
             let found: Vec<Aov> = if item == "all" { Aov::ALL.to_vec() } else { vec![item.parse()?] };

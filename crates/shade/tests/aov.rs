@@ -61,6 +61,9 @@ fn names_parse_and_print() {
     assert_eq!(Aov::parse_list("albedo,all").map(|v| v[0]), Ok(Aov::Albedo));
     assert_eq!(Aov::parse_list("depth,Normal"), Err(AovParseError { name: "Normal".into() }));
     assert_eq!(Aov::parse_list("depth,,normal"), Err(AovParseError { name: String::new() }));
+    // `none` alone is no pass (a flag that clears the scene's list).
+    assert_eq!(Aov::parse_list(" none "), Ok(vec![]));
+    assert!(Aov::parse_list("depth,none").is_err());
     let msg = "zbuffer".parse::<Aov>().expect_err("unknown").to_string();
     assert!(msg.contains("zbuffer") && msg.contains("geo_normal"), "{msg}");
     assert_eq!(Aov::Depth.channels(), 1);
