@@ -14,13 +14,13 @@
 //! non-finite policy: `±∞` is stored as is, NaN as 0.
 
 use crate::PixelBounds;
-use crate::output::{OutputError, invalid, write_atomic};
+use crate::output::{OutputError, encode_into, invalid, write_atomic};
 use ::exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes, IntegerBounds,
     Layer, LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, Vec2, WritableImage, read,
 };
 use std::collections::BTreeMap;
-use std::io::{Read, Seek};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 /// The values of one channel, one per pixel of the data window, row by
@@ -286,63 +286,73 @@ pub fn write_layered_exr(path: &Path, image: &LayeredExr) -> Result<(), OutputEr
     );
     let display = IntegerBounds::from_dimensions(Vec2(image.width as usize, image.height as usize));
     let exr = Image::new(ImageAttributes::new(display), layer);
-    // Encoded in memory first: the exr crate writes custom attributes in
-    // its hash map's order, which changes from run to run, and the same
-    // image should be the same bytes.
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    exr.write()
-        .to_buffered(&mut bytes)
-        .map_err(|e| OutputError::Image { path: path.to_path_buf(), reason: e.to_string() })?;
-    let mut bytes = bytes.into_inner();
-    sort_header_attributes(&mut bytes);
     write_atomic(path, |w| {
-        std::io::Write::write_all(w, &bytes)
-            .map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
+        encode_into(path, w, |w| exr.write().to_buffered(w))?;
+        // The exr crate writes custom attributes in its hash map's order,
+        // which changes from run to run; the same image should be the same
+        // bytes. The header keeps its length, so it is sorted in place
+        // where the file can be read back (not a pipe or a device).
+        let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+        w.flush().map_err(io)?;
+        let f = w.get_mut();
+        if f.seek(SeekFrom::Start(0)).is_err() {
+            return Ok(());
+        }
+        let mut head = Vec::new();
+        let read = (&mut *f).take(HEADER_READ).read_to_end(&mut head).is_ok();
+        if read && sort_header_attributes(&mut head) {
+            f.seek(SeekFrom::Start(0)).map_err(io)?;
+            f.write_all(&head).map_err(io)?;
+        }
+        f.seek(SeekFrom::End(0)).map_err(io)?;
+        Ok(())
     })
 }
 
-/// Puts the header attributes of a single-part OpenEXR file `b` in the
-/// order of their names, in place. The header keeps its length, so the
+/// How much of a written file is read back to find its header: prism's
+/// headers take a few kilobytes (the tile's settings text the most).
+const HEADER_READ: u64 = 1 << 20;
+
+/// Puts the header attributes of a single-part OpenEXR file `b` (its
+/// start, holding at least the header) in the order of their names, in
+/// place, and says whether it did. The header keeps its length, so the
 /// offsets after it stay right. Other files (multi-part, deep) and a
-/// header that does not parse are left as they are.
-fn sort_header_attributes(b: &mut [u8]) {
-    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+/// header that does not parse (or not within `b`) are left as they are.
+fn sort_header_attributes(b: &mut [u8]) -> bool {
+    let Some((mut spans, end)) = header_spans(b) else { return false };
+    spans.sort_by(|x, y| b[x.0..x.1].cmp(&b[y.0..y.1]));
+    let sorted: Vec<u8> = spans.iter().flat_map(|&(start, _, next)| b[start..next].to_vec()).collect();
+    b[8..end].copy_from_slice(&sorted);
+    true
+}
+
+/// The attributes of the header of a single-part OpenEXR file `b` (its
+/// start), each as `(start, end of its name, end)`, and where the header
+/// ends (its closing NUL); `None` for a multi-part or deep file or a
+/// header that does not parse within `b`.
+fn header_spans(b: &[u8]) -> Option<(Vec<(usize, usize, usize)>, usize)> {
     const MULTIPART_OR_DEEP: u32 = 0x1000 | 0x800;
-    let Some(flags) = b.get(4..8).and_then(|f| <[u8; 4]>::try_from(f).ok()).map(u32::from_le_bytes) else {
-        return;
-    };
-    if b[..4] != MAGIC || flags & MULTIPART_OR_DEEP != 0 {
-        return;
+    let word =
+        |at: usize| b.get(at..at + 4).and_then(|w| <[u8; 4]>::try_from(w).ok()).map(u32::from_le_bytes);
+    if b.get(..4)? != EXR_MAGIC || word(4)? & MULTIPART_OR_DEEP != 0 {
+        return None;
     }
     // Each attribute: name NUL, type NUL, a 4-byte size, the value; a NUL
     // where a name would start ends the header.
     let zero_from = |i: usize| b.get(i..)?.iter().position(|&c| c == 0).map(|n| i + n);
     let mut spans = Vec::new();
     let mut i = 8;
-    let end = loop {
-        match b.get(i) {
-            Some(0) => break i,
-            Some(_) => {}
-            None => return,
-        }
-        let Some(name_end) = zero_from(i) else { return };
-        let Some(type_end) = zero_from(name_end + 1) else { return };
-        let size = type_end + 1;
-        let Some(len) =
-            b.get(size..size + 4).and_then(|l| <[u8; 4]>::try_from(l).ok()).map(u32::from_le_bytes)
-        else {
-            return;
-        };
-        let next = size + 4 + len as usize;
+    while *b.get(i)? != 0 {
+        let name_end = zero_from(i)?;
+        let size = zero_from(name_end + 1)? + 1;
+        let next = (size + 4).checked_add(word(size)? as usize)?;
         if next > b.len() {
-            return;
+            return None;
         }
         spans.push((i, name_end, next));
         i = next;
-    };
-    spans.sort_by(|x, y| b[x.0..x.1].cmp(&b[y.0..y.1]));
-    let sorted: Vec<u8> = spans.iter().flat_map(|&(start, _, next)| b[start..next].to_vec()).collect();
-    b[8..end].copy_from_slice(&sorted);
+    }
+    Some((spans, i))
 }
 
 /// The first four bytes of every OpenEXR file.
@@ -494,14 +504,11 @@ mod tests {
         // the order of their names, whatever order the exr crate's hash map
         // gave them.
         let bytes = std::fs::read(&p).unwrap();
-        let mut names = Vec::new();
-        let mut i = 8;
-        while bytes[i] != 0 {
-            let name_end = i + bytes[i..].iter().position(|&c| c == 0).unwrap();
-            let size = name_end + 1 + bytes[name_end + 1..].iter().position(|&c| c == 0).unwrap() + 1;
-            names.push(String::from_utf8(bytes[i..name_end].to_vec()).unwrap());
-            i = size + 4 + u32::from_le_bytes(bytes[size..size + 4].try_into().unwrap()) as usize;
-        }
+        let (spans, _) = header_spans(&bytes).unwrap();
+        let name = |&(start, name_end, _): &(usize, usize, usize)| {
+            String::from_utf8(bytes[start..name_end].to_vec()).unwrap()
+        };
+        let names: Vec<String> = spans.iter().map(name).collect();
         assert!(
             names.contains(&"prism:spp".to_owned()) && names.contains(&"dataWindow".to_owned()),
             "{names:?}"

@@ -242,7 +242,8 @@ fn replace_atomically(
     tmp_name.push(name);
     tmp_name.push(format!(".{}.{n}.tmp", std::process::id()));
     let tmp = dir.join(tmp_name);
-    let file = OpenOptions::new().write(true).create_new(true).open(&tmp).map_err(io)?;
+    // Readable too: a writer may read back what it wrote (the EXR header).
+    let file = OpenOptions::new().read(true).write(true).create_new(true).open(&tmp).map_err(io)?;
     let result = (|| {
         let mut w = BufWriter::new(file);
         encode(&mut w)?;
