@@ -326,11 +326,13 @@ fn sort_header_attributes(b: &mut [u8]) -> bool {
     true
 }
 
+/// One header attribute's bytes: `(start, end of its name, end)`.
+type AttributeSpan = (usize, usize, usize);
+
 /// The attributes of the header of a single-part OpenEXR file `b` (its
-/// start), each as `(start, end of its name, end)`, and where the header
-/// ends (its closing NUL); `None` for a multi-part or deep file or a
-/// header that does not parse within `b`.
-fn header_spans(b: &[u8]) -> Option<(Vec<(usize, usize, usize)>, usize)> {
+/// start), and where the header ends (its closing NUL); `None` for a
+/// multi-part or deep file or a header that does not parse within `b`.
+fn header_spans(b: &[u8]) -> Option<(Vec<AttributeSpan>, usize)> {
     const MULTIPART_OR_DEEP: u32 = 0x1000 | 0x800;
     let word =
         |at: usize| b.get(at..at + 4).and_then(|w| <[u8; 4]>::try_from(w).ok()).map(u32::from_le_bytes);
@@ -505,7 +507,7 @@ mod tests {
         // gave them.
         let bytes = std::fs::read(&p).unwrap();
         let (spans, _) = header_spans(&bytes).unwrap();
-        let name = |&(start, name_end, _): &(usize, usize, usize)| {
+        let name = |&(start, name_end, _): &AttributeSpan| {
             String::from_utf8(bytes[start..name_end].to_vec()).unwrap()
         };
         let names: Vec<String> = spans.iter().map(name).collect();
