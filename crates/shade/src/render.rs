@@ -96,7 +96,9 @@ pub struct RenderStats {
     pub seconds: f64,
     /// Every ray traced: camera, reflection, refraction, transparency, shadow.
     pub rays: u64,
-    /// Of `rays`, the beauty's camera rays (one per sample).
+    /// Of `rays`, the beauty's camera rays: one per sample (under adaptive
+    /// sampling, those taken, and for a region the first samples of a
+    /// one-pixel border around it too).
     pub camera_rays: u64,
     /// Of `rays`, the shadow rays.
     pub shadow_rays: u64,
@@ -427,12 +429,20 @@ pub(crate) fn render_pixels<'a>(
                         |(r, (row, g))| render_row(by.start + r, bx.clone(), row, None, Pass::Base(g)),
                     );
                     let flags = refine_flags(&sums, &ranges, bx.len(), threshold);
-                    let mut refine = Vec::with_capacity(pixels.len());
-                    for (r, row) in pixels.chunks_mut(row_len).enumerate() {
-                        let from = (y0 - by.start + r) * bx.len() + (x0 - bx.start);
-                        row.copy_from_slice(&sums[from..from + row_len]);
-                        refine.extend_from_slice(&flags[from..from + row_len]);
-                    }
+                    drop(ranges);
+                    let refine = if sums.len() == pixels.len() {
+                        // The whole image: no border, the buffers as they are.
+                        pixels = sums;
+                        flags
+                    } else {
+                        let mut refine = Vec::with_capacity(pixels.len());
+                        for (r, row) in pixels.chunks_mut(row_len).enumerate() {
+                            let from = (y0 - by.start + r) * bx.len() + (x0 - bx.start);
+                            row.copy_from_slice(&sums[from..from + row_len]);
+                            refine.extend_from_slice(&flags[from..from + row_len]);
+                        }
+                        refine
+                    };
                     pixels.par_chunks_mut(row_len).zip(refine.par_chunks(row_len)).enumerate().for_each(
                         |(r, (row, f))| render_row(y0 + r, cols.clone(), row, None, Pass::Refine(f)),
                     );
