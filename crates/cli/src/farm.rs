@@ -268,7 +268,7 @@ fn shared_check(paths: &[PathBuf]) -> Result<String> {
 }
 
 fn slurm(a: &SlurmArgs) -> Result<()> {
-    if a.scene == Path::new("-") {
+    if prism_scene::is_stdin_path(&a.scene) {
         bail!("a farm job needs its scene in a file (every task reads it), not on standard input");
     }
     // Checked here so that a bad list fails before anything is submitted.

@@ -16,16 +16,11 @@ fn trim(x: f32) -> String {
     if s == "-0" { "0".into() } else { s.into() }
 }
 
-/// The scene's name as messages give it: `<stdin>` for `-`.
-fn scene_name(path: &Path) -> String {
-    if path == Path::new("-") { prism_scene::STDIN_NAME.to_owned() } else { path.display().to_string() }
-}
-
 /// The description printed by `prism info`.
 pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
     let i = &loaded.info;
     let mut s = String::new();
-    let _ = writeln!(s, "scene      {}", scene_name(path));
+    let _ = writeln!(s, "scene      {}", prism_scene::scene_name(path));
     let _ = writeln!(
         s,
         "image      {}×{}, {} spp, max depth {}, min contribution {}",
@@ -165,7 +160,7 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
         json!({ "mode": mode, "params": params, "color": arr(f.color), "enabled": loaded.settings.fog })
     });
     json!({
-        "scene": scene_name(path),
+        "scene": prism_scene::scene_name(path),
         "image": {
             "width": i.width,
             "height": i.height,

@@ -49,7 +49,7 @@ pub fn to_json(
     let bvh = loaded.scene.accel.stats();
     let total = phases.load + phases.render + phases.write;
     serde_json::json!({
-        "scene": scene.display().to_string(),
+        "scene": prism_scene::scene_name(scene),
         "outputs": outputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         "image": { "width": w, "height": h, "spp": loaded.settings.spp },
         "threads": loaded.settings.threads.unwrap_or_else(rayon_threads),

@@ -90,8 +90,10 @@ fn a_scene_on_standard_input_renders_with_paths_from_the_current_directory() {
         child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
         child.wait_with_output().unwrap()
     };
-    let out = run(&["render", "-", "-o", "piped.png"], &scene);
+    let out = run(&["render", "-", "-o", "piped.png", "--stats-json", "piped.json"], &scene);
     assert!(out.status.success(), "{}", text(&out.stderr));
+    let stats = fs::read_to_string(dir.path().join("piped.json")).unwrap();
+    assert!(stats.contains("\"scene\": \"<stdin>\""), "{stats}");
     fs::write(dir.path().join("s.toml"), &scene).unwrap();
     let out = prism(dir.path(), &["render", "s.toml", "-o", "file.png"]);
     assert!(out.status.success(), "{}", text(&out.stderr));

@@ -257,6 +257,13 @@ pub fn is_stdin_path(path: &Path) -> bool {
 /// The name a scene read from standard input has in messages.
 pub const STDIN_NAME: &str = "<stdin>";
 
+/// The scene `path` as messages and reports name it: [`STDIN_NAME`] for
+/// standard input (`-`).
+#[must_use]
+pub fn scene_name(path: &Path) -> String {
+    if is_stdin_path(path) { STDIN_NAME.to_owned() } else { path.display().to_string() }
+}
+
 /// Loads a TOML scene read from `reader` (standard input for `prism
 /// render -`): at most [`MAX_SCENE_BYTES`], UTF-8. Its messages name it
 /// [`STDIN_NAME`], and the paths it holds (meshes, textures) are relative
