@@ -239,8 +239,10 @@ pub(crate) fn environment(
 pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Option<Fog>, bool)> {
     let d = f.get_ref();
     let on = d.enabled.unwrap_or(true);
-    let FogDef { mode, measure, start, end, density, color, enabled: _ } = d;
-    if mode.is_none()
+    let FogDef { mode, measure, start, end, density, color, enabled } = d;
+    // `enabled` alone; an empty table is still linear fog missing its `end`.
+    if enabled.is_some()
+        && mode.is_none()
         && measure.is_none()
         && start.is_none()
         && end.is_none()

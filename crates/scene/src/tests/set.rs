@@ -230,13 +230,15 @@ fn a_fog_of_enabled_alone_is_the_switch_without_a_medium() {
     // `--set fog.enabled=false` on a scene without [fog]: no fog, no error.
     let off = with_sets(&scene(), &["fog.enabled=false"]).unwrap();
     assert!(!off.settings.fog && off.warnings.is_empty(), "{:?}", off.warnings);
+    // An empty [fog] is linear fog without its `end`, as before.
+    let empty = with_sets(&format!("{}[fog]\n", scene()), &[]).unwrap_err().to_string();
+    assert!(empty.contains("linear fog needs `end`"), "{empty}");
     // On alone: the default fog `--fog` adds, with its warning.
-    for text in [format!("{}[fog]\nenabled = true\n", scene()), format!("{}[fog]\n", scene())] {
-        let on = with_sets(&text, &[]).unwrap();
-        assert!(on.settings.fog, "{text}");
-        let fog = on.scene.fog.unwrap();
-        assert!(matches!(fog.mode, prism_shade::FogMode::Linear { start: 0.0, .. }), "{fog:?}");
-        assert_eq!(fog.color, prism_geometry::glam::Vec3::ONE);
-        assert!(on.warnings.iter().any(|w| w.contains("[fog] gives only `enabled`")), "{:?}", on.warnings);
-    }
+    let text = format!("{}[fog]\nenabled = true\n", scene());
+    let on = with_sets(&text, &[]).unwrap();
+    assert!(on.settings.fog, "{text}");
+    let fog = on.scene.fog.unwrap();
+    assert!(matches!(fog.mode, prism_shade::FogMode::Linear { start: 0.0, .. }), "{fog:?}");
+    assert_eq!(fog.color, prism_geometry::glam::Vec3::ONE);
+    assert!(on.warnings.iter().any(|w| w.contains("[fog] gives only `enabled`")), "{:?}", on.warnings);
 }
