@@ -265,7 +265,11 @@ impl ImageTexture {
                     format!("the {name} data is cut short: the file ends before the image does")
                 }
                 // The image's size, read from its header alone.
-                image::ImageError::Limits(_) => match image::image_dimensions(path) {
+                image::ImageError::Limits(_) => match image::ImageReader::open(path)
+                    .and_then(image::ImageReader::with_guessed_format)
+                    .map_err(image::ImageError::IoError)
+                    .and_then(image::ImageReader::into_dimensions)
+                {
                     Ok((w, h)) if w.max(h) > MAX_TEXTURE_EDGE => {
                         format!("{w}×{h} texels is more than the {MAX_TEXTURE_EDGE} allowed per side")
                     }
@@ -536,7 +540,7 @@ mod tests {
         std::fs::write(&truncated, &ok[..ok.len() / 2]).expect("can write");
         let t = ImageTexture::load(&truncated, Wrap::Clamp);
         // A PNG header claiming 100000 × 100000 texels.
-        let huge = temp("huge.png");
+        let huge = temp("huge.dat"); // named as no format: read by its content
         let mut f = b"\x89PNG\r\n\x1a\n".to_vec();
         let mut ihdr = b"IHDR".to_vec();
         ihdr.extend_from_slice(&100_000u32.to_be_bytes());
