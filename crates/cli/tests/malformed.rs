@@ -353,7 +353,7 @@ fn cases() -> Vec<Case> {
     v.push(obj_case("obj: lines only", b"v 0 0 0\nv 1 0 0\nl 1 2\n", "m.obj:3", "no faces"));
     v.push(obj_case("obj: points only", b"v 0 0 0\nv 1 0 0\np 1 2\n", "m.obj:3", "no faces"));
     v.push(obj_case("obj: empty file", b"", "m.obj:1", "no faces"));
-    v.push(obj_case("obj: binary garbage", &[0, 159, 146, 150, 255, 0, 1], "m.obj", "holds a NUL byte"));
+    v.push(obj_case("obj: binary garbage", &[0, 159, 146, 150, 255, 0, 1], "m.obj", "m.obj:1: a NUL byte"));
     v.push(obj_case("obj: utf-16 text", &utf16("v 0 0 0\n"), "m.obj", "UTF-16"));
     v.push(obj_case("obj: nan vertex", b"v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "m.obj:1", "not finite"));
     v.push(obj_case("obj: word for a number", b"v 0 zero 0\n", "m.obj:1", "not a number"));

@@ -75,7 +75,9 @@ pub fn load_obj(
     normals: NormalMode,
     read_mtl: &dyn Fn(&Path) -> Option<Vec<u8>>,
 ) -> Result<ObjFile, (Location, String)> {
-    let (text, decode_warning) = wild::decode_text(bytes).map_err(|m| (Location::file(path), m))?;
+    let (text, decode_warning) = wild::decode_text(bytes).map_err(|(line, m)| {
+        (line.map_or_else(|| Location::file(path), |l| Location::at_line(path, l)), m)
+    })?;
     let (text, obj_warnings) = wild::fix_obj(&text);
     let text: &str = &text;
     let here = |w: String| format!("{}:{}", path.display(), w.strip_prefix("line ").unwrap_or(&w));
@@ -98,8 +100,9 @@ pub fn load_obj(
         };
         let (text, decode_warning) = match wild::decode_text(&bytes) {
             Ok(t) => t,
-            Err(m) => {
-                *mtl_problem.borrow_mut() = Some(format!("{}: {m}", path.display()));
+            Err((line, m)) => {
+                let at = line.map_or_else(String::new, |l| format!(":{l}"));
+                *mtl_problem.borrow_mut() = Some(format!("{}{at}: {m}", path.display()));
                 return Err(tobj::LoadError::ReadError);
             }
         };
@@ -328,8 +331,19 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
                     ));
                 }
                 numbers(3, 4, "x y z [w]")?;
-                if vals.get(3).and_then(|w| w.parse::<f32>().ok()) == Some(0.0) {
-                    return Err((line_no, "`v` weight w is 0; x, y and z are divided by it".into()));
+                // tobj divides x, y and z by w.
+                if let [x, y, z, w] = vals.as_slice() {
+                    let n = |s: &str| s.parse::<f32>().unwrap_or(f32::NAN);
+                    let w = n(w);
+                    if w == 0.0 {
+                        return Err((line_no, "`v` weight w is 0; x, y and z are divided by it".into()));
+                    }
+                    if ![x, y, z].iter().all(|c| (n(c) / w).is_finite()) {
+                        return Err((
+                            line_no,
+                            format!("`v` x, y and z divided by the weight w = {w:e} are not all finite"),
+                        ));
+                    }
                 }
                 nv += 1;
             }

@@ -11,15 +11,16 @@ pub(crate) const UNNAMED: &str = "(unnamed)";
 
 /// The text of `bytes`: UTF-8 (a byte-order mark dropped), or, for bytes
 /// that are not UTF-8 but hold no NUL, Latin-1 with a warning. UTF-16 and
-/// binary data (NUL bytes) are errors.
-pub(crate) fn decode_text(bytes: &[u8]) -> Result<(Cow<'_, str>, Option<String>), String> {
+/// binary data (NUL bytes) are errors: the line, where there is one, and
+/// what is wrong.
+pub(crate) fn decode_text(bytes: &[u8]) -> Result<(Cow<'_, str>, Option<String>), (Option<usize>, String)> {
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
-        return Err("the file is UTF-16 text; expected UTF-8 (or ASCII) text".into());
+        return Err((None, "the file is UTF-16 text; expected UTF-8 (or ASCII) text".into()));
     }
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     if let Some(at) = bytes.iter().position(|&b| b == 0) {
         let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        return Err(format!("line {line} holds a NUL byte; is it a binary file? (expected text)"));
+        return Err((Some(line), "a NUL byte: is it a binary file? (expected text)".into()));
     }
     match std::str::from_utf8(bytes) {
         Ok(t) => Ok((Cow::Borrowed(t), None)),
@@ -149,10 +150,10 @@ mod tests {
         assert_eq!(decode_text(b"\xEF\xBB\xBFv 1 2 3").unwrap(), (Cow::Borrowed("v 1 2 3"), None));
         assert_eq!(
             decode_text(&[0x80, 0x81, 0x00]).unwrap_err(),
-            "line 1 holds a NUL byte; is it a binary file? (expected text)"
+            (Some(1), "a NUL byte: is it a binary file? (expected text)".to_owned())
         );
-        assert!(decode_text(b"v 0 0 0\nf 1 2 3\0\x01\n").unwrap_err().starts_with("line 2 holds a NUL byte"));
-        assert!(decode_text(&[0xFF, 0xFE, b'v', 0]).unwrap_err().contains("UTF-16"));
+        assert_eq!(decode_text(b"v 0 0 0\nf 1 2 3\0\x01\n").unwrap_err().0, Some(2));
+        assert!(decode_text(&[0xFF, 0xFE, b'v', 0]).unwrap_err().1.contains("UTF-16"));
     }
 
     #[test]

@@ -170,7 +170,7 @@ fn meshes_are_loaded_once_and_instanced() {
 #[test]
 fn malformed_objs_are_reported_with_their_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[u8], &str); 9] = [
+    let cases: [(&str, &[u8], &str); 10] = [
         (
             "range.obj",
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
@@ -184,14 +184,23 @@ fn malformed_objs_are_reported_with_their_line() {
         ("two.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\n", "two.obj:3: a face needs at least 3 corners"),
         ("lines.obj", b"v 0 0 0\nv 1 0 0\nl 1 2\n", "no faces"),
         ("empty.obj", b"", "no faces"),
-        ("garbage.obj", b"\x00\xff\xfe\x80binary", "holds a NUL byte"),
-        ("nul.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\x00\x01\n", "nul.obj: line 4 holds a NUL byte"),
+        ("garbage.obj", b"\x00\xff\xfe\x80binary", "garbage.obj:1: a NUL byte"),
+        (
+            "nul.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\x00\x01\n",
+            "nul.obj:4: a NUL byte: is it a binary file?",
+        ),
         (
             "five.obj",
             b"v 0 0 0\nv 1 0 0 1 1\n",
             "five.obj:2: `v` needs 3 numbers (x y z), 4 (x y z w) or 6 (x y z r g b), found 5",
         ),
         ("w.obj", b"v 0 0 0 0\n", "w.obj:1: `v` weight w is 0"),
+        (
+            "tiny.obj",
+            b"v 1e30 0 0 1e-20\n",
+            "tiny.obj:1: `v` x, y and z divided by the weight w = 1e-20 are not all finite",
+        ),
     ];
     for (name, bytes, words) in cases {
         fs::write(dir.path().join(name), bytes).unwrap();
