@@ -9,11 +9,14 @@ use std::borrow::Cow;
 /// The name given to a material whose `newmtl`/`usemtl` name is empty.
 pub(crate) const UNNAMED: &str = "(unnamed)";
 
+/// A file's text, and the warning its decoding gave, if any.
+pub(crate) type Decoded<'a> = (Cow<'a, str>, Option<String>);
+
 /// The text of `bytes`: UTF-8 (a byte-order mark dropped), or, for bytes
 /// that are not UTF-8 but hold no NUL, Latin-1 with a warning. UTF-16 and
 /// binary data (NUL bytes) are errors: the line, where there is one, and
 /// what is wrong.
-pub(crate) fn decode_text(bytes: &[u8]) -> Result<(Cow<'_, str>, Option<String>), (Option<usize>, String)> {
+pub(crate) fn decode_text(bytes: &[u8]) -> Result<Decoded<'_>, (Option<usize>, String)> {
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
         return Err((None, "the file is UTF-16 text; expected UTF-8 (or ASCII) text".into()));
     }
