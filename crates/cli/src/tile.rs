@@ -91,7 +91,7 @@ fn parse_tile(s: &str) -> Result<(u32, u32), String> {
 pub fn task_index(flag: &str) -> Result<u32> {
     // An empty variable is unset, as the job script's `${VAR:-…}` reads it.
     for var in INDEX_VARIABLES {
-        if let Ok(v) = std::env::var(var).map(|v| v.trim().to_owned())
+        if let Ok(v) = std::env::var(var)
             && !v.is_empty()
         {
             return v
