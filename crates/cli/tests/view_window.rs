@@ -130,6 +130,17 @@ fn no_display_fails_clearly() {
         assert_eq!(out.status.code(), Some(1), "{err}");
         assert!(err.contains(words) && !err.contains("no display"), "{args:?}: {err}");
     }
+    // A missing --save-dir is made only once a window can open.
+    let gone = std::env::temp_dir().join(format!("prism-view-save-{}", std::process::id()));
+    let out = Command::new(BIN)
+        .args(["view", "scenes/seed.toml", "--save-dir"])
+        .arg(&gone)
+        .current_dir(&root)
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no display"));
+    assert!(!gone.exists(), "made without a window");
 }
 
 #[test]

@@ -186,25 +186,49 @@ pub fn run_with_loader(opts: ViewOptions, loader: Arc<SceneLoader>) -> Result<()
     let setup =
         loader(&opts.scene).map_err(|message| ViewError::Scene { path: opts.scene.clone(), message })?;
     if let Some(dir) = &opts.save_dir {
-        save_dir_ready(dir)?;
+        save_dir_usable(dir)?;
     }
     check_display()?;
+    if let Some(dir) = &opts.save_dir {
+        save_dir_ready(dir)?;
+    }
     window::run(opts, loader, setup)
 }
 
-/// Makes `dir` (where `s` saves snapshots) if it is missing, as `prism
-/// render` makes an output's folder, so that a bad `--save-dir` is found
-/// before the window opens rather than at the first snapshot.
+/// Checks, creating nothing, that `dir` (where `s` saves snapshots) is a
+/// directory or could be one: it and the folders above it that exist are
+/// directories. So a bad `--save-dir` is found before the window opens
+/// rather than at the first snapshot.
 ///
 /// # Errors
-/// [`ViewError::SaveDir`] if `dir` is a file or cannot be made.
-pub fn save_dir_ready(dir: &Path) -> Result<(), ViewError> {
-    let bad = |reason: String| ViewError::SaveDir { path: dir.to_path_buf(), reason };
-    match std::fs::metadata(dir) {
-        Ok(m) if m.is_dir() => Ok(()),
-        Ok(_) => Err(bad("it is a file, not a directory".into())),
-        Err(_) => std::fs::create_dir_all(dir).map_err(|e| bad(e.to_string())),
+/// [`ViewError::SaveDir`] naming the file in the way.
+pub fn save_dir_usable(dir: &Path) -> Result<(), ViewError> {
+    let mut at = Some(dir);
+    while let Some(p) = at.filter(|p| !p.as_os_str().is_empty()) {
+        match std::fs::metadata(p) {
+            Ok(m) if m.is_dir() => return Ok(()),
+            Ok(_) => {
+                let what = if p == dir { "it".to_owned() } else { p.display().to_string() };
+                return Err(ViewError::SaveDir {
+                    path: dir.to_path_buf(),
+                    reason: format!("{what} is a file, not a directory"),
+                });
+            }
+            Err(_) => at = p.parent(),
+        }
     }
+    Ok(())
+}
+
+/// Makes `dir` if it is missing, as `prism render` makes an output's
+/// folder (after [`save_dir_usable`] and the display check).
+///
+/// # Errors
+/// [`ViewError::SaveDir`] if it cannot be made.
+pub fn save_dir_ready(dir: &Path) -> Result<(), ViewError> {
+    save_dir_usable(dir)?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| ViewError::SaveDir { path: dir.to_path_buf(), reason: e.to_string() })
 }
 
 /// `Ok` if an X display is named in the environment.
@@ -240,7 +264,11 @@ mod tests {
         std::fs::write(&file, b"").unwrap();
         let e = save_dir_ready(&file).unwrap_err().to_string();
         assert!(e.ends_with("f: it is a file, not a directory"), "{e}");
-        assert!(save_dir_ready(&file.join("sub")).is_err());
+        let e = save_dir_usable(&file.join("sub")).unwrap_err().to_string();
+        assert!(e.ends_with(&format!("{} is a file, not a directory", file.display())), "{e}");
+        // The check alone makes nothing.
+        save_dir_usable(&tmp.path().join("c/d")).unwrap();
+        assert!(!tmp.path().join("c").exists());
     }
 
     #[test]
