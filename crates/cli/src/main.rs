@@ -326,7 +326,12 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let early = args.output.clone().or_else(|| default_output(&args.scene).ok());
     if let Some(o) = &early {
         OutputFormat::from_path(o)?;
-        writable::check_writable(o, "the image")?;
+        // A turntable writes its frames beside OUT, not at OUT itself.
+        let first = match args.frames.frames {
+            Some(n) => frames::frame_path(o, args.frames.frame.unwrap_or(0), n),
+            None => o.clone(),
+        };
+        writable::check_writable(&first, "the image")?;
     }
     if let Some(s) = &args.stats_json {
         writable::check_writable(s, "the statistics").context("--stats-json")?;
