@@ -76,9 +76,25 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
 /// 4` against `spp: 16`): items are separated by `, ` or `; `, and shown
 /// without the names and braces of the structures around them.
 fn first_difference(a: &str, b: &str) -> (String, String) {
+    // Items end at `, ` or `; ` outside parentheses and brackets (a
+    // `Vec3(0.0, 2.0, 10.0)` is one item).
     let split = |s: &str| {
-        s.split("; ")
-            .flat_map(|part| part.split(", "))
+        let (mut items, mut depth, mut start) = (Vec::new(), 0i32, 0);
+        let b = s.as_bytes();
+        for (i, &c) in b.iter().enumerate() {
+            match c {
+                b'(' | b'[' => depth += 1,
+                b')' | b']' => depth -= 1,
+                b',' | b';' if depth == 0 && b.get(i + 1) == Some(&b' ') => {
+                    items.push(&s[start..i]);
+                    start = i + 2;
+                }
+                _ => {}
+            }
+        }
+        items.push(&s[start.min(s.len())..]);
+        items
+            .into_iter()
             .map(|item| {
                 let item = item.rsplit_once("{ ").map_or(item, |(_, inner)| inner);
                 item.trim_end_matches(" }").trim_end_matches(" }").to_owned()
@@ -356,6 +372,14 @@ mod tests {
         assert_eq!(
             first_difference("S { a: A { filter: Box, x: 1 } }", "S { a: A { filter: Gaussian, x: 1 } }"),
             ("filter: Box".to_owned(), "filter: Gaussian".to_owned())
+        );
+        // A vector is one item, named.
+        assert_eq!(
+            first_difference(
+                "S { c: C { position: Vec3(0.0, 2.0, 10.0), fov: 45.0 }, aov [\"depth\", \"normal\"] }",
+                "S { c: C { position: Vec3(0.0, 3.0, 10.0), fov: 45.0 }, aov [\"depth\", \"normal\"] }"
+            ),
+            ("position: Vec3(0.0, 2.0, 10.0)".to_owned(), "position: Vec3(0.0, 3.0, 10.0)".to_owned())
         );
         let mut spp = tile(1, 3);
         spp.1.header.settings = "RenderSettings { spp: 16, fog: true }".into();
