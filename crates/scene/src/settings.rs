@@ -198,15 +198,33 @@ fn image_size(
         let (w, h) = fit_size(side(fw), side(fh), ov.width, ov.height);
         (u64::from(w), u64::from(h))
     };
-    for (value, flag, spanned, name) in [
-        (width, "--width", if ov.width.is_none() { width_f.as_ref() } else { None }, "width"),
-        (height, "--height", if ov.height.is_none() { height_f.as_ref() } else { None }, "height"),
+    // A side the file gives points at the file; one a flag gives, or one
+    // the other side's flag derives (keeping the aspect), names that flag.
+    let derived = |other: Option<u32>, flag: &str| {
+        other.map_or_else(String::new, |v| format!(" (from {flag} {v}, keeping the scene's aspect)"))
+    };
+    let no_flags = ov.width.is_none() && ov.height.is_none();
+    for (value, flag, spanned, name, from) in [
+        (
+            width,
+            if ov.width.is_some() || ov.height.is_none() { "--width" } else { "--height" },
+            if no_flags { width_f.as_ref() } else { None },
+            "width",
+            if ov.width.is_none() { derived(ov.height, "--height") } else { String::new() },
+        ),
+        (
+            height,
+            if ov.height.is_some() || ov.width.is_none() { "--height" } else { "--width" },
+            if no_flags { height_f.as_ref() } else { None },
+            "height",
+            if ov.height.is_none() { derived(ov.width, "--width") } else { String::new() },
+        ),
     ] {
         let problem = if value == 0 {
-            Some(format!("image {name} must be at least 1 pixel"))
+            Some(format!("image {name}{from} must be at least 1 pixel"))
         } else if value > u64::from(limits.max_side) {
             Some(format!(
-                "image {name} {value} is over the limit of {} pixels per side (raise it with --max-side)",
+                "image {name} {value}{from} is over the limit of {} pixels per side (raise it with --max-side)",
                 limits.max_side
             ))
         } else {

@@ -169,6 +169,38 @@ fn an_obj_without_materials_is_grey_and_errors_point_into_it() {
 }
 
 #[test]
+fn a_side_over_the_limit_names_where_it_came_from() {
+    // BASE is 320×180. A side a flag derives names that flag, not the file.
+    let limited = |overrides: Overrides, sets: &[&str]| {
+        let opts = LoadOptions {
+            overrides,
+            limits: Limits { max_side: 1000, ..Limits::default() },
+            sets: sets.iter().map(|s| (*s).to_owned()).collect(),
+            ..LoadOptions::default()
+        };
+        parse_scene_str_with(BASE, Path::new("."), Path::new("test.toml"), &opts).unwrap_err().to_string()
+    };
+    let e = limited(Overrides { height: Some(1000), ..Overrides::default() }, &[]);
+    assert!(
+        e.starts_with("--height: image width 1778 (from --height 1000, keeping the scene's aspect) is over"),
+        "{e}"
+    );
+    let e = limited(
+        Overrides { width: Some(100), ..Overrides::default() },
+        &["render.height=1800", "render.width=10"],
+    );
+    assert!(
+        e.starts_with("--width: image height 18000 (from --width 100, keeping the scene's aspect) is over"),
+        "{e}"
+    );
+    let e = limited(Overrides { width: Some(2000), ..Overrides::default() }, &[]);
+    assert!(e.starts_with("--width: image width 2000 is over"), "{e}");
+    // From the file (or a set): its place.
+    let e = limited(Overrides::default(), &["render.width=2000"]);
+    assert!(e.starts_with("--set: render.width=2000: image width 2000 is over"), "{e}");
+}
+
+#[test]
 fn fit_size_keeps_the_aspect_rounds_halves_up_and_stays_in_range() {
     assert_eq!(fit_size(1280, 720, Some(160), None), (160, 90));
     assert_eq!(fit_size(1280, 720, None, Some(90)), (160, 90));
