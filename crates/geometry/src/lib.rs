@@ -60,7 +60,7 @@ pub use glam;
 pub use hit::Hit;
 pub use mesh::{TriangleMesh, weld_by_position};
 pub use normals::{DEFAULT_CREASE_DEG, with_computed_normals};
-pub use ray::{Ray, offset_ray_origin};
+pub use ray::{Ray, offset_ray_origin, offset_ray_origin_scaled, offset_scale};
 pub use shape::{Instance, Intersect, Shape};
 pub use shapes::{
     Cone, Cuboid, Cylinder, Disk, Nearest8, PacketRays, Plane, Sphere, Triangle, TriangleRay, TriangleRays8,

@@ -68,8 +68,16 @@ impl Ray {
     #[inline]
     #[must_use]
     pub fn spawn(point: Vec3, geo_normal: Vec3, dir: Vec3) -> Self {
+        Self::spawn_scaled(point, geo_normal, dir, 1.0)
+    }
+
+    /// [`Ray::spawn`] in a scene of `scale` ([`offset_scale`]): the offset
+    /// near the origin shrinks with a scene smaller than a unit.
+    #[inline]
+    #[must_use]
+    pub fn spawn_scaled(point: Vec3, geo_normal: Vec3, dir: Vec3, scale: f32) -> Self {
         let n = if geo_normal.dot(dir) < 0.0 { -geo_normal } else { geo_normal };
-        Self::new(offset_ray_origin(point, n), dir)
+        Self::new(offset_ray_origin_scaled(point, n, scale), dir)
     }
 
     /// A shadow ray from the surface point `point` toward `target`: unit
@@ -77,9 +85,16 @@ impl Ray {
     #[inline]
     #[must_use]
     pub fn spawn_to(point: Vec3, geo_normal: Vec3, target: Vec3) -> Self {
+        Self::spawn_to_scaled(point, geo_normal, target, 1.0)
+    }
+
+    /// [`Ray::spawn_to`] in a scene of `scale` ([`offset_scale`]).
+    #[inline]
+    #[must_use]
+    pub fn spawn_to_scaled(point: Vec3, geo_normal: Vec3, target: Vec3, scale: f32) -> Self {
         let toward = target - point;
         let n = if geo_normal.dot(toward) < 0.0 { -geo_normal } else { geo_normal };
-        let origin = offset_ray_origin(point, n);
+        let origin = offset_ray_origin_scaled(point, n, scale);
         let to = target - origin;
         let dist = to.length();
         let dir = if dist > 0.0 { to / dist } else { n };
@@ -101,9 +116,38 @@ const FLOAT_SCALE: f32 = 1.0 / 65536.0;
 ///
 /// The offset scales with the magnitude of each coordinate, so it is safe
 /// both near the origin and far from it; the spawned ray then uses
-/// `t_min = 0`. This is the only self-intersection epsilon in prism.
+/// `t_min = 0`. This is the only self-intersection epsilon in prism. Near
+/// the origin (coordinates under 1/32) the offset is a fixed 1/65536,
+/// sized for scenes of a unit or more; [`offset_ray_origin_scaled`]
+/// shrinks both for a smaller scene.
 #[must_use]
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
+    offset_ray_origin_scaled(p, n, 1.0)
+}
+
+/// The scale of a scene whose coordinates (surfaces and camera) reach
+/// `extent` from the origin, for [`offset_ray_origin_scaled`]: 1 for a
+/// scene of a unit or more (so that such scenes keep [`offset_ray_origin`]
+/// exactly), else the power of two at or above `extent` (at least
+/// 2⁻¹⁰⁰), so that a scene scaled down keeps its offsets in proportion.
+#[must_use]
+pub fn offset_scale(extent: f32) -> f32 {
+    if !(extent < 1.0) {
+        return 1.0;
+    }
+    let floor = 2f32.powi(-100);
+    let mut s = 1.0f32;
+    while s * 0.5 >= extent && s * 0.5 >= floor {
+        s *= 0.5;
+    }
+    s
+}
+
+/// [`offset_ray_origin`] in a scene of `scale` ([`offset_scale`]): the
+/// band near the origin and its fixed offset scaled by it.
+#[must_use]
+pub fn offset_ray_origin_scaled(p: Vec3, n: Vec3, scale: f32) -> Vec3 {
+    let (band, fixed) = (ORIGIN_BAND * scale, FLOAT_SCALE * scale);
     let of = [(INT_SCALE * n.x) as i32, (INT_SCALE * n.y) as i32, (INT_SCALE * n.z) as i32];
     let pa = p.to_array();
     let na = n.to_array();
@@ -111,8 +155,7 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     for k in 0..3 {
         let bits = pa[k].to_bits() as i32;
         let moved = f32::from_bits(bits.wrapping_add(if pa[k] < 0.0 { -of[k] } else { of[k] }) as u32);
-        out[k] =
-            if pa[k].abs() < ORIGIN_BAND || !moved.is_finite() { pa[k] + FLOAT_SCALE * na[k] } else { moved };
+        out[k] = if pa[k].abs() < band || !moved.is_finite() { pa[k] + fixed * na[k] } else { moved };
     }
     Vec3::from_array(out)
 }
@@ -144,6 +187,31 @@ mod tests {
         }
         let far = offset_ray_origin(Vec3::splat(f32::MAX), Vec3::ONE.normalize());
         assert!(far.is_finite());
+    }
+
+    #[test]
+    fn a_small_scene_scales_its_offsets() {
+        assert_eq!((offset_scale(5.0), offset_scale(1.0), offset_scale(f32::NAN)), (1.0, 1.0, 1.0));
+        assert_eq!(offset_scale(0.3), 0.5);
+        assert_eq!(offset_scale(6e-6), 2f32.powi(-17));
+        assert_eq!(offset_scale(0.0), 2f32.powi(-100));
+        // The same point and normal, scaled down by a power of two, move by
+        // the same fraction of the scene.
+        for k in [0, 10, 20, 40] {
+            let s = 2f32.powi(-k);
+            for p in [Vec3::new(0.3, 0.0, -0.7), Vec3::new(1e-3, 0.02, 0.5)] {
+                let n = Vec3::new(0.0, 1.0, 0.0);
+                let q = offset_ray_origin_scaled(p * s, n, offset_scale(s));
+                let one = offset_ray_origin(p, n);
+                assert!(
+                    ((q - p * s) / s - (one - p)).length() <= 1e-6 * (one - p).length(),
+                    "{k}: {q} {one}"
+                );
+            }
+        }
+        // At scale 1, the same as the unscaled rule.
+        let (p, n) = (Vec3::new(0.01, 2.0, -3.0), Vec3::new(0.6, 0.8, 0.0));
+        assert_eq!(offset_ray_origin_scaled(p, n, 1.0), offset_ray_origin(p, n));
     }
 
     #[test]

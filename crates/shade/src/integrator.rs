@@ -67,6 +67,9 @@ pub(crate) struct Tracer<'a> {
     /// eye for a perspective camera; a parallel beam one pixel wide at the
     /// look-at distance for an orthographic one.
     camera_cone: RayCone,
+    /// The scene's offset scale for rays started off a surface
+    /// ([`offset_scale`]).
+    offset: f32,
     /// Rays traced so far (camera, secondary, shadow).
     pub rays: u64,
     /// Of `rays`, the shadow rays.
@@ -98,13 +101,27 @@ fn camera_cone(settings: &RenderSettings) -> RayCone {
 /// light's samples go in groups of this many).
 const SHADOW_PACKET: usize = 16;
 
-/// The shadow ray from the surface point of `hit` toward `target`.
+/// The shadow ray from the surface point of `hit` toward `target`, in a
+/// scene of offset scale `scale` ([`offset_scale`]).
 #[inline]
-fn shadow_ray(hit: &Hit, target: Target) -> Ray {
+fn shadow_ray(hit: &Hit, target: Target, scale: f32) -> Ray {
     match target {
-        Target::Point(q) => Ray::spawn_to(hit.point, hit.geo_normal, q),
-        Target::Away(dir) => Ray::spawn(hit.point, hit.geo_normal, dir),
+        Target::Point(q) => Ray::spawn_to_scaled(hit.point, hit.geo_normal, q, scale),
+        Target::Away(dir) => Ray::spawn_scaled(hit.point, hit.geo_normal, dir, scale),
     }
+}
+
+/// The scale of the offsets that start rays off a surface
+/// (`prism_geometry::offset_scale`): from how far the scene's bounded
+/// surfaces and its camera reach from the origin, so that a scene a
+/// millionth of a unit across keeps its shadows and reflections.
+fn offset_scale(scene: &Scene, settings: &RenderSettings) -> f32 {
+    let b = scene.accel.bounds();
+    let mut extent = settings.camera.position().abs().max_element();
+    if b.min.is_finite() && b.max.is_finite() {
+        extent = extent.max(b.min.abs().max_element()).max(b.max.abs().max_element());
+    }
+    prism_geometry::offset_scale(extent)
 }
 
 /// The one sample of light `index` (`light`, of one sample) at the point
@@ -171,6 +188,7 @@ impl<'a> Tracer<'a> {
             pre_point: None,
             pre: [PreShadow::Unknown; PRE_LIGHTS],
             camera_cone: camera_cone(settings),
+            offset: offset_scale(scene, settings),
             rays: 0,
             shadow_rays: 0,
             packet_rays: 0,
@@ -234,7 +252,7 @@ impl<'a> Tracer<'a> {
                 let Some(ls) = one_sample(light, index, h.hit.point, h.hit.facing_normal()) else {
                     continue;
                 };
-                rays[n] = shadow_ray(&h.hit, ls.target);
+                rays[n] = shadow_ray(&h.hit, ls.target, self.offset);
                 from[n] = k;
                 n += 1;
             }
@@ -366,7 +384,7 @@ impl<'a> Tracer<'a> {
         let weight = weight * fog_t;
         let cone = RayCone { width: cone.width_at(seg), spread: cone.spread };
         if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
-            let next = Ray::spawn(h.hit.point, h.hit.geo_normal, ray.dir);
+            let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
             let l = self.trace(&next, depth, weight, end, NO_OBJECT, cone);
             return self.fog_blend(l, fog_t);
         }
@@ -421,19 +439,19 @@ impl<'a> Tracer<'a> {
         // Mirror reflection and the dielectric's reflected part share one ray.
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 && self.worth(weight * k_mirror) {
-            let r = Ray::spawn(hit.point, hit.geo_normal, reflect(d, n));
+            let r = Ray::spawn_scaled(hit.point, hit.geo_normal, reflect(d, n), self.offset);
             let c = cone.reflect(cone.width, curvature(self.scene, h));
             out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c);
         }
         if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
-            let r = Ray::spawn(hit.point, hit.geo_normal, d);
+            let r = Ray::spawn_scaled(hit.point, hit.geo_normal, d, self.offset);
             let skip = if hit.front_face { h.object } else { NO_OBJECT };
             out += mat.transparency * self.trace(&r, depth + 1, weight * mat.transparency, path, skip, cone);
         }
         if let Some(t) = refracted {
             let k = mat.transmission * (1.0 - fresnel);
             if k > 0.0 && self.worth(weight * k) {
-                let r = Ray::spawn(hit.point, hit.geo_normal, t);
+                let r = Ray::spawn_scaled(hit.point, hit.geo_normal, t, self.offset);
                 let eta = if hit.front_face { 1.0 / mat.ior } else { mat.ior };
                 let c = cone.refract(cone.width, eta, curvature(self.scene, h));
                 out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c);
@@ -559,7 +577,7 @@ impl<'a> Tracer<'a> {
         let mut rays = [Ray { dir: Vec3::ZERO, ..Ray::new(hit.point, Vec3::X) }; SHADOW_PACKET];
         for (r, t) in rays.iter_mut().zip(targets) {
             if let Some(t) = t {
-                *r = shadow_ray(hit, *t);
+                *r = shadow_ray(hit, *t, self.offset);
                 self.rays += 1;
                 self.shadow_rays += 1;
                 self.packet_rays += 1;
@@ -602,7 +620,7 @@ impl<'a> Tracer<'a> {
 
     /// [`Tracer::shadow`]'s value, the ray not counted (a packet counted it).
     fn transmittance(&mut self, hit: &Hit, target: Target) -> Vec3 {
-        let ray = shadow_ray(hit, target);
+        let ray = shadow_ray(hit, target, self.offset);
         let scene = self.scene;
         if !self.see_through {
             return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };

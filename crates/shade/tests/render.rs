@@ -320,3 +320,36 @@ fn any_region_on_any_thread_count_is_bit_identical_to_the_full_render() {
     let past = PixelBounds::new(30, 38, 0, 1).unwrap();
     assert!(render_region(&s, &settings_t(&s, 1, 1), past, &[], RenderHooks::default()).is_err());
 }
+
+#[test]
+fn a_scene_scaled_down_renders_the_same_picture() {
+    // A mirror ball and a glass ball on a floor under a point light, every
+    // length times `s`: the same picture (ray offsets scale with the
+    // scene; a fixed one put a small scene's reflected and shadow rays
+    // past the surfaces they should meet).
+    let shot = |s: f32| {
+        let mirror = Material { reflectivity: 1.0, ..Material::diffuse(Vec3::ONE) };
+        let mut sh = scene(
+            vec![
+                (Plane::new(Vec3::ZERO, Vec3::Y).expect("ok").into(), I, Material::diffuse(Vec3::splat(0.7))),
+                (Sphere::new(Vec3::new(-0.8, 1.0, 0.0) * s, s).expect("ok").into(), I, mirror),
+                (Sphere::new(Vec3::new(1.2, 0.6, 0.5) * s, 0.6 * s).expect("ok").into(), I, glass(1.5)),
+            ],
+            vec![light(Vec3::new(1.0, 6.0, 3.0) * s)],
+            camera(Vec3::new(0.0, 2.0, 6.0) * s, Vec3::new(0.0, 0.6, 0.0) * s, Vec3::Y, 45.0, 48, 36),
+        );
+        sh.scene.background = Vec3::new(0.2, 0.4, 0.8);
+        sh
+    };
+    let one = render(&shot(1.0), 1, 6);
+    for s in [1e-2, 1e-4, 1e-6] {
+        let small = render(&shot(s), 1, 6);
+        let off = one
+            .pixels
+            .iter()
+            .zip(&small.pixels)
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 0.05)
+            .count();
+        assert!(off <= 2, "scale {s}: {off} of {} pixels differ", one.pixels.len());
+    }
+}
