@@ -158,7 +158,7 @@ struct RenderArgs {
     #[arg(long)]
     partial: bool,
     /// AOV passes, comma-separated: depth, normal, geo_normal, albedo, object_id, or all
-    /// (replaces the scene's `aov`); layers of OUT.exr, or of OUT-stem.aov.exr beside a PNG
+    /// (replaces the scene's `aov`; none for no pass); layers of OUT.exr, or of OUT-stem.aov.exr beside a PNG
     /// (--aov-files: one OUT-stem.PASS.exr each).
     #[arg(long, value_name = "LIST")]
     aov: Option<String>,

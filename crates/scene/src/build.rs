@@ -495,7 +495,8 @@ impl<'a> Build<'a> {
         if on && medium.is_none() {
             let end = view::default_fog_end(camera.position(), bounds);
             let why = if table { "[fog] gives only `enabled`" } else { "the scene has no [fog]" };
-            self.warn(&format!("{why}; --fog uses linear white fog from 0 to {end:.1}"));
+            let by = if self.overrides.fog == Some(true) { "--fog uses" } else { "using" };
+            self.warn(&format!("{why}; {by} linear white fog from 0 to {end:.1}"));
             medium = Some(Fog { color: Vec3::ONE, mode: FogMode::Linear { start: 0.0, end } });
         }
         Ok((camera, medium, on))

@@ -99,6 +99,13 @@ fn spot(
         return Err(ctx.invalid(span, "a spot light needs `outer_angle` (degrees from its axis)"));
     };
     let outer = angle(outer_n, "outer_angle")?;
+    if outer == 0.0 {
+        // A cone of no width: no point is inside it.
+        return Err(ctx.invalid(
+            &outer_n.span(),
+            "spot light outer_angle 0 lights nothing; give its cone's half-angle in degrees (0 < outer_angle < 90)",
+        ));
+    }
     let inner = d.inner_angle.as_ref().map_or(Ok(outer), |n| angle(n, "inner_angle"))?;
     if outer < inner {
         return Err(ctx.invalid(

@@ -107,7 +107,7 @@ impl FromStr for Aov {
 /// A name that is not an AOV pass.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown AOV pass `{name}`{}: expected one of depth, normal, geo_normal, albedo, object_id (or all)",
+    "unknown AOV pass `{name}`{}: expected one of depth, normal, geo_normal, albedo, object_id (or all; or none alone)",
     crate::names::did_you_mean(.name, &Aov::ALL.map(Aov::name))
 )]
 pub struct AovParseError {

@@ -100,6 +100,11 @@ fn bad_lights_are_refused_at_their_key() {
             Some("outer_angle"),
         ),
         (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nouter_angle = 0\n",
+            "spot light outer_angle 0 lights nothing",
+            Some("outer_angle"),
+        ),
+        (
             "[[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\n",
             "direction must not be zero",
             Some("direction = "),

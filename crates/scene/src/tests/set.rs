@@ -240,5 +240,11 @@ fn a_fog_of_enabled_alone_is_the_switch_without_a_medium() {
     let fog = on.scene.fog.unwrap();
     assert!(matches!(fog.mode, prism_shade::FogMode::Linear { start: 0.0, .. }), "{fog:?}");
     assert_eq!(fog.color, prism_geometry::glam::Vec3::ONE);
-    assert!(on.warnings.iter().any(|w| w.contains("[fog] gives only `enabled`")), "{:?}", on.warnings);
+    assert!(
+        on.warnings
+            .iter()
+            .any(|w| w.contains("[fog] gives only `enabled`; using linear white fog from 0 to")),
+        "{:?}",
+        on.warnings
+    );
 }
