@@ -2,7 +2,7 @@
 
 use prism_geometry::glam::Vec3;
 use prism_scene::LoadedScene;
-use prism_shade::{AreaShape, Falloff, FogMode, LightKind};
+use prism_shade::{AreaShape, Falloff, FogMode, LightKind, Projection};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -31,9 +31,18 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
         trim(i.min_contribution)
     );
     let c = &i.camera;
+    let projection = match c.projection() {
+        Projection::Perspective => String::new(),
+        Projection::Orthographic => ", orthographic".to_owned(),
+    };
+    let lens = if c.aperture() > 0.0 {
+        format!(", lens aperture {} focused at {}", trim(c.aperture()), trim(c.focus_distance()))
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
-        "camera     at {} looking at {}, up {}, vertical fov {}°",
+        "camera     at {} looking at {}, up {}, vertical fov {}°{projection}{lens}",
         v(c.position()),
         v(c.look_at()),
         v(c.up()),
@@ -173,6 +182,12 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
             "look_at": arr(c.look_at()),
             "up": arr(c.up()),
             "vfov_deg": num(c.vfov_deg()),
+            "projection": match c.projection() {
+                Projection::Perspective => "perspective",
+                Projection::Orthographic => "orthographic",
+            },
+            "aperture": num(c.aperture()),
+            "focus_distance": num(c.focus_distance()),
         },
         "objects": i.objects,
         "objects_by_kind": i.objects_by_kind,

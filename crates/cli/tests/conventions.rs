@@ -106,6 +106,28 @@ fn info_json_holds_the_scene_in_numbers() {
     assert!(j["bvh"]["nodes"].as_u64().unwrap() >= 1);
     assert!(j["bvh"]["build_seconds"].as_f64().unwrap() >= 0.0);
     assert_eq!(j["fog"], serde_json::Value::Null);
+    assert_eq!(
+        (&j["camera"]["projection"], &j["camera"]["aperture"]),
+        (&serde_json::json!("perspective"), &serde_json::json!(0.0))
+    );
+    // The lens and the projection, in the text and in JSON.
+    let lens = GOOD.replace(
+        "look_at = [0, 1, 0]",
+        "look_at = [0, 1, 0]\nprojection = \"orthographic\"\naperture = 0.25\nfocus_distance = 3",
+    );
+    fs::write(dir.path().join("lens.toml"), lens).unwrap();
+    let out = prism(dir.path(), &["info", "lens.toml"]);
+    assert!(
+        text(&out.stdout).contains(", orthographic, lens aperture 0.25 focused at 3\n"),
+        "{}",
+        text(&out.stdout)
+    );
+    let j = json(&prism(dir.path(), &["info", "lens.toml", "--json"]).stdout);
+    assert_eq!(j["camera"]["projection"], "orthographic");
+    assert_eq!(
+        (j["camera"]["aperture"].as_f64(), j["camera"]["focus_distance"].as_f64()),
+        (Some(0.25), Some(3.0))
+    );
 }
 
 #[test]
