@@ -93,13 +93,26 @@ fn first_difference(a: &str, b: &str) -> (String, String) {
             }
         }
         items.push(&s[start.min(s.len())..]);
-        items
-            .into_iter()
-            .map(|item| {
-                let item = item.rsplit_once("{ ").map_or(item, |(_, inner)| inner);
-                item.trim_end_matches(" }").trim_end_matches(" }").to_owned()
-            })
-            .collect::<Vec<_>>()
+        // Each item named by the fields around it (`camera.position: …`):
+        // `field: Type { ` opens a level, a trailing ` }` closes one.
+        let mut path: Vec<&str> = Vec::new();
+        let mut out = Vec::new();
+        for item in items {
+            let mut parts = item.split("{ ").collect::<Vec<_>>();
+            let leaf = parts.pop().unwrap_or_default();
+            for opened in parts {
+                path.push(opened.split_once(':').map_or("", |(field, _)| field.trim()));
+            }
+            let mut leaf = leaf;
+            let mut closes = 0;
+            while let Some(rest) = leaf.strip_suffix(" }") {
+                (leaf, closes) = (rest, closes + 1);
+            }
+            let named: Vec<&str> = path.iter().copied().filter(|f| !f.is_empty()).collect();
+            out.push(if named.is_empty() { leaf.to_owned() } else { format!("{}.{leaf}", named.join(".")) });
+            path.truncate(path.len().saturating_sub(closes));
+        }
+        out
     };
     let (sa, sb) = (split(a), split(b));
     for (x, y) in sa.iter().zip(&sb) {
@@ -361,7 +374,8 @@ mod tests {
             assert!(e.contains(&format!("(s.toml and s.toml: {words}")), "{e}");
         }
         // A settings difference inside a nested structure, or in the AOVs,
-        // is shown without the structures' names.
+        // is named by its fields' path, without the types' names; a
+        // structure closed before it is left.
         assert_eq!(
             first_difference(
                 "RenderSettings { spp: 4, antialias: Antialias { filter: Box, point_textures: false } }; aov [\"depth\"]",
@@ -371,7 +385,11 @@ mod tests {
         );
         assert_eq!(
             first_difference("S { a: A { filter: Box, x: 1 } }", "S { a: A { filter: Gaussian, x: 1 } }"),
-            ("filter: Box".to_owned(), "filter: Gaussian".to_owned())
+            ("a.filter: Box".to_owned(), "a.filter: Gaussian".to_owned())
+        );
+        assert_eq!(
+            first_difference("S { a: A { x: 1 }, spp: 4 }", "S { a: A { x: 1 }, spp: 9 }"),
+            ("spp: 4".to_owned(), "spp: 9".to_owned())
         );
         // A vector is one item, named.
         assert_eq!(
@@ -379,7 +397,7 @@ mod tests {
                 "S { c: C { position: Vec3(0.0, 2.0, 10.0), fov: 45.0 }, aov [\"depth\", \"normal\"] }",
                 "S { c: C { position: Vec3(0.0, 3.0, 10.0), fov: 45.0 }, aov [\"depth\", \"normal\"] }"
             ),
-            ("position: Vec3(0.0, 2.0, 10.0)".to_owned(), "position: Vec3(0.0, 3.0, 10.0)".to_owned())
+            ("c.position: Vec3(0.0, 2.0, 10.0)".to_owned(), "c.position: Vec3(0.0, 3.0, 10.0)".to_owned())
         );
         let mut spp = tile(1, 3);
         spp.1.header.settings = "RenderSettings { spp: 16, fog: true }".into();
