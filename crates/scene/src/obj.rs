@@ -319,7 +319,7 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
         match key {
             "v" => {
                 // x y z, x y z w, or x y z r g b (vertex colours, which
-                // `wild::fix_obj` has dropped by now).
+                // `wild::fix_obj` has dropped by now unless one is bad).
                 let vals: Vec<&str> = words.collect();
                 if !matches!(vals.len(), 3 | 4 | 6) {
                     return Err((
@@ -329,6 +329,9 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
                             vals.len()
                         ),
                     ));
+                }
+                if vals.len() == 6 {
+                    numbers(6, 6, "x y z r g b")?;
                 }
                 numbers(3, 4, "x y z [w]")?;
                 // tobj divides x, y and z by w.

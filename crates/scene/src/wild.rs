@@ -62,7 +62,11 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
             )
         }),
         "vt" if rest.split_whitespace().count() == 1 => Some((format!("vt {rest} 0"), None)),
-        "v" if rest.split_whitespace().count() == 6 => {
+        // Colours dropped only where all six are numbers; a bad one is
+        // left for the check of the line to name.
+        "v" if rest.split_whitespace().count() == 6
+            && rest.split_whitespace().all(|v| v.parse::<f32>().is_ok_and(f32::is_finite)) =>
+        {
             Some((format!("v {}", rest.split_whitespace().take(3).collect::<Vec<_>>().join(" ")), None))
         }
         "usemtl" if rest.is_empty() => Some((

@@ -170,7 +170,7 @@ fn meshes_are_loaded_once_and_instanced() {
 #[test]
 fn malformed_objs_are_reported_with_their_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[u8], &str); 10] = [
+    let cases: [(&str, &[u8], &str); 11] = [
         (
             "range.obj",
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
@@ -196,6 +196,7 @@ fn malformed_objs_are_reported_with_their_line() {
             "five.obj:2: `v` needs 3 numbers (x y z), 4 (x y z w) or 6 (x y z r g b), found 5",
         ),
         ("w.obj", b"v 0 0 0 0\n", "w.obj:1: `v` weight w is 0"),
+        ("rgb.obj", b"v 0 0 0 1 red 0\n", "rgb.obj:1: `v` value `red` is not a number"),
         (
             "tiny.obj",
             b"v 1e30 0 0 1e-20\n",
