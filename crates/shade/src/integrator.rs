@@ -603,7 +603,8 @@ impl<'a> Tracer<'a> {
     /// colour at the crossing, clamped to `[0, 1]` per channel. A closed
     /// solid (sphere, cuboid, cylinder, cone, closed mesh) counts once, at the crossing
     /// where the segment enters it; open surfaces (planes, disks,
-    /// triangles, open meshes) count at every crossing. Opaque occluders give 0.
+    /// triangles, open meshes) count at every crossing. Opaque occluders give 0,
+    /// from either side: a segment that leaves a closed opaque solid is blocked.
     ///
     /// Light crossing an absorbing dielectric (a closed solid with
     /// `transmission > 0` and non-zero `absorption`) is also attenuated by
@@ -646,13 +647,18 @@ impl<'a> Tracer<'a> {
                     (tau, open) = (tau + s, open - m.absorption);
                 }
             }
-            if !c.front_face && closed {
-                return ControlFlow::Continue(());
-            }
             let through = m.transparency + m.transmission;
+            // An opaque surface blocks from either side: a segment that
+            // leaves a closed opaque solid (a point inside a room, a light
+            // outside) is as blocked as `occluded` finds it.
             if !(through > 0.0) {
                 t = Vec3::ZERO;
                 return ControlFlow::Break(());
+            }
+            // A see-through closed solid counts once, where the segment
+            // enters it.
+            if !c.front_face && closed {
+                return ControlFlow::Continue(());
             }
             let colour = match &m.texture {
                 Texture::Solid(solid) => *solid,

@@ -436,3 +436,22 @@ fn a_sun_through_two_absorbing_solids_follows_beer_lambert() {
     let inside = 2.0 * std::f32::consts::SQRT_2;
     assert_close(shadow, Vec3::splat((-(0.6 + 0.1) * inside).exp()), 1e-4);
 }
+
+#[test]
+fn an_opaque_room_blocks_the_light_outside_whatever_else_is_see_through() {
+    // The floor and the camera inside a closed opaque box, the light
+    // outside: the shadow ray leaves the room through its inner (back)
+    // face, which blocks it. A glass sphere elsewhere in the scene makes
+    // the shadows walk their crossings; that must not open the walls.
+    let floor_albedo = Vec3::new(0.5, 0.7, 0.9);
+    let floor = Material { ambient: 0.2, diffuse: 0.8, ..Material::diffuse(floor_albedo) };
+    let room = cuboid(Vec3::new(-1.0, -0.5, -1.0), Vec3::new(1.0, 1.0, 1.0));
+    let cam = camera(Vec3::new(0.0, 0.9, 0.0), Vec3::ZERO, Vec3::NEG_Z, 20.0, 9, 9);
+    let l = light(Vec3::new(4.0, 4.0, 0.0));
+    let mut objects = vec![(plane(Vec3::ZERO, Vec3::Y), I, floor), (room, I, Material::diffuse(Vec3::ONE))];
+    let dark = px(&render(&scene(objects.clone(), vec![l], cam), 1, 4), 4, 4);
+    assert_close(dark, 0.2 * floor_albedo, 1e-6);
+    objects.push((sphere(Vec3::new(-20.0, 5.0, -20.0), 1.0), I, glass(1.5)));
+    let with_glass = px(&render(&scene(objects, vec![l], cam), 1, 4), 4, 4);
+    assert_close(with_glass, dark, 0.0);
+}
