@@ -314,15 +314,20 @@ impl Scene {
     }
 
     /// The world-to-texture map of object `object` for `texture`:
-    /// [`Scene::to_object`], except under [`crate::Mapping::Cylindrical`],
-    /// where the object's own height (its object-space bounds, `y` from
-    /// `min` to `max`) is then scaled to `[0, 1]`, so that the image covers
-    /// the object from bottom to top. Unbounded objects (planes) keep their
-    /// object-space `y`.
+    /// [`Scene::to_object`], except under the mappings about a centre.
+    /// [`crate::Mapping::Spherical`] measures its direction from the centre
+    /// of the object's own bounds (object space), and
+    /// [`crate::Mapping::Cylindrical`] its angle about the vertical line
+    /// through that centre, with the object's own height (`y` from `min`
+    /// to `max`) scaled to `[0, 1]` so that the image covers the object
+    /// from bottom to top. So a sphere made with `center = [3, 0, 0]` maps
+    /// as one moved there by `translate`: the shape's own centre, not the
+    /// world's origin. Unbounded objects (planes) keep their object space.
     #[must_use]
     pub fn texture_to_object(&self, object: u32, texture: &crate::Texture) -> Affine3A {
         let to_object = self.to_object(object);
-        if !matches!(texture, crate::Texture::Image { mapping: crate::Mapping::Cylindrical, .. }) {
+        let crate::Texture::Image { mapping, .. } = texture else { return to_object };
+        if !matches!(mapping, crate::Mapping::Spherical | crate::Mapping::Cylindrical) {
             return to_object;
         }
         let bounds = match self.accel.objects().get(object as usize) {
@@ -333,12 +338,19 @@ impl Scene {
             },
             None => return to_object,
         };
+        let centre = (bounds.min + bounds.max) * 0.5;
+        if !centre.is_finite() {
+            return to_object;
+        }
+        if *mapping == crate::Mapping::Spherical {
+            return Affine3A::from_translation(-centre) * to_object;
+        }
         let (lo, height) = (bounds.min.y, bounds.max.y - bounds.min.y);
         if !(lo.is_finite() && height.is_finite() && height > 0.0) {
             return to_object;
         }
         let scale = Affine3A::from_scale(Vec3::new(1.0, 1.0 / height, 1.0))
-            * Affine3A::from_translation(Vec3::new(0.0, -lo, 0.0));
+            * Affine3A::from_translation(Vec3::new(-centre.x, -lo, -centre.z));
         scale * to_object
     }
 

@@ -20,11 +20,13 @@ pub enum Mapping {
     /// cylindrical on cylinder and cone sides; planar on planes; the
     /// mesh's uvs on meshes).
     Uv,
-    /// Spherical about the object's origin, from the object-space point
-    /// `p`: the report's `u = 0.5 + atan2(d.z, d.x) / 2π`,
-    /// `v = 0.5 − asin(d.y) / π` with `d = p / |p|`.
+    /// Spherical, from the point `p` relative to the object's centre (the
+    /// centre of its object-space bounds, [`crate::Scene::texture_to_object`]):
+    /// [`prism_geometry::sphere_uv`] of `d = p / |p|`, `u = 0.5 +
+    /// atan2(d.x, d.z) / 2π` (0.5 at +Z, growing toward +X), `v = 0.5 −
+    /// asin(d.y) / π` (the report's equation 8).
     Spherical,
-    /// Cylindrical about the object's Y axis: `u` =
+    /// Cylindrical about the vertical line through the object's centre: `u` =
     /// [`prism_geometry::azimuth_u`] of `p` (the angle: 0.5 at +Z, growing
     /// toward +X, seam at −Z, as on spheres), `v = 1 − p.y` (the height, so
     /// that the image stands upright). The renderer passes a point whose

@@ -3,7 +3,7 @@
 mod common;
 use common::*;
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Cuboid, Disk, Plane, Sphere, Transform};
+use prism_geometry::{Cuboid, Cylinder, Disk, Plane, Sphere, Transform};
 use prism_shade::{Material, PointLight, Texture};
 
 fn sphere(c: Vec3, r: f32) -> prism_geometry::Shape {
@@ -386,6 +386,39 @@ fn sphere_texture_follows_the_documented_formula() {
     );
     let img2 = render(&s2, 1, 0);
     for (a, b) in img.pixels.iter().zip(&img2.pixels) {
+        assert_close(*a, *b, 2e-3);
+    }
+    // So does a sphere made about its centre (3, 0, 0), with no transform:
+    // the mapping is about the shape's own centre, not the world's origin.
+    let s3 = scene(
+        vec![(sphere(Vec3::new(3.0, 0.0, 0.0), 1.0), I, flat_texture(tex(prism_shade::Mapping::Spherical)))],
+        vec![],
+        cam2,
+    );
+    let img3 = render(&s3, 1, 0);
+    for (a, b) in img.pixels.iter().zip(&img3.pixels) {
+        assert_close(*a, *b, 2e-3);
+    }
+}
+
+#[test]
+fn cylindrical_mapping_is_about_the_shapes_own_axis() {
+    // A cylinder made at base (3, -1, 0) maps as one made at the origin and
+    // moved there: about its own axis (x = 3, z = 0), not the world's Y axis.
+    let tex = flat_texture(Texture::Image {
+        image: distinct_texture(),
+        mapping: prism_shade::Mapping::Cylindrical,
+        scale: prism_geometry::glam::Vec2::ONE,
+        tint: Vec3::ONE,
+    });
+    let cam = camera(Vec3::new(4.0, 1.0, 6.0), Vec3::new(3.0, 0.0, 0.0), Vec3::Y, 40.0, 31, 31);
+    let cylinder = |base| prism_geometry::Shape::from(Cylinder::new(base, 1.0, 2.0).expect("valid cylinder"));
+    let moved = Transform::translate(Vec3::new(3.0, -1.0, 0.0)).expect("finite");
+    let a = render(&scene(vec![(cylinder(Vec3::ZERO), moved, tex.clone())], vec![], cam), 1, 0);
+    let b = render(&scene(vec![(cylinder(Vec3::new(3.0, -1.0, 0.0)), I, tex)], vec![], cam), 1, 0);
+    let seen = a.pixels.iter().filter(|p| **p != Vec3::ZERO).count();
+    assert!(seen > 200, "only {seen} pixels on the cylinder");
+    for (a, b) in a.pixels.iter().zip(&b.pixels) {
         assert_close(*a, *b, 2e-3);
     }
 }
