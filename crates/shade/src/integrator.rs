@@ -383,19 +383,24 @@ impl<'a> Tracer<'a> {
         let fog_t = self.fog_t(path, end);
         let weight = weight * fog_t;
         let cone = RayCone { width: cone.width_at(seg), spread: cone.spread };
-        if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
-            let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
-            let l = self.trace(&next, depth, weight, end, NO_OBJECT, cone);
-            return self.fog_blend(l, fog_t);
-        }
         let mat = scene.material_of(h.object);
-        // Beer–Lambert over a segment travelled inside an absorbing dielectric
-        // (it ends on the inside of its surface).
-        let absorb = if !h.hit.front_face && mat.transmission > 0.0 && mat.absorption != Vec3::ZERO {
+        let closed = is_closed(scene, h.object);
+        // Beer–Lambert over a segment travelled inside an absorbing
+        // dielectric: it ends on the inside of a closed solid's surface (an
+        // open surface has no inside).
+        let absorb = if !h.hit.front_face && closed && mat.transmission > 0.0 && mat.absorption != Vec3::ZERO
+        {
             (-mat.absorption * seg).exp()
         } else {
             Vec3::ONE
         };
+        if h.object == skip_exit && !h.hit.front_face && closed {
+            // The unbent ray through a see-through solid crossed its inside
+            // too, and is absorbed as the refracted one is.
+            let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
+            let l = self.trace(&next, depth, weight * absorb, end, NO_OBJECT, cone) * absorb;
+            return self.fog_blend(l, fog_t);
+        }
         let l = self.shade(ray, &h, mat, depth, weight * absorb, end, cone) * absorb;
         self.fog_blend(l, fog_t)
     }

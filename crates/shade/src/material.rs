@@ -28,15 +28,18 @@ use prism_geometry::glam::Vec3;
 /// per channel: opaque objects block, transparent ones cast lighter shadows
 /// of their own colour. A closed solid (sphere, cuboid, cylinder, cone)
 /// counts once, where the segment enters it; open surfaces (planes, disks,
-/// triangles, mesh faces) count at every crossing. Absorption does not
-/// darken shadows.
+/// triangles, mesh faces) count at every crossing. An absorbing
+/// dielectric also darkens them by Beer–Lambert over the segment's length
+/// inside it, as it darkens the view through it.
 ///
 /// `L_mirror` reflects the ray about `n`; `L_straight` continues it from
 /// the far side of a closed solid (its exit is not shaded); the dielectric
 /// enters when the ray meets the outer side (`Hit::front_face`, ratio
 /// `1 / ior`) and leaves otherwise (ratio `ior`). Every segment travelled
-/// inside an absorbing dielectric (ending on the inner side of its
-/// surface) is multiplied by `exp(−absorption · length)`. `L_straight` and
+/// inside a closed absorbing dielectric (ending on the inner side of its
+/// surface), unbent or refracted, is multiplied by
+/// `exp(−absorption · length)`; open surfaces (planes, disks, triangles,
+/// open meshes) have no inside and absorb nothing. `L_straight` and
 /// `L_refracted` are not tinted by the albedo; use `absorption` for
 /// coloured glass.
 #[derive(Clone, Debug, PartialEq)]

@@ -488,3 +488,23 @@ fn an_opaque_room_blocks_the_light_outside_whatever_else_is_see_through() {
     let with_glass = px(&render(&scene(objects, vec![l], cam), 1, 4), 4, 4);
     assert_close(with_glass, dark, 0.0);
 }
+
+#[test]
+fn absorption_counts_only_segments_inside_a_closed_solid() {
+    // Straight down the axis onto a white wall behind the object, the
+    // glass index-matched (ior 1: no bending, no reflection head on).
+    let a = Vec3::new(0.5, 0.2, 0.1);
+    let wall = (plane(Vec3::new(0.0, 0.0, -5.0), Vec3::Z), I, flat(Vec3::ONE));
+    let cam = camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 0.5, 1, 1);
+    let seen = |object: prism_geometry::Shape, m: Material| {
+        px(&render(&scene(vec![wall.clone(), (object, I, m)], vec![], cam), 1, 8), 0, 0)
+    };
+    // An open disk seen from behind: no inside, nothing absorbed (the ray
+    // came 10 units through air, not glass).
+    let disk = Disk::new(Vec3::ZERO, Vec3::NEG_Z, 1.0).expect("valid disk");
+    assert_close(seen(disk.into(), Material { absorption: a, ..glass(1.0) }), Vec3::ONE, 1e-5);
+    // A unit sphere, half see-through and half glass: both the unbent and
+    // the refracted ray cross its diameter inside, and both are absorbed.
+    let m = Material { transparency: 0.5, transmission: 0.5, absorption: a, ..glass(1.0) };
+    assert_close(seen(sphere(Vec3::ZERO, 1.0), m), (-2.0 * a).exp(), 1e-4);
+}
