@@ -8,7 +8,7 @@
 
 use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
 use crate::light::{Light, LightSample, Target, sample_seed};
-use crate::optics::{reflect, refract, schlick};
+use crate::optics::{fresnel, reflect, refract};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
 use prism_geometry::glam::Vec3;
@@ -435,7 +435,7 @@ impl<'a> Tracer<'a> {
         let (fresnel, refracted) = if mat.transmission > 0.0 {
             let (n1, n2) = if hit.front_face { (1.0, mat.ior) } else { (mat.ior, 1.0) };
             match refract(d, n, n1 / n2) {
-                Some(t) => (schlick(-d.dot(n), n1, n2), Some(t)),
+                Some(t) => (fresnel(-d.dot(n), n1, n2), Some(t)),
                 None => (1.0, None),
             }
         } else {

@@ -9,7 +9,7 @@ use prism_geometry::glam::Vec3;
 ///
 /// where `w_local = 1 − reflectivity − transparency − transmission`,
 /// `local` is ambient + Lambert diffuse + Phong specular over all lights
-/// with shadows, and `F` is the Fresnel reflectance (Schlick) of a
+/// with shadows, and `F` is the exact Fresnel reflectance of a
 /// dielectric with index `ior`. `L_straight` continues the ray unbent (the
 /// report's transparent object); `L_refracted` bends it by Snell's law,
 /// with total internal reflection past the critical angle and Beer–Lambert

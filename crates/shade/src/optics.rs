@@ -1,4 +1,4 @@
-//! Reflection, refraction and Fresnel reflectance: the optics the
+//! Reflection, refraction and Fresnel reflectance (exact, and Schlick's approximation): the optics the
 //! integrator uses, public so that they can be checked on their own.
 
 use prism_geometry::glam::Vec3;
@@ -50,6 +50,33 @@ pub fn schlick(cos_i: f32, n1: f32, n2: f32) -> f32 {
     };
     let k = 1.0 - c;
     let f = r0 + (1.0 - r0) * (k * k) * (k * k) * k;
+    if f.is_finite() { f.clamp(0.0, 1.0) } else { 1.0 }
+}
+
+/// The exact Fresnel reflectance of unpolarised light arriving at cosine
+/// `cos_i` (to the normal on its side) from index `n1` into index `n2`: the
+/// mean of the `s` and `p` reflectances,
+/// `r_s = (n1 cos i − n2 cos t) / (n1 cos i + n2 cos t)` and
+/// `r_p = (n2 cos i − n1 cos t) / (n2 cos i + n1 cos t)`, squared, with
+/// `cos t` by Snell's law. Exactly 0 for matched indices (an `ior = 1`
+/// glass is invisible, where [`schlick`] leaves a bright rim at grazing
+/// angles), 1 past the critical angle and at grazing incidence otherwise.
+#[inline]
+#[must_use]
+pub fn fresnel(cos_i: f32, n1: f32, n2: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    if n1 == n2 {
+        return 0.0;
+    }
+    let eta = n1 / n2;
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if !(sin2_t < 1.0) {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    let f = 0.5 * (rs * rs + rp * rp);
     if f.is_finite() { f.clamp(0.0, 1.0) } else { 1.0 }
 }
 
@@ -116,6 +143,36 @@ mod tests {
         let t = refract(dir_at(a), Vec3::Y, 1.0 / 1.5).unwrap_or(Vec3::ZERO);
         let inside_cos = -t.y;
         assert!((schlick(inside_cos, 1.5, 1.0) - schlick(a.cos(), 1.0, 1.5)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn fresnel_matches_its_limits_and_stays_near_schlick() {
+        // Head on: ((n1 − n2) / (n1 + n2))², from either side.
+        let r0: f32 = (0.5f32 / 2.5).powi(2);
+        assert!((fresnel(1.0, 1.0, 1.5) - r0).abs() < 1e-7);
+        assert!((fresnel(1.0, 1.5, 1.0) - r0).abs() < 1e-7);
+        // Grazing: everything reflects.
+        assert_eq!(fresnel(0.0, 1.0, 1.5), 1.0);
+        // Matched indices: nothing reflects, at any angle.
+        for deg in [0.0f32, 30.0, 60.0, 85.0, 89.9, 90.0] {
+            assert_eq!(fresnel(deg.to_radians().cos(), 1.33, 1.33), 0.0);
+        }
+        // Brewster's angle: the p reflectance vanishes, leaving half of s's.
+        let brewster = 1.5f32.atan();
+        let (ci, ct) = (brewster.cos(), (brewster.sin() / 1.5).asin().cos());
+        let rs = (ci - 1.5 * ct) / (ci + 1.5 * ct);
+        assert!((fresnel(ci, 1.0, 1.5) - 0.5 * rs * rs).abs() < 1e-6);
+        // Past the critical angle, total; symmetric paths reflect alike.
+        let crit = critical_angle(1.5, 1.0).unwrap_or(0.0);
+        assert_eq!(fresnel((crit + 1e-3).cos(), 1.5, 1.0), 1.0);
+        let a = 20f32.to_radians();
+        let t = refract(dir_at(a), Vec3::Y, 1.0 / 1.5).unwrap_or(Vec3::ZERO);
+        assert!((fresnel(-t.y, 1.5, 1.0) - fresnel(a.cos(), 1.0, 1.5)).abs() < 1e-5);
+        // Schlick's approximation is within a few hundredths for glass.
+        for deg in 0..90 {
+            let c = (deg as f32).to_radians().cos();
+            assert!((fresnel(c, 1.0, 1.5) - schlick(c, 1.0, 1.5)).abs() < 0.05, "{deg}°");
+        }
     }
 
     #[test]

@@ -220,7 +220,7 @@ fn glass_slab_displaces_the_ray_by_the_analytic_amount() {
     let d = cam.ray(0.5, 0.5).dir;
     let cos_i = -d.z;
     let (theta_i, theta_t) = (cos_i.acos(), (cos_i.acos().sin() / n).asin());
-    let f = prism_shade::optics::schlick(cos_i, 1.0, n);
+    let f = prism_shade::optics::fresnel(cos_i, 1.0, n);
     // Beer–Lambert over the path inside: thick / cos θt.
     let inside = thick / theta_t.cos();
     let got = px(&img, 0, 0) / ((1.0 - f) * (1.0 - f));
@@ -260,7 +260,7 @@ fn inside_glass(angle_deg: f32) -> (Vec3, f32) {
         cam,
     );
     let img = render(&s, 1, 1);
-    (px(&img, 0, 0), prism_shade::optics::schlick(a.cos(), n, 1.0))
+    (px(&img, 0, 0), prism_shade::optics::fresnel(a.cos(), n, 1.0))
 }
 
 #[test]
@@ -507,4 +507,22 @@ fn absorption_counts_only_segments_inside_a_closed_solid() {
     // the refracted ray cross its diameter inside, and both are absorbed.
     let m = Material { transparency: 0.5, transmission: 0.5, absorption: a, ..glass(1.0) };
     assert_close(seen(sphere(Vec3::ZERO, 1.0), m), (-2.0 * a).exp(), 1e-4);
+}
+
+#[test]
+fn index_matched_glass_is_invisible() {
+    // A clear ior-1 sphere before a wall of two colours: no bending and no
+    // reflection at any angle, so the picture is the wall's, rim included.
+    let wall = cuboid(Vec3::new(-5.0, -5.0, -4.0), Vec3::new(5.0, 5.0, -3.0));
+    let ramp = Material {
+        texture: Texture::Checker { a: Vec3::ONE, b: Vec3::ZERO, size: 0.7, world: false },
+        ..flat(Vec3::ONE)
+    };
+    let cam = camera(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y, 12.0, 41, 41);
+    let bare = render(&scene(vec![(wall, I, ramp.clone())], vec![], cam), 1, 8);
+    let shot = scene(vec![(wall, I, ramp), (sphere(Vec3::ZERO, 0.9), I, glass(1.0))], vec![], cam);
+    let with = render(&shot, 1, 8);
+    for (a, b) in bare.pixels.iter().zip(&with.pixels) {
+        assert_close(*b, *a, 1e-5);
+    }
 }
