@@ -37,8 +37,12 @@ impl Level {
     #[inline]
     pub(crate) fn bilinear(&self, uv: Vec2, wrap: Wrap) -> Vec3 {
         let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
+        let (mut x, mut y) = (uv.x * self.width as f32 - 0.5, uv.y * self.height as f32 - 0.5);
+        if !(x.is_finite() && y.is_finite()) {
+            // A uv so large that its texel position overflows (|uv| above
+            // about 1e34): read it as 0, as a non-finite uv, not as NaN.
+            (x, y) = (-0.5, -0.5);
+        }
         let (x0, y0) = (floor_f32(x), floor_f32(y));
         let (fx, fy) = (x - x0, y - y0);
         let (ix, iy) = (x0 as i64, y0 as i64);
@@ -82,11 +86,13 @@ pub(crate) fn build_pyramid(base: &Level, wrap: Wrap) -> Vec<Level> {
 
 /// The level of detail for footprint axes `duv` (in uv units) on an image
 /// of `width × height` texels: `log2` of the longer axis in texels (0 or
-/// less: the full-resolution image).
+/// less: the full-resolution image; an infinite footprint, a surface seen
+/// edge-on at the horizon, is `+∞`: the coarsest level, the image's mean;
+/// a `NaN` footprint is 0).
 pub(crate) fn lod(width: u32, height: u32, duv: [Vec2; 2]) -> f32 {
     let size = Vec2::new(width as f32, height as f32);
     let texels = (duv[0] * size).length().max((duv[1] * size).length());
-    if texels > 0.0 && texels.is_finite() { texels.log2() } else { 0.0 }
+    if texels > 0.0 { texels.log2() } else { 0.0 }
 }
 
 /// Trilinear lookup: `base` is level 0, `smaller` the levels below it.
@@ -247,6 +253,26 @@ mod tests {
         );
         assert_eq!(lod(256, 256, [Vec2::ZERO; 2]), 0.0);
         assert_eq!(lod(256, 256, [Vec2::NAN; 2]), 0.0);
+        // An infinite footprint is the coarsest level, not the finest.
+        assert_eq!(lod(256, 256, [Vec2::new(f32::INFINITY, 0.0), Vec2::ZERO]), f32::INFINITY);
+        let base = level(16, 16, |i, _| (i % 2) as f32);
+        let levels = build_pyramid(&base, Wrap::Repeat);
+        let far = lod(16, 16, [Vec2::new(f32::INFINITY, 0.0), Vec2::ZERO]);
+        assert!(
+            (trilinear(&base, &levels, Wrap::Repeat, Vec2::new(0.5 / 16.0, 0.3), far).x - 0.5).abs() < 1e-6
+        );
+    }
+
+    #[test]
+    fn a_uv_too_large_for_a_texel_position_reads_as_zero_not_nan() {
+        let base = level(16, 8, |i, j| (i + 16 * j) as f32);
+        for wrap in [Wrap::Repeat, Wrap::Clamp] {
+            for uv in [Vec2::new(1e38, 0.25), Vec2::new(0.25, -1e38), Vec2::splat(f32::MAX)] {
+                let got = base.bilinear(uv, wrap);
+                assert!(got.is_finite(), "{uv} ({wrap:?}): {got}");
+                assert_eq!(got, base.bilinear(Vec2::ZERO, wrap), "{uv} ({wrap:?})");
+            }
+        }
     }
 
     #[test]
