@@ -10,6 +10,10 @@ use std::collections::HashMap;
 /// than this keep a hard edge.
 pub const DEFAULT_CREASE_DEG: f32 = 60.0;
 
+/// Faces around one position above which [`with_computed_normals`] keeps
+/// the normals it sums there for faces of the same plane and group.
+const MANY_FACES: usize = 32;
+
 /// `mesh` with computed vertex normals.
 ///
 /// Faces are taken to meet wherever their corners share a **position**
@@ -51,10 +55,9 @@ pub fn with_computed_normals(
             (b - a).cross(c - a).normalize_or_zero()
         })
         .collect();
-    // The angle of face `g` at its corner on welded position `w`.
-    let angle = |g: usize, w: usize| {
+    // The angle of face `g` at its corner `c`.
+    let angle = |g: usize, c: usize| {
         let t = indices[g];
-        let c = (0..3).find(|&j| id[t[j] as usize] as usize == w).unwrap_or(0);
         let p = |j: usize| positions[t[(c + j) % 3] as usize];
         let (e1, e2) = (p(1) - p(0), p(2) - p(0));
         if e1 == Vec3::ZERO || e2 == Vec3::ZERO { 0.0 } else { e1.angle_between(e2) }
@@ -71,13 +74,25 @@ pub fn with_computed_normals(
     }
     let mut fill = start.clone();
     let mut around = vec![0u32; start[positions.len()] as usize];
+    // Each face's angle at the position, in the same rows: computed once
+    // per corner, not once per pair of faces around a vertex.
+    let mut weight = vec![0f32; around.len()];
     for (f, tri) in indices.iter().enumerate() {
-        for &v in tri {
+        for (j, &v) in tri.iter().enumerate() {
             let w = id[v as usize] as usize;
+            // A face with two corners on one position (degenerate, with
+            // no normal of its own) takes its first such corner's angle.
+            let c = (0..3).find(|&c| id[tri[c] as usize] as usize == w).unwrap_or(j);
             around[fill[w] as usize] = f as u32;
+            weight[fill[w] as usize] = angle(f, c);
             fill[w] += 1;
         }
     }
+    // Normals already summed at a position of many faces, by (position,
+    // group, face normal): a fan of thousands of faces around one vertex
+    // (a large polygon, a cone's apex) would otherwise cost the square of
+    // its faces where they share a plane.
+    let mut summed: HashMap<(usize, u32, [u32; 3]), Vec3> = HashMap::new();
     let mut new_pos = Vec::with_capacity(positions.len());
     let mut new_uv = mesh.uvs().map(|_| Vec::with_capacity(positions.len()));
     let mut new_n = Vec::with_capacity(positions.len());
@@ -91,14 +106,22 @@ pub fn with_computed_normals(
             let n = if group(f) == 0 || unit[f] == Vec3::ZERO {
                 unit[f]
             } else {
-                let mut sum = Vec3::ZERO;
-                for &g in &around[start[w] as usize..start[w + 1] as usize] {
-                    let g = g as usize;
-                    if group(g) == group(f) && unit[g].dot(unit[f]) >= cos_crease {
-                        sum += unit[g] * angle(g, w);
+                let rows = start[w] as usize..start[w + 1] as usize;
+                let sum = || {
+                    let mut sum = Vec3::ZERO;
+                    for (&g, &a) in around[rows.clone()].iter().zip(&weight[rows.clone()]) {
+                        let g = g as usize;
+                        if group(g) == group(f) && unit[g].dot(unit[f]) >= cos_crease {
+                            sum += unit[g] * a;
+                        }
                     }
+                    sum.normalize_or_zero()
+                };
+                if rows.len() > MANY_FACES {
+                    *summed.entry((w, group(f), unit[f].to_array().map(f32::to_bits))).or_insert_with(sum)
+                } else {
+                    sum()
                 }
-                sum.normalize_or_zero()
             };
             let key = (v, n.to_array().map(f32::to_bits));
             out[k] = *made.entry(key).or_insert_with(|| {
@@ -145,6 +168,54 @@ mod tests {
         let tri = m.indices()[f];
         let k = tri.iter().position(|&v| m.positions()[v as usize] == point).unwrap();
         m.normals().unwrap()[tri[k] as usize]
+    }
+
+    #[test]
+    fn many_faces_around_one_vertex_get_the_normals_of_the_definition() {
+        // A cone's apex shared by 200 faces, and a flat 200-gon's fan around
+        // its first corner, in one mesh: above MANY_FACES, where summed
+        // normals are kept. Each corner's normal must be the
+        // angle-weighted mean of the faces within the crease, as documented.
+        let n = 200;
+        let ring = |i: usize, y: f32| {
+            let t = (i % n) as f32 / n as f32 * std::f32::consts::TAU;
+            Vec3::new(t.cos(), y, t.sin())
+        };
+        let mut p = vec![Vec3::new(0.0, 1.0, 0.0)];
+        p.extend((0..n).map(|i| ring(i, 0.0)));
+        let fan = p.len() as u32;
+        p.extend((0..n).map(|i| ring(i, -2.0)));
+        let mut idx: Vec<[u32; 3]> = (0..n as u32).map(|i| [0, 1 + (i + 1) % n as u32, 1 + i]).collect();
+        idx.extend((1..n as u32 - 1).map(|i| [fan, fan + i, fan + i + 1]));
+        let mesh = TriangleMesh::new(p.clone(), None, None, idx.clone()).unwrap();
+        let out = with_computed_normals(&mesh, None, DEFAULT_CREASE_DEG).unwrap();
+        let unit = |t: [u32; 3]| {
+            let [a, b, c] = t.map(|v| p[v as usize]);
+            (b - a).cross(c - a).normalize()
+        };
+        let angle = |t: [u32; 3], v: u32| {
+            let k = t.iter().position(|&x| x == v).unwrap();
+            let (o, b, c) = (p[t[k] as usize], p[t[(k + 1) % 3] as usize], p[t[(k + 2) % 3] as usize]);
+            (b - o).angle_between(c - o)
+        };
+        let cos_crease = DEFAULT_CREASE_DEG.to_radians().cos();
+        for (f, &t) in idx.iter().enumerate() {
+            for v in [0, fan] {
+                if !t.contains(&v) {
+                    continue;
+                }
+                let want = idx
+                    .iter()
+                    .filter(|g| g.contains(&v) && unit(**g).dot(unit(t)) >= cos_crease)
+                    .map(|&g| unit(g) * angle(g, v))
+                    .sum::<Vec3>()
+                    .normalize();
+                let got = normal_at(&out, f, p[v as usize]);
+                assert!((got - want).length() < 1e-5, "face {f} at {v}: {got} against {want}");
+            }
+        }
+        // The flat fan's corners all share the plane's normal (−Y here).
+        assert!((normal_at(&out, n, p[fan as usize]) - Vec3::NEG_Y).length() < 1e-6);
     }
 
     #[test]
