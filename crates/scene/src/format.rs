@@ -16,7 +16,7 @@ use toml::Spanned;
 /// A spanned number.
 pub type Num = Spanned<f64>;
 /// A spanned 3-vector.
-pub type V3 = Spanned<[f64; 3]>;
+pub type V3 = Spanned<Exact<f64, 3>>;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -457,7 +457,7 @@ pub struct ObjectDef {
     pub size: Option<Spanned<Scale3>>,
     pub base: Option<V3>,
     pub height: Option<Num>,
-    pub vertices: Option<Spanned<[[f64; 3]; 3]>>,
+    pub vertices: Option<Spanned<Exact<Point, 3>>>,
     pub path: Option<Spanned<String>>,
     pub normals: Option<Spanned<NormalsDef>>,
     pub crease_angle: Option<Num>,
@@ -484,7 +484,7 @@ impl ObjectDef {
 #[derive(Deserialize, Debug)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Step {
-    Translate([f64; 3]),
+    Translate(Exact<f64, 3>),
     RotateX(f64),
     RotateY(f64),
     RotateZ(f64),
@@ -492,12 +492,12 @@ pub enum Step {
     Scale(Scale3),
     Shear(ShearDef),
     ShearAngle(ShearDef),
-    Matrix([[f64; 4]; 4]),
+    Matrix(Exact<Row, 4>),
 }
 
 #[derive(Debug)]
 pub struct AxisAngle {
-    pub axis: [f64; 3],
+    pub axis: Exact<f64, 3>,
     pub degrees: f64,
 }
 
@@ -508,7 +508,7 @@ impl<'de> Deserialize<'de> for AxisAngle {
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
         struct Fields {
-            axis: [f64; 3],
+            axis: Exact<f64, 3>,
             degrees: f64,
         }
         struct V;
@@ -585,17 +585,106 @@ fn parse_hex(s: &str) -> Option<[f64; 3]> {
 
 /// Exactly `N` numbers from `seq`.
 fn seq_n<'de, A: SeqAccess<'de>, const N: usize>(
-    mut seq: A,
+    seq: A,
     exp: &dyn de::Expected,
 ) -> Result<[f64; N], A::Error> {
-    let mut out = [0.0; N];
-    for (i, v) in out.iter_mut().enumerate() {
-        *v = seq.next_element()?.ok_or_else(|| de::Error::invalid_length(i, exp))?;
+    exactly(seq, exp)
+}
+
+/// Exactly `N` items from `seq`: fewer or more are refused, the message
+/// counting every value given (serde's arrays, and toml, drop the values
+/// past the `N`th without a word).
+fn exactly<'de, A: SeqAccess<'de>, T: Deserialize<'de>, const N: usize>(
+    mut seq: A,
+    exp: &dyn de::Expected,
+) -> Result<[T; N], A::Error> {
+    let mut out: Vec<T> = Vec::with_capacity(N);
+    while out.len() < N {
+        match seq.next_element()? {
+            Some(v) => out.push(v),
+            None => return Err(de::Error::invalid_length(out.len(), exp)),
+        }
     }
-    if seq.next_element::<de::IgnoredAny>()?.is_some() {
-        return Err(de::Error::invalid_length(N + 1, exp));
+    let mut extra = 0;
+    while seq.next_element::<de::IgnoredAny>()?.is_some() {
+        extra += 1;
     }
-    Ok(out)
+    if extra > 0 {
+        return Err(de::Error::invalid_length(N + extra, exp));
+    }
+    out.try_into().map_err(|_| de::Error::invalid_length(N, exp))
+}
+
+/// What an array's items are, in messages: "an array of 3 {numbers}".
+pub trait Item {
+    /// The items, plural.
+    const MANY: &'static str;
+}
+
+impl Item for f64 {
+    const MANY: &'static str = "numbers";
+}
+
+/// Exactly `N` items, `[a, b, c]`: an array of another length is refused
+/// at its place, longer as well as shorter.
+#[derive(Clone, Copy, PartialEq)]
+pub struct Exact<T, const N: usize>(pub [T; N]);
+
+impl<T, const N: usize> std::ops::Deref for Exact<T, N> {
+    type Target = [T; N];
+    fn deref(&self) -> &[T; N] {
+        &self.0
+    }
+}
+
+impl<T: fmt::Debug, const N: usize> fmt::Debug for Exact<T, N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<'de, T: Deserialize<'de> + Item, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T, const N: usize>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de> + Item, const N: usize> Visitor<'de> for V<T, N> {
+            type Value = Exact<T, N>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "an array of {N} {}", T::MANY)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Exact<T, N>, A::Error> {
+                exactly(seq, &self).map(Exact)
+            }
+        }
+        d.deserialize_seq(V::<T, N>(std::marker::PhantomData))
+    }
+}
+
+/// A triangle's vertex, `[x, y, z]`.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Point(pub [f64; 3]);
+
+impl Item for Point {
+    const MANY: &'static str = "points [x, y, z]";
+}
+
+impl<'de> Deserialize<'de> for Point {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Exact::<f64, 3>::deserialize(d).map(|e| Point(e.0))
+    }
+}
+
+/// A matrix row, `[a, b, c, d]`.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Row(pub [f64; 4]);
+
+impl Item for Row {
+    const MANY: &'static str = "rows [a, b, c, d]";
+}
+
+impl<'de> Deserialize<'de> for Row {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Exact::<f64, 4>::deserialize(d).map(|e| Row(e.0))
+    }
 }
 
 /// A number (the same on every axis) or an array of `N` numbers.

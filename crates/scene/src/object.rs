@@ -59,8 +59,8 @@ pub(crate) fn shape(
                 );
             };
             let mut pts = [Vec3::ZERO; 3];
-            for (p, raw) in pts.iter_mut().zip(v.get_ref()) {
-                *p = vec3_of(raw)
+            for (p, raw) in pts.iter_mut().zip(v.get_ref().iter()) {
+                *p = vec3_of(&raw.0)
                     .ok_or_else(|| ctx.invalid(&v.span(), "triangle vertices must be finite numbers"))?;
             }
             Triangle::new(pts).map_err(|e| ctx.geometry(&v.span(), e))?.into()
@@ -248,7 +248,7 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
             Step::Matrix(rows) => {
                 let mut cols = [[0f32; 4]; 4];
                 for (r, row) in rows.iter().enumerate() {
-                    for (c, v) in row.iter().enumerate() {
+                    for (c, v) in row.0.iter().enumerate() {
                         let v = f(*v);
                         if !v.is_finite() {
                             return Err(bad("matrix entries"));

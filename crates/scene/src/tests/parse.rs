@@ -522,3 +522,67 @@ fn large_finite_values_are_not_mistaken_for_zero() {
     let err = expect_err(quad, "a quad light's area overflows 32-bit floats");
     assert_at(&err, quad, "edge_v");
 }
+
+#[test]
+fn arrays_longer_than_expected_are_refused_where_they_are() {
+    let three = "invalid length 4: expected an array of 3 numbers, got 4 values";
+    refused(&[
+        ("[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0, 7]\nradius = 1\n", three, Some("center")),
+        ("[[lights]]\nposition = [1, 2, 3, 4]\n", three, Some("position = [1, 2, 3, 4]")),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ translate = [1, 2, 3, 4] }]\n",
+            three,
+            Some("translate"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{ rotate = { axis = [0, 1, 0, 5], degrees = 30 } }]\n",
+            three,
+            Some("rotate"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n\
+             transform = [{ matrix = [[1, 0, 0, 0, 7], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }]\n",
+            "invalid length 5: expected an array of 4 numbers, got 5 values",
+            Some("matrix"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n\
+             transform = [{ matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1], [0, 0, 0, 1]] }]\n",
+            "invalid length 5: expected an array of 4 rows [a, b, c, d], got 5 values",
+            Some("matrix"),
+        ),
+        (
+            "[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\n",
+            "invalid length 4: expected an array of 3 points [x, y, z], got 4 values",
+            Some("vertices"),
+        ),
+        // Too short, in the same words: points and rows, not numbers.
+        (
+            "[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0]]\n",
+            "invalid length 2: expected an array of 3 points [x, y, z], got 2 values",
+            Some("vertices"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n\
+             transform = [{ matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }]\n",
+            "invalid length 3: expected an array of 4 rows [a, b, c, d], got 3 values",
+            Some("matrix"),
+        ),
+        // Every value past the last is counted, whatever it is.
+        (
+            "[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0, 7, \"x\"]\nradius = 1\n",
+            "got 5 values",
+            Some("center"),
+        ),
+    ]);
+    // The camera's vectors, at their own column.
+    for (from, to, column) in [
+        ("position = [0, 2, 10]", "position = [0, 2, 10, 99]", 12),
+        ("look_at = [0, 1, 0]", "look_at = [0, 1, 0, \"x\"]", 11),
+    ] {
+        let text = BASE.replace(from, to);
+        let err = parse(&text).unwrap_err().to_string();
+        let line = text.lines().position(|l| l == to).unwrap() + 1;
+        assert_eq!(err, format!("test.toml:{line}:{column}: {three}"));
+    }
+}
