@@ -118,6 +118,13 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
             format!("a transform step needs one key: {step}")
         };
     }
+    // A name (`type`, `projection`, ...) given as a number, an array or
+    // a table: toml says only "wanted string or table".
+    if (message.starts_with("wanted string or table") || message.starts_with("wanted exactly 1 element"))
+        && let Some(m) = name_wanted(text, span.clone(), at)
+    {
+        return m;
+    }
     if message.starts_with("duplicate key") && !at.is_empty() {
         return format!("duplicate key `{at}`: it is already defined above");
     }
@@ -141,6 +148,40 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
         return format!("expected {wanted} after `{first}`");
     }
     format!("`{at}` is not a value: a string must be quoted ({})", toml::Value::String(at.to_owned()))
+}
+
+/// For a name key (`type = 3`) whose value at `span` of `text` is not a
+/// string: "`type` must be a string such as "sphere" (one of: sphere,
+/// plane, ...), got the number 3". The names are those serde lists when
+/// the value is replaced by an unknown name; `None` where the key or the
+/// names cannot be found.
+fn name_wanted(text: &str, span: std::ops::Range<usize>, at: &str) -> Option<String> {
+    let before = text.get(..span.start)?.trim_end().strip_suffix('=')?.trim_end();
+    let key_start =
+        before.rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '-')).map_or(0, |i| i + 1);
+    let key = &before[key_start..];
+    if key.is_empty() {
+        return None;
+    }
+    let probe = format!("{}\"?\"{}", &text[..span.start], text.get(span.end..)?);
+    let err = toml::from_str::<SceneFile>(&probe).err()?;
+    let names = err.message().strip_prefix("unknown variant `?`, expected ")?;
+    let names = names.lines().next()?.trim();
+    let names: Vec<&str> = names.split('`').skip(1).step_by(2).collect();
+    let first = names.first()?;
+    let at = at.trim();
+    let got = match at.as_bytes().first() {
+        Some(b'[') => "an array".to_owned(),
+        Some(b'{') => "a table".to_owned(),
+        _ if at == "true" || at == "false" => at.to_owned(),
+        _ if toml::from_str::<toml::Table>(&format!("v = {at}"))
+            .is_ok_and(|t| t["v"].is_integer() || t["v"].is_float()) =>
+        {
+            format!("the number {at}")
+        }
+        _ => format!("`{at}`"),
+    };
+    Some(format!("`{key}` must be a string such as \"{first}\" (one of: {}), got {got}", names.join(", ")))
 }
 
 /// toml's messages, made to say what was expected in scene terms

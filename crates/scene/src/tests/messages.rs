@@ -110,3 +110,35 @@ fn colours_that_look_8_bit_warn_and_hex_is_offered() {
     let loaded = parse(&glass).unwrap();
     assert!(loaded.warnings.iter().all(|w| !w.contains("8-bit")), "{:?}", loaded.warnings);
 }
+
+#[test]
+fn a_name_given_as_another_type_says_a_string_is_wanted() {
+    let objects = "(one of: sphere, plane, cuboid, cylinder, cone, disk, triangle, mesh)";
+    refused(&[
+        (
+            "[[objects]]\ntype = 3\n",
+            &format!("`type` must be a string such as \"sphere\" {objects}, got the number 3"),
+            Some("type = 3"),
+        ),
+        ("[[objects]]\ntype = true\n", "`type` must be a string such as \"sphere\"", Some("type = true")),
+        ("[[objects]]\ntype = [1]\n", "got an array", Some("type = [1]")),
+        ("[[objects]]\ntype = {}\n", "`type` must be a string such as \"sphere\"", Some("type = {}")),
+        (
+            "[[lights]]\ntype = 2\n",
+            "`type` must be a string such as \"point\" (one of: point, spot, directional, quad, disk, sphere), got the number 2",
+            Some("type = 2"),
+        ),
+        (
+            "[materials.m]\ntexture = { type = 1 }\n",
+            "`type` must be a string such as \"checker\" (one of: checker, image), got the number 1",
+            Some("texture"),
+        ),
+    ]);
+    let err = parse(&BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nprojection = 1")).unwrap_err();
+    let err = err.to_string();
+    assert!(
+        err.contains("`projection` must be a string such as \"perspective\" (one of: perspective, orthographic), got the number 1"),
+        "{err}"
+    );
+    assert!(!err.contains("wanted"), "{err}");
+}
