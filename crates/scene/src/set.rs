@@ -6,7 +6,9 @@
 //!
 //! The text is edited in place (toml_edit's spans): a value that exists is
 //! replaced where it is written, on its line; a key that does not exist is
-//! added on a new line under its table's header (or at the end of the
+//! added on a new line under its table's header (as a dotted key after
+//! the last line of a table the file writes with dotted keys,
+//! `camera.fov = 30` after `camera.look_at = …`; or at the end of the
 //! file, under a new header, for a table the file does not have). Every
 //! other line keeps its text, and [`Edited::remap`] turns an error back
 //! into the file's own line numbers, or, for an error in a set value, into
@@ -65,8 +67,9 @@ fn flag_error(set: &str, message: impl std::fmt::Display) -> SceneError {
 enum Target {
     /// Replace the value written at this span.
     Replace(Range<usize>),
-    /// A new line `KEY = VALUE` (KEY dotted) after the line of the table
-    /// header at this byte offset.
+    /// A new line `KEY = VALUE` (KEY dotted) after the line holding this
+    /// byte offset: a table's header, or the last value of a table made by
+    /// dotted keys.
     Line(usize, String),
     /// A new line `KEY = VALUE` at the top of the file.
     Top(String),
@@ -109,7 +112,7 @@ impl Edited {
             };
             SceneError::Syntax { location, message: e.message().trim().to_owned() }
         })?;
-        let target = locate(doc.as_table(), &keys, set, "")?;
+        let target = locate(doc.as_table(), &keys, set, "", &[])?;
         let text = &self.text;
         let line_of = |offset: usize| crate::error::line_col(text, offset);
         let (new_text, edit) = match target {
@@ -332,13 +335,26 @@ fn is_a_table(set: &str, here: &str) -> SceneError {
     flag_error(set, format!("`{here}` is a table; set its keys one by one (such as {here}.KEY=VALUE)"))
 }
 
-/// Where `keys` (at least one) go in the table `t` at `here`.
-fn locate(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, SceneError> {
+/// Where `keys` (at least one) go in the table `t` at `here`; `prefix`:
+/// the dotted keys that name `t` under the table whose section holds it
+/// (`red` for `[materials]` / `red.color = …`; empty for a table with a
+/// header, or the top level).
+fn locate(
+    t: &Table,
+    keys: &[String],
+    set: &str,
+    here: &str,
+    prefix: &[String],
+) -> Result<Target, SceneError> {
     let key = &keys[0];
     let at = join(here, key);
     match t.get(key) {
-        None | Some(Item::None) => missing(t, keys, set, here),
-        Some(Item::Table(sub)) if keys.len() > 1 => locate(sub, &keys[1..], set, &at),
+        None | Some(Item::None) => missing(t, keys, set, here, prefix),
+        Some(Item::Table(sub)) if keys.len() > 1 => {
+            let prefix: Vec<String> =
+                if sub.is_dotted() { prefix.iter().chain([key]).cloned().collect() } else { Vec::new() };
+            locate(sub, &keys[1..], set, &at, &prefix)
+        }
         Some(Item::Table(_)) => Err(is_a_table(set, &at)),
         Some(Item::ArrayOfTables(a)) => {
             let Some(k) = keys.get(1) else {
@@ -350,7 +366,7 @@ fn locate(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, S
             let n = index(k, a.len(), &at, set)?;
             let at = format!("{at}.{n}");
             match (a.get(n), keys.len() > 2) {
-                (Some(sub), true) => locate(sub, &keys[2..], set, &at),
+                (Some(sub), true) => locate(sub, &keys[2..], set, &at, &[]),
                 _ => Err(is_a_table(set, &at)),
             }
         }
@@ -384,10 +400,25 @@ fn locate_value(v: &Value, keys: &[String], set: &str, here: &str) -> Result<Tar
     }
 }
 
-/// Where `keys`, whose first is not in the table `t` at `here`, go.
-fn missing(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, SceneError> {
+/// Where `keys`, whose first is not in the table `t` at `here`, go
+/// (`prefix`: as for [`locate`]).
+fn missing(
+    t: &Table,
+    keys: &[String],
+    set: &str,
+    here: &str,
+    prefix: &[String],
+) -> Result<Target, SceneError> {
     let (last, table) = keys.split_last().ok_or_else(|| flag_error(set, "empty key"))?;
     let key = Key::new(last.as_str()).to_string();
+    if t.is_dotted() {
+        // A table made by dotted keys (`camera.position = …`): the key
+        // joins them, a dotted key on the line after the last, in the same
+        // section (a header `[camera]` would define the table twice).
+        let end = last_value_end(t).ok_or_else(|| flag_error(set, "cannot place this value"))?;
+        let path: Vec<String> = prefix.iter().chain(keys).cloned().collect();
+        return Ok(Target::Line(end.saturating_sub(1), dotted(&path)));
+    }
     if here.is_empty() {
         // The scene's lists of tables: an entry cannot be made by a set (it
         // would be a table named `0`).
@@ -420,4 +451,16 @@ fn missing(t: &Table, keys: &[String], set: &str, here: &str) -> Result<Target, 
             ),
         )),
     }
+}
+
+/// The end of the last value written in the table `t` made by dotted keys
+/// (its own and those of the dotted tables under it), if any has a span.
+fn last_value_end(t: &Table) -> Option<usize> {
+    t.iter()
+        .filter_map(|(_, item)| match item {
+            Item::Value(v) => v.span().map(|s| s.end),
+            Item::Table(sub) if sub.is_dotted() => last_value_end(sub),
+            _ => None,
+        })
+        .max()
 }

@@ -248,3 +248,28 @@ fn a_fog_of_enabled_alone_is_the_switch_without_a_medium() {
         on.warnings
     );
 }
+
+#[test]
+fn sets_add_keys_to_tables_written_with_dotted_keys() {
+    let text = "render.width = 64\nrender.height = 48\ncamera.position = [0, 1, 5]\ncamera.look_at = [0, 0, 0]\n\
+                [[objects]]\ntype = \"sphere\"\nradius = 1\n";
+    with_sets(text, &[]).unwrap();
+    let l = with_sets(text, &["camera.fov=30"]).unwrap();
+    assert_eq!(l.settings.camera.vfov_deg(), 30.0);
+    let l = with_sets(text, &["render.spp=2", "camera.fov=30"]).unwrap();
+    assert_eq!((l.settings.spp, l.settings.camera.vfov_deg()), (2, 30.0));
+    let l = with_sets(text, &["camera.projection=\"orthographic\"", "render.spp=3"]).unwrap();
+    assert_eq!(l.settings.spp, 3);
+    assert_eq!(l.settings.camera.projection(), prism_shade::Projection::Orthographic);
+    // Dotted keys under a header.
+    let materials = format!("{text}material = \"red\"\n[materials]\nred.color = [1, 0, 0]\n");
+    let l = with_sets(&materials, &["materials.red.specular=0.5"]).unwrap();
+    assert_eq!(l.info.materials, ["red"]);
+    // The set's key is the one added: an error in it names the flag.
+    let err = set_err(&materials, &["materials.red.specular=-1"]);
+    assert!(err.starts_with("--set: materials.red.specular=-1: "), "{err}");
+    // An error elsewhere keeps the file's line.
+    let bad = materials.replace("radius = 1", "radius = -1");
+    let plain = with_sets(&bad, &[]).unwrap_err().to_string();
+    assert_eq!(set_err(&bad, &["render.spp=2", "camera.fov=30", "materials.red.specular=0.5"]), plain);
+}
