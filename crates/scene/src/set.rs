@@ -74,8 +74,9 @@ enum Target {
     /// A new line `KEY = VALUE` at the top of the file.
     Top(String),
     /// `KEY = VALUE` inside the inline table whose closing brace is at
-    /// this offset (`empty`: it has no keys yet).
-    Inline { close: usize, key: String, empty: bool },
+    /// this offset (`last`: where its last value ends; `None` for an
+    /// empty table).
+    Inline { close: usize, key: String, last: Option<usize> },
     /// A new `[TABLE]` with `KEY = VALUE` at the end of the file.
     NewTable(String, String),
 }
@@ -135,11 +136,15 @@ impl Edited {
                 let t = format!("{key} = {repr}\n{text}");
                 (t, Edit { set: set.to_owned(), line: 1, lines: 1, column: 1 })
             }
-            Target::Inline { close, key, empty } => {
+            Target::Inline { close, key, last } => {
+                // At the closing brace itself, which is never in a comment
+                // (a line break or comment before it stays as it is), with
+                // a comma unless the table is empty or ends with one.
                 let (line, column) = line_of(close);
-                let sep = if empty { " " } else { ", " };
-                let t = format!("{}{sep}{key} = {repr} {}", text[..close].trim_end(), &text[close..]);
-                (t, Edit { set: set.to_owned(), line, lines: 0, column: column.saturating_sub(1).max(1) })
+                let comma = last.is_some_and(|end| !has_comma(text.get(end..close).unwrap_or_default()));
+                let sep = if comma { ", " } else { " " };
+                let t = format!("{}{sep}{key} = {repr} {}", &text[..close], &text[close..]);
+                (t, Edit { set: set.to_owned(), line, lines: 0, column })
             }
             Target::NewTable(table, key) => {
                 let sep = if text.is_empty() || text.ends_with('\n') { "" } else { "\n" };
@@ -162,6 +167,7 @@ impl Edited {
                 }
             }
         }
+        still_toml(set, &new_text)?;
         self.text = new_text;
         self.edits.push(edit);
         Ok(())
@@ -270,6 +276,23 @@ impl Edited {
         let Some(message) = rest.strip_prefix(": ") else { return w };
         let location = crate::error::Location { file: file.to_path_buf(), line: Some(line), column };
         self.remap(SceneError::Invalid { location, message: message.to_owned() }, file).to_string()
+    }
+}
+
+/// That the text `edited`, a readable scene with the set `set` applied,
+/// is still TOML: an edit must not make a readable file unreadable, and
+/// if one did, the error is the set's, not a place in the file (which
+/// might be a line the file does not have).
+fn still_toml(set: &str, edited: &str) -> Result<(), SceneError> {
+    match Document::parse(edited) {
+        Ok(_) => Ok(()),
+        Err(e) => Err(flag_error(
+            set,
+            format!(
+                "cannot add this to the scene as the file writes it ({}); write the key in the file",
+                e.message().trim()
+            ),
+        )),
     }
 }
 
@@ -384,11 +407,12 @@ fn locate_value(v: &Value, keys: &[String], set: &str, here: &str) -> Result<Tar
             Some(inner) => locate_value(inner, &keys[1..], set, &join(here, key)),
             None => {
                 let span = t.span().ok_or_else(|| flag_error(set, "cannot place this value"))?;
-                Ok(Target::Inline {
-                    close: span.end.saturating_sub(1),
-                    key: dotted(keys),
-                    empty: t.is_empty(),
-                })
+                let close = span.end.saturating_sub(1);
+                let last = match inline_last_end(t) {
+                    None if !t.is_empty() => return Err(flag_error(set, "cannot place this value")),
+                    last => last,
+                };
+                Ok(Target::Inline { close, key: dotted(keys), last })
             }
         },
         Value::Array(a) => {
@@ -463,4 +487,37 @@ fn last_value_end(t: &Table) -> Option<usize> {
             _ => None,
         })
         .max()
+}
+
+/// The end of the last value written in the inline table `t` (dotted
+/// keys within it included), if any has a span.
+fn inline_last_end(t: &toml_edit::InlineTable) -> Option<usize> {
+    t.iter()
+        .filter_map(|(_, v)| match v {
+            Value::InlineTable(sub) if sub.is_dotted() => inline_last_end(sub),
+            v => v.span().map(|s| s.end),
+        })
+        .max()
+}
+
+/// Whether `between`, the text from an inline table's last value to its
+/// closing brace, holds its trailing comma (outside comments).
+fn has_comma(between: &str) -> bool {
+    between.lines().any(|l| l.split('#').next().unwrap_or_default().contains(','))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_edit_that_breaks_the_text_is_the_sets_error() {
+        assert!(still_toml("a.b=1", "[a]\nb = 1\n").is_ok());
+        let err = still_toml("a.b=1", "[a]\nc = 1\n[a]\nb = 1\n").unwrap_err().to_string();
+        assert!(
+            err.starts_with("--set: a.b=1: cannot add this to the scene as the file writes it ("),
+            "{err}"
+        );
+        assert!(err.ends_with("); write the key in the file"), "{err}");
+    }
 }

@@ -273,3 +273,38 @@ fn sets_add_keys_to_tables_written_with_dotted_keys() {
     let plain = with_sets(&bad, &[]).unwrap_err().to_string();
     assert_eq!(set_err(&bad, &["render.spp=2", "camera.fov=30", "materials.red.specular=0.5"]), plain);
 }
+
+#[test]
+fn sets_add_keys_to_inline_tables_with_a_trailing_comma_or_line_breaks() {
+    let base = format!(
+        "{}[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"red\"\n",
+        BASE.replace("color = [0.8, 0.1, 0.1]\n", "")
+    );
+    for texture in [
+        "texture = {\n  type = \"checker\",\n}\n",
+        "texture = { type = \"checker\", }\n",
+        "texture = { type = \"checker\" }\n",
+        "texture = {\n  type = \"checker\" # a comment, with a comma\n}\n",
+        "texture = {\n  type = \"checker\", # a comment\n}\n",
+    ] {
+        let text = base.replace("specular = 0.5\n", &format!("specular = 0.5\n{texture}"));
+        with_sets(&text, &[]).unwrap();
+        with_sets(&text, &["materials.red.texture.size=2"]).unwrap_or_else(|e| panic!("{texture}: {e}"));
+        let err = set_err(&text, &["materials.red.texture.size=-2"]);
+        assert!(
+            err.starts_with("--set: materials.red.texture.size=-2: checker size must be"),
+            "{texture}: {err}"
+        );
+    }
+    // Each set is named for its own edit, not the one before it on the line.
+    let text = format!(
+        "objects = [\n  {{ type = \"plane\" }},\n  {{ type = \"sphere\",\n    radius = -3,\n  }},\n]\n{BASE}"
+    );
+    let plain = with_sets(&text, &[]).unwrap_err().to_string();
+    assert!(plain.contains("sphere radius must be greater than 0, got -3"), "{plain}");
+    with_sets(&text, &["objects.1.radius=2"]).unwrap();
+    let err = set_err(&text, &["objects.1.radius=2", "objects.1.material=x"]);
+    assert!(err.starts_with("--set: objects.1.material=x: unknown material `x`"), "{err}");
+    let err = set_err(&text, &["objects.1.material=x", "objects.1.radius=2"]);
+    assert!(err.starts_with("--set: objects.1.material=x: unknown material `x`"), "{err}");
+}
