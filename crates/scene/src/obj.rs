@@ -255,8 +255,9 @@ fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
 /// refuse later without a line: colours (`Ka`, `Kd`, `Ks`, `Ke`) need
 /// three numbers (one is read as grey before this, see `wild.rs`), finite
 /// and `>= 0`; `Ns`, `Ni`, `d` and `Tr` a finite number `>= 0`, `Tr` at
-/// most 1. Errors
-/// carry the 1-based line.
+/// most 1; `illum` a whole number 0 to 255; `map_Kd` and the other maps
+/// tobj reads a file name (tobj says only "material parse error" for
+/// these). Errors carry the 1-based line.
 fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
     for (i, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("");
@@ -264,6 +265,33 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
         let (key, want) = match words.next() {
             Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) => (key, 3),
             Some(key @ ("Ns" | "Ni" | "d" | "Tr")) => (key, 1),
+            // tobj refuses these with "material parse error" alone.
+            Some(
+                key @ ("map_Ka" | "map_Kd" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns" | "map_ns"
+                | "map_NS" | "bump" | "map_d"),
+            ) => {
+                if words.next().is_none() {
+                    return Err((i + 1, format!("`{key}` needs a file name")));
+                }
+                continue;
+            }
+            Some("illum") => {
+                let Some(v) = words.next() else {
+                    return Err((
+                        i + 1,
+                        "`illum` needs a whole number (the illumination model, such as 2)".into(),
+                    ));
+                };
+                if v.parse::<u8>().is_err() {
+                    return Err((
+                        i + 1,
+                        format!(
+                            "`illum` value `{v}` must be a whole number from 0 to 255 (the illumination model, such as 2)"
+                        ),
+                    ));
+                }
+                continue;
+            }
             _ => continue,
         };
         let values: Vec<&str> = words.collect();
@@ -468,6 +496,43 @@ mod tests {
             Err((2, "`Tr` value `1.5` must be between 0 and 1 (the transparency, 1 − d)".into()))
         );
         assert!(precheck_mtl("Tr 1\nTr 0.25\nd 1.5\n").is_ok());
+    }
+
+    #[test]
+    fn mtl_lines_tobj_refuses_without_a_place_are_refused_with_their_line() {
+        let obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+        let error = |mtl: &'static str| {
+            let file =
+                load_obj(Path::new("/s/m.obj"), obj, NormalMode::Auto, &|_| Some(mtl.as_bytes().to_vec()))
+                    .unwrap();
+            file.material_error.unwrap_or_default()
+        };
+        for (mtl, words) in [
+            (
+                "newmtl a\nillum x\n",
+                "/s/m.mtl:2: `illum` value `x` must be a whole number from 0 to 255 (the illumination model, such as 2)",
+            ),
+            (
+                "newmtl a\nKd 1 1 1\nillum\n",
+                "/s/m.mtl:3: `illum` needs a whole number (the illumination model, such as 2)",
+            ),
+            (
+                "newmtl a\nillum 300\n",
+                "/s/m.mtl:2: `illum` value `300` must be a whole number from 0 to 255 (the illumination model, such as 2)",
+            ),
+            ("newmtl a\nKd 1 0 0\nmap_Kd\n", "/s/m.mtl:3: `map_Kd` needs a file name"),
+            ("newmtl a\nmap_Kd   # no file\n", "/s/m.mtl:2: `map_Kd` needs a file name"),
+        ] {
+            let e = error(mtl);
+            assert_eq!(e, format!("cannot use material library {words}"), "{mtl}");
+        }
+        for key in ["map_Ka", "map_Ks", "map_Bump", "map_bump", "map_Ns", "map_ns", "map_NS", "bump", "map_d"]
+        {
+            let e = error(Box::leak(format!("newmtl a\n{key}\n").into_boxed_str()));
+            assert_eq!(e, format!("cannot use material library /s/m.mtl:2: `{key}` needs a file name"));
+        }
+        // What tobj reads stays readable.
+        assert_eq!(error("newmtl a\nillum 2\nmap_Kd tex.png\nbump -bm 1 n.png\n"), "");
     }
 
     #[test]
