@@ -70,6 +70,19 @@ pub(crate) fn light(ctx: &Ctx, l: &Spanned<LightDef>) -> Result<Light> {
             LightKind::Area(area(ctx, d, kind, &span)?)
         }
     };
+    // Each finite alone, the product can still overflow: the light would
+    // be infinite, and what it lights black (infinity times zero).
+    if !(color * intensity).is_finite() {
+        let at = d.intensity.as_ref().map_or(span, Spanned::span);
+        return Err(ctx.invalid(
+            &at,
+            format!(
+                "{name} light is too bright (color × intensity overflows: beyond {:.1e}, the largest finite value); \
+                 lower the intensity or the colour",
+                f32::MAX
+            ),
+        ));
+    }
     Ok(Light { kind, color, intensity })
 }
 

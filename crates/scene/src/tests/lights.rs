@@ -243,3 +243,44 @@ fn a_radiance_hdr_background_is_read_linear() {
     assert!((c - Vec3::new(2.0, 0.5, 0.25)).abs().max_element() < 0.02, "{c}");
     assert!(loaded.inputs.iter().any(|p| p.ends_with("sky.hdr")), "the image is an input");
 }
+
+#[test]
+fn a_light_whose_colour_times_intensity_overflows_is_refused_at_its_intensity() {
+    let too_bright = "(color × intensity overflows: beyond 3.4e38, the largest finite value)";
+    refused(&[
+        (
+            "[[lights]]\nposition = [0, 5, 0]\nintensity = 3e38\ncolor = [10, 10, 10]\n",
+            &format!(":13: point light is too bright {too_bright}"),
+            Some("3e38"),
+        ),
+        (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 5, 0]\ndirection = [0, -1, 0]\nouter_angle = 30\n\
+             color = [0, 2, 0]\nintensity = 3e38\n",
+            "spot light is too bright",
+            Some("3e38"),
+        ),
+        (
+            "[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nintensity = 2e38\nradiance = [1, 2, 1]\n",
+            "directional light is too bright",
+            Some("2e38"),
+        ),
+        (
+            "[[lights]]\ntype = \"quad\"\ncorner = [-1, 4, -1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, 2]\n\
+             radiance = [1e20, 1, 1]\nintensity = 1e19\n",
+            "quad light is too bright",
+            Some("1e19"),
+        ),
+        (
+            "[[lights]]\ntype = \"disk\"\ncenter = [0, 4, 0]\nnormal = [0, -1, 0]\nradius = 1\nintensity = 1e38\ncolor = [4, 1, 1]\n",
+            "disk light is too bright",
+            Some("1e38"),
+        ),
+        (
+            "[[lights]]\ntype = \"sphere\"\ncenter = [0, 4, 0]\nradius = 1\nintensity = 1e38\ncolor = [1, 1, 5]\n",
+            "sphere light is too bright",
+            Some("1e38"),
+        ),
+    ]);
+    // At the edge: large, but finite, is accepted.
+    parse(&format!("{BASE}[[lights]]\nposition = [0, 5, 0]\nintensity = 3e38\ncolor = [1, 1, 1]\n")).unwrap();
+}
