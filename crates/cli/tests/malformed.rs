@@ -251,12 +251,12 @@ fn cases() -> Vec<Case> {
 
     // Singular transforms.
     let s = with("radius = 1", "radius = 1\ntransform = [{ scale = [1, 0, 1] }]");
-    v.push(Case::new("zero scale", s.clone(), at(&s, "{ scale"), "singular"));
+    v.push(Case::new("zero scale", s.clone(), at(&s, "[1, 0, 1]"), "singular"));
     let zero = "[[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1]]";
     let s = with("radius = 1", &format!("radius = 1\ntransform = [{{ matrix = {zero} }}]"));
-    v.push(Case::new("singular matrix", s.clone(), at(&s, "{ matrix"), "singular"));
+    v.push(Case::new("singular matrix", s.clone(), at(&s, zero), "singular"));
     let s = with("radius = 1", "radius = 1\ntransform = [{ rotate = { axis = [0, 0, 0], degrees = 30 } }]");
-    v.push(Case::new("rotation about a zero axis", s.clone(), at(&s, "{ rotate"), "axis"));
+    v.push(Case::new("rotation about a zero axis", s.clone(), at(&s, "{ axis"), "axis"));
 
     // Missing and broken files.
     let s = mesh("");

@@ -521,19 +521,35 @@ impl ObjectDef {
     }
 }
 
-/// One transform step, a table with a single key.
+/// One transform step, a table with a single key; the value keeps its
+/// span, so that a step written as `[[objects.transform]]` is refused at
+/// its value, not its header.
 #[derive(Deserialize, Debug)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Step {
-    Translate(Exact<f64, 3>),
-    RotateX(f64),
-    RotateY(f64),
-    RotateZ(f64),
-    Rotate(AxisAngle),
-    Scale(Scale3),
-    Shear(ShearDef),
-    ShearAngle(ShearDef),
-    Matrix(Exact<Row, 4>),
+    Translate(Spanned<Exact<f64, 3>>),
+    RotateX(Num),
+    RotateY(Num),
+    RotateZ(Num),
+    Rotate(Spanned<AxisAngle>),
+    Scale(Spanned<Scale3>),
+    Shear(Spanned<ShearDef>),
+    ShearAngle(Spanned<ShearDef>),
+    Matrix(Spanned<Exact<Row, 4>>),
+}
+
+impl Step {
+    /// Where the step's value is written.
+    pub fn value_span(&self) -> std::ops::Range<usize> {
+        match self {
+            Self::Translate(v) => v.span(),
+            Self::RotateX(v) | Self::RotateY(v) | Self::RotateZ(v) => v.span(),
+            Self::Rotate(v) => v.span(),
+            Self::Scale(v) => v.span(),
+            Self::Shear(v) | Self::ShearAngle(v) => v.span(),
+            Self::Matrix(v) => v.span(),
+        }
+    }
 }
 
 #[derive(Debug)]

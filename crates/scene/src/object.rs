@@ -188,14 +188,14 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
     let Some(steps) = &d.transform else { return Ok(Transform::IDENTITY) };
     let mut acc = Transform::IDENTITY;
     for step in steps.get_ref() {
-        let span = step.span();
+        let span = step.get_ref().value_span();
         let bad = |what: &str| ctx.invalid(&span, format!("transform step: {what} must be finite numbers"));
         let f = |v: f64| v as f32;
         let t = match step.get_ref() {
-            Step::Translate(v) => Transform::translate(vec3_of(v).ok_or_else(|| bad("translate"))?)
+            Step::Translate(v) => Transform::translate(vec3_of(v.get_ref()).ok_or_else(|| bad("translate"))?)
                 .map_err(|e| ctx.geometry(&span, e))?,
             Step::RotateX(a) | Step::RotateY(a) | Step::RotateZ(a) => {
-                let a = f(*a);
+                let a = f(*a.get_ref());
                 if !a.is_finite() {
                     return Err(bad("a rotation angle"));
                 }
@@ -206,15 +206,15 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
                 }
             }
             Step::Rotate(r) => {
-                let axis = vec3_of(&r.axis).ok_or_else(|| bad("a rotation axis"))?;
-                let deg = f(r.degrees);
+                let axis = vec3_of(&r.get_ref().axis).ok_or_else(|| bad("a rotation axis"))?;
+                let deg = f(r.get_ref().degrees);
                 if !deg.is_finite() {
                     return Err(bad("a rotation angle"));
                 }
                 Transform::rotate_axis(axis, deg.to_radians()).map_err(|e| ctx.geometry(&span, e))?
             }
             Step::Scale(s) => {
-                let s = vec3_of(&s.0).ok_or_else(|| bad("scale"))?;
+                let s = vec3_of(&s.get_ref().0).ok_or_else(|| bad("scale"))?;
                 if s.cmpeq(Vec3::ZERO).any() {
                     return Err(ctx.invalid(
                         &span,
@@ -227,6 +227,7 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
             }
             Step::Shear(s) | Step::ShearAngle(s) => {
                 let angle = matches!(step.get_ref(), Step::ShearAngle(_));
+                let s = s.get_ref();
                 let raw = [s.xy, s.xz, s.yx, s.yz, s.zx, s.zy];
                 let mut k = [0f32; 6];
                 for (o, v) in k.iter_mut().zip(raw) {
@@ -247,7 +248,7 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
             }
             Step::Matrix(rows) => {
                 let mut cols = [[0f32; 4]; 4];
-                for (r, row) in rows.iter().enumerate() {
+                for (r, row) in rows.get_ref().iter().enumerate() {
                     for (c, v) in row.0.iter().enumerate() {
                         let v = f(*v);
                         if !v.is_finite() {

@@ -586,3 +586,31 @@ fn arrays_longer_than_expected_are_refused_where_they_are() {
         assert_eq!(err, format!("test.toml:{line}:{column}: {three}"));
     }
 }
+
+#[test]
+fn a_transform_step_written_as_a_table_is_refused_at_its_value() {
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n[[objects.transform]]\nscale = 0\n",
+            "scale [0, 0, 0] has a zero factor",
+            Some("scale = 0"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n[[objects.transform]]\ntranslate = [1, 0, 0]\n\
+             [[objects.transform]]\nrotate = { axis = [0, 0, 0], degrees = 3 }\n",
+            "axis is zero",
+            Some("rotate ="),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n[[objects.transform]]\n\
+             matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 1, 1]]\n",
+            "not affine",
+            Some("matrix ="),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\n[[objects.transform]]\nrotate_y = 1e39\n",
+            "transform step: a rotation angle must be finite numbers",
+            Some("rotate_y"),
+        ),
+    ]);
+}
