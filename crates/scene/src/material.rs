@@ -177,6 +177,17 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
                     if !sc.is_finite() {
                         return Err(ctx.invalid(&s.span(), "texture scale must be finite"));
                     }
+                    // uv × 0 is one texel everywhere, and no footprint.
+                    if sc.cmpeq(Vec2::ZERO).any() {
+                        let written = ctx.text.get(s.span()).unwrap_or_default();
+                        return Err(ctx.invalid(
+                            &s.span(),
+                            format!(
+                                "texture scale must not be 0 on either axis (it would stretch one texel over \
+                                 the whole surface; a negative scale mirrors), got {written}"
+                            ),
+                        ));
+                    }
                     sc
                 }
                 None => Vec2::ONE,

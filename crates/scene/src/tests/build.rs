@@ -153,3 +153,28 @@ fn errors_point_at_the_value_in_the_string() {
         format!("{}: internal error: `mem/other.png` was not read", place_of(&text, "\"mem/other.png\""))
     );
 }
+
+#[test]
+fn an_image_texture_scale_of_zero_is_refused_at_its_place() {
+    let res = resources();
+    for scale in ["0", "[0, 2]", "[2, 0]", "-0.0"] {
+        let text = format!(
+            "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", scale = {scale} }}\n"
+        );
+        let (line, column) =
+            line_col(&text, text.find(&format!("scale = {scale}")).unwrap() + "scale = ".len());
+        let err = build(&text, &res).err().map(|e| e.to_string()).unwrap_or_default();
+        assert_eq!(
+            err,
+            format!(
+                "mem.toml:{line}:{column}: texture scale must not be 0 on either axis (it would stretch one texel \
+                 over the whole surface; a negative scale mirrors), got {scale}"
+            ),
+        );
+    }
+    // Negative: a mirror image, accepted.
+    let text = format!(
+        "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", scale = [-1, 2] }}\n"
+    );
+    build(&text, &res).unwrap();
+}
