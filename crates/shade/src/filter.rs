@@ -19,8 +19,8 @@ pub enum PixelFilter {
     /// 1.5 pixels and shifted to reach 0 there (pbrt-v4's default).
     Gaussian,
     /// The 4-term Blackman–Harris window over radius 2 pixels (standard
-    /// deviation about 0.39 pixel): smoother than the Gaussian's tail,
-    /// slightly sharper.
+    /// deviation 0.55 pixel, against the truncated Gaussian's 0.48): a
+    /// little softer than the Gaussian, with a smoother tail.
     BlackmanHarris,
 }
 
@@ -211,6 +211,20 @@ mod tests {
             den += w;
         }
         num / den
+    }
+
+    #[test]
+    fn standard_deviations_are_the_documented_ones() {
+        // scene-format.md and the variants' docs: box 1/√12, Gaussian 0.48
+        // (σ 0.5 truncated), Blackman–Harris 0.55.
+        for (f, want) in [
+            (PixelFilter::Box, 1.0 / 12f64.sqrt()),
+            (PixelFilter::Gaussian, 0.479),
+            (PixelFilter::BlackmanHarris, 0.554),
+        ] {
+            let sd = moment(f, 2).sqrt();
+            assert!((sd - want).abs() < 1e-3, "{}: {sd}", f.name());
+        }
     }
 
     #[test]
