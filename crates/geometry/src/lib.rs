@@ -81,6 +81,18 @@ pub fn unit(v: glam::Vec3) -> Option<glam::Vec3> {
     (v / largest).try_normalize()
 }
 
+/// `v` scaled to length 1 as `Vec3::normalize` does it (the same bits)
+/// where its squared length is a normal finite float, else [`unit`]'s
+/// answer: for the hot paths that must not change their results for
+/// ordinary vectors, but must not lose extreme ones (whose squared length
+/// overflows or is subnormal) to a fallback.
+#[inline]
+#[must_use]
+pub fn unit_or_extreme(v: glam::Vec3) -> Option<glam::Vec3> {
+    let l2 = v.length_squared();
+    if (f32::MIN_POSITIVE..=f32::MAX).contains(&l2) { Some(v.normalize()) } else { unit(v) }
+}
+
 /// The unit vector from `from` towards `to`, or `None` where they are the
 /// same point or not finite. Any two finite points work: past f32's range
 /// apart (about 3.4e38), where `to - from` overflows, their halves'

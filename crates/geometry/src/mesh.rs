@@ -162,7 +162,10 @@ impl TriangleMesh {
         let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
         let b0 = 1.0 - b1 - b2;
         let point = b0 * a + b1 * b + b2 * c;
-        let geo_normal = (b - a).cross(c - a).normalize_or(Vec3::Y);
+        // `unit` where the cross product's squared length under- or
+        // overflows (edges below about 1e-11 or above 1e19).
+        let cross = (b - a).cross(c - a);
+        let geo_normal = crate::unit_or_extreme(cross).unwrap_or(Vec3::Y);
         let normal = match &self.normals {
             Some(ns) => {
                 let n = (b0 * ns[ia] + b1 * ns[ib] + b2 * ns[ic]).normalize_or(geo_normal);
@@ -243,6 +246,19 @@ mod tests {
     fn quad(normals: Option<Vec<Vec3>>, uvs: Option<Vec<Vec2>>) -> TriangleMesh {
         let p = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
         TriangleMesh::new(p, normals, uvs, vec![[0, 1, 2], [0, 2, 3]]).unwrap()
+    }
+
+    #[test]
+    fn tiny_and_huge_triangles_have_their_own_normal() {
+        // Edges of 1e-12 and 1e19: the cross product's squared length
+        // under- or overflows f32; the normal is still the face's (+X
+        // here), not a fallback +Y.
+        for s in [1e-12f32, 1e19] {
+            let p = vec![Vec3::ZERO, Vec3::new(0.0, s, 0.0), Vec3::new(0.0, 0.0, s)];
+            let m = TriangleMesh::new(p, None, None, vec![[0, 1, 2]]).unwrap();
+            let h = m.hit(0, 1.0, 0.25, 0.25, Vec3::NEG_X);
+            assert_eq!(h.geo_normal, Vec3::X, "edge {s}");
+        }
     }
 
     #[test]

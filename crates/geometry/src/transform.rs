@@ -131,7 +131,8 @@ impl Transform {
     /// # Errors
     /// [`GeometryError::Degenerate`] if `axis` is zero or not finite.
     pub fn rotate_axis(axis: Vec3, angle: f32) -> Result<Self, GeometryError> {
-        let axis = axis.try_normalize().ok_or(GeometryError::Degenerate("rotation axis is zero"))?;
+        let axis =
+            crate::unit(axis).ok_or(GeometryError::Degenerate("rotation axis is zero or not finite"))?;
         Ok(Self::rotation(Mat3::from_axis_angle(axis, angle)))
     }
 
@@ -219,7 +220,10 @@ impl Transform {
     #[inline]
     #[must_use]
     pub fn normal(&self, n: Vec3) -> Vec3 {
-        Vec3::from(self.normal * Vec3A::from(n)).normalize_or(n)
+        let m = Vec3::from(self.normal * Vec3A::from(n));
+        // `unit` where `m`'s squared length under- or overflows (a scale
+        // of 1e-20 makes the inverse transpose 1e20).
+        crate::unit_or_extreme(m).unwrap_or(n)
     }
 
     /// Whether the map to object space is exactly the identity, so that
@@ -326,6 +330,28 @@ mod tests {
 
     fn t(v: Vec3) -> Transform {
         Transform::translate(v).unwrap()
+    }
+
+    #[test]
+    fn normals_and_axes_of_extreme_scale_stay_unit() {
+        // A uniform scale of 1e-20: the inverse transpose is 1e20, whose
+        // product's squared length overflows; the normal is still the
+        // object's turned, not left in object space.
+        let m = Transform::rotate_y(FRAC_PI_2).then(&Transform::scale(Vec3::splat(1e-20)).unwrap());
+        close3(m.normal(Vec3::X), Vec3::new(0.0, 0.0, -1.0), 1e-6);
+        let m = Transform::rotate_y(FRAC_PI_2).then(&Transform::scale(Vec3::splat(1e20)).unwrap());
+        close3(m.normal(Vec3::X), Vec3::new(0.0, 0.0, -1.0), 1e-6);
+        // Any finite, non-zero axis is a direction.
+        for axis in [Vec3::new(1e20, 0.0, 0.0), Vec3::new(1e-30, 0.0, 0.0), Vec3::new(3e38, 3e38, 0.0)] {
+            let r = Transform::rotate_axis(axis, FRAC_PI_2).unwrap();
+            // The axis itself stays put; a direction across it turns.
+            let d = crate::unit(axis).unwrap();
+            close3(r.vector(d), d, 1e-6);
+            close3(r.vector(Vec3::Z), d.cross(Vec3::Z), 1e-6);
+        }
+        for axis in [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::NAN] {
+            assert!(Transform::rotate_axis(axis, 1.0).is_err(), "{axis}");
+        }
     }
 
     #[test]
