@@ -61,6 +61,7 @@ mod farm;
 mod frames;
 mod info;
 mod interrupt;
+mod memory;
 mod merge;
 mod outputs;
 mod overwrite;
@@ -450,6 +451,16 @@ fn render_to(
         eprintln!(
             "warning: a tile holds its passes as layers; prism merge --aov-files writes them as files of their own"
         );
+    }
+
+    let pixels =
+        region.map_or(u64::from(w) * u64::from(h), |r| u64::from(r.0.width()) * u64::from(r.0.height()));
+    let encoded = plan.uncompressed_bytes(1, 1, aovs);
+    let channels = aovs.iter().map(|a| a.channels() as u64).sum();
+    if let Some(warning) =
+        memory::check(memory::image_bytes(pixels, plan.alpha, channels, encoded), "this render")?
+    {
+        eprintln!("warning: {warning}");
     }
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {

@@ -243,3 +243,54 @@ fn images_are_bit_identical_across_threads_and_runs() {
     // The image is not trivially uniform.
     assert!(exrs[0].iter().any(|&b| b != exrs[0][0]));
 }
+
+/// A render whose image buffers cannot fit is refused before it starts,
+/// with what it needs and what limits it, not aborted by a failed
+/// allocation ("memory allocation of N bytes failed", exit 134).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_render_too_large_for_memory_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    // Under `ulimit -v` (1 GB): 10000 × 10000 pixels with every pass need
+    // about 10 GiB.
+    let out = std::process::Command::new("bash")
+        .current_dir(dir.path())
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 1000000 && exec {} render s.toml -o big.exr --width 10000 --height 10000 --aov all --threads 1",
+            env!("CARGO_BIN_EXE_prism")
+        ))
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .unwrap();
+    assert_clean_failure("ulimit -v", &out);
+    let err = text(&out.stderr);
+    assert!(err.contains("needs about 10.4 GiB") && err.contains("ulimit -v"), "{err}");
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    // More than any machine here holds in memory and swap (12 TB of
+    // colour alone), limits raised to let it through.
+    let out = prism(
+        dir.path(),
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "huge.png",
+            "--width",
+            "1000000",
+            "--height",
+            "1000000",
+            "--max-side",
+            "1000000",
+            "--max-pixels",
+            "1000000000000",
+            "--threads",
+            "1",
+        ],
+    );
+    assert_clean_failure("machine", &out);
+    let err = text(&out.stderr);
+    assert!(err.contains("more than this machine's"), "{err}");
+    assert_eq!(listing(dir.path()), ["s.toml"]);
+}
