@@ -610,6 +610,8 @@ impl<'a> Tracer<'a> {
     /// where the segment enters it; open surfaces (planes, disks,
     /// triangles, open meshes) count at every crossing. Opaque occluders give 0,
     /// from either side: a segment that leaves a closed opaque solid is blocked.
+    /// A mesh crossed exactly at an edge or a corner, which each triangle
+    /// there reports, is crossed once.
     ///
     /// Light crossing an absorbing dielectric (a closed solid with
     /// `transmission > 0` and non-zero `absorption`) is also attenuated by
@@ -639,7 +641,14 @@ impl<'a> Tracer<'a> {
         let mut absorbed = false;
         // Crossings without their hit records: only a textured see-through
         // occluder's colour needs the point and uv.
+        // Mesh crossings counted so far: where the ray runs exactly
+        // through an edge or a corner, every triangle there reports the
+        // same crossing of the surface, which must count once.
+        let mut counted = Counted::default();
         scene.accel.for_each_crossing(&ray, |c| {
+            if c.triangle != SceneHit::NO_TRIANGLE && counted.again(c.object, c.t, c.front_face) {
+                return ControlFlow::Continue(());
+            }
             let closed = is_closed(scene, c.object);
             let m = scene.material_of(c.object);
             if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
@@ -691,5 +700,33 @@ impl<'a> Tracer<'a> {
         let inside = open.to_array().map(|a| if a > tol { a * ray.t_max } else { 0.0 });
         let tau = tau + Vec3::from_array(inside);
         t * (-tau.max(Vec3::ZERO)).exp()
+    }
+}
+
+/// The mesh crossings a shadow ray has counted ([`Tracer::transmittance`]):
+/// object, distance and side of the last [`Counted::KEPT`].
+#[derive(Default)]
+struct Counted {
+    seen: [(u32, f32, bool); Counted::KEPT],
+    len: usize,
+}
+
+impl Counted {
+    /// Crossings remembered; a ray meets more only through many layers.
+    const KEPT: usize = 16;
+
+    /// Whether a crossing of `object` at `t` on side `front` was counted
+    /// already: the same object, the same side and the same distance to a
+    /// few units in the last place (two triangles' tests of one edge point
+    /// round differently). Remembers it otherwise.
+    fn again(&mut self, object: u32, t: f32, front: bool) -> bool {
+        let near = |u: f32| (u - t).abs() <= 8.0 * f32::EPSILON * t.abs().max(u.abs());
+        if self.seen[..self.len.min(Self::KEPT)].iter().any(|&(o, u, f)| o == object && f == front && near(u))
+        {
+            return true;
+        }
+        self.seen[self.len % Self::KEPT] = (object, t, front);
+        self.len += 1;
+        false
     }
 }

@@ -526,3 +526,58 @@ fn index_matched_glass_is_invisible() {
         assert_close(*b, *a, 1e-5);
     }
 }
+
+#[test]
+fn a_shadow_ray_through_a_meshs_shared_edge_crosses_it_once() {
+    // A transparent quad of two triangles above a floor point, the light
+    // straight above: the shadow ray runs exactly along x = z = 0, through
+    // the quad's diagonal, where both triangles report the crossing. The
+    // surface is crossed once: half the light, not a quarter.
+    use prism_bvh::{Accel, Object};
+    use std::sync::Arc;
+    let quad = prism_geometry::TriangleMesh::new(
+        vec![
+            Vec3::new(-1.0, 2.0, -1.0),
+            Vec3::new(1.0, 2.0, -1.0),
+            Vec3::new(1.0, 2.0, 1.0),
+            Vec3::new(-1.0, 2.0, 1.0),
+        ],
+        None,
+        None,
+        vec![[0, 2, 1], [0, 3, 2]],
+    )
+    .expect("valid mesh");
+    let floor = Material { ambient: 0.0, diffuse: 1.0, ..Material::diffuse(Vec3::ONE) };
+    let see_through = Material { transparency: 0.5, ..Material::diffuse(Vec3::ONE) };
+    let lit = |with_quad: bool| {
+        let mut objects = vec![Object::Shape(prism_geometry::Instance::new(plane(Vec3::ZERO, Vec3::Y), I))];
+        if with_quad {
+            objects.push(Object::Mesh { mesh: 0, transform: I });
+        }
+        let scene = prism_shade::Scene {
+            accel: Accel::build(vec![Arc::new(quad.clone())], objects).expect("builds"),
+            object_materials: vec![0, 1],
+            materials: vec![floor.clone(), see_through.clone()],
+            lights: vec![light(Vec3::new(0.0, 4.0, 0.0)).into()],
+            ambient: Vec3::ZERO,
+            background: Vec3::ZERO,
+            environment: None,
+            fog: None,
+        };
+        // From the side, under the quad, onto the floor point (0, 0, 0).
+        let cam = camera(Vec3::new(5.0, 1.0, 0.0), Vec3::ZERO, Vec3::Y, 0.5, 1, 1);
+        let s = prism_shade::RenderSettings {
+            camera: cam,
+            fog: false,
+            spp: 1,
+            max_depth: 2,
+            min_contribution: 0.0,
+            threads: Some(1),
+            antialias: prism_shade::Antialias::default(),
+        };
+        px(&prism_shade::render(&scene, &s, prism_shade::RenderHooks::default()).0, 0, 0)
+    };
+    let (open, shaded) = (lit(false), lit(true));
+    assert!(open.x > 0.01, "{open}");
+    assert_close(shaded / open, Vec3::splat(0.5), 1e-4);
+}
