@@ -325,19 +325,27 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     // (possibly long) load. A scene path with no name to give the image
     // (`.`) is left to the load, which says what is wrong with it.
     let early = args.output.clone().or_else(|| default_output(&args.scene).ok());
+    let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
     if let Some(o) = &early {
-        OutputFormat::from_path(o)?;
+        let format = OutputFormat::from_path(o)?;
         // A turntable writes its frames beside OUT, not at OUT itself.
         let first = match args.frames.frames {
             Some(n) => frames::frame_path(o, args.frames.frame.unwrap_or(0), n),
             None => o.clone(),
         };
-        writable::check_writable(&first, "the image")?;
+        writable::check_writable(&first, overwrite::Output::Image)?;
+        // The passes' files that --aov alone decides (the scene's `aov`
+        // and `aov_preview` are known only after the load).
+        if let Some(aovs) = aov_flag.as_deref().filter(|a| !a.is_empty()) {
+            let (plan, _) = args.image.plan(first.clone(), format, true, args.aov_preview)?;
+            for f in plan.other_files(aovs)? {
+                writable::check_writable(&f, overwrite::Output::Image)?;
+            }
+        }
     }
     if let Some(s) = &args.stats_json {
-        writable::check_writable(s, "the statistics").context("--stats-json")?;
+        writable::check_writable(s, overwrite::Output::Stats).context("--stats-json")?;
     }
-    let aov_flag = args.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
 
     let opts = LoadOptions {
         limits: args.limits.limits(),

@@ -21,7 +21,8 @@ pub enum Output {
 }
 
 impl Output {
-    fn noun(self) -> &'static str {
+    /// What the file holds, in words: "the image", "the statistics".
+    pub fn noun(self) -> &'static str {
         match self {
             Self::Image => "the image",
             Self::Stats => "the statistics",
@@ -39,9 +40,7 @@ impl Output {
 /// Refuses an output path of kind `what` that is (or will replace) one of
 /// `inputs`, or that is a directory.
 pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<()> {
-    if output.is_dir() {
-        bail!("{}: the output is a directory; give {}", output.display(), what.name_hint());
-    }
+    check_not_a_directory(output, what)?;
     if let Some(t) = written(output)
         && inputs.contains(&t)
     {
@@ -51,6 +50,15 @@ pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<(
             output.display(),
             what.noun()
         );
+    }
+    Ok(())
+}
+
+/// Refuses an output path of kind `what` that is an existing directory
+/// (or a link to one): no file can be written there.
+pub fn check_not_a_directory(output: &Path, what: Output) -> Result<()> {
+    if output.is_dir() {
+        bail!("{}: the output is a directory; give {}", output.display(), what.name_hint());
     }
     Ok(())
 }

@@ -6,15 +6,18 @@
 //! (after the load, before the render), [`check_space`] refuses a full
 //! disk and warns when the files may not fit.
 
+use crate::overwrite::{Output, check_not_a_directory};
 use anyhow::{Result, bail};
 use std::path::Path;
 
-/// Checks that `output` (`what` it holds: "the image", "the statistics")
-/// can be written: the deepest existing directory on its path is a
-/// directory (not a file) and accepts a new file (a probe, created and
+/// Checks that `output` (`what` it holds: the image, the statistics)
+/// can be written: it is not itself a directory, the deepest existing
+/// directory on its path is a directory (not a file) and accepts a new file (a probe, created and
 /// removed at once). Directories that do not exist yet are not created
 /// here; a symbolic link must lead into one that exists.
-pub fn check_writable(output: &Path, what: &str) -> Result<()> {
+pub fn check_writable(output: &Path, kind: Output) -> Result<()> {
+    check_not_a_directory(output, kind)?;
+    let what = kind.noun();
     let shown = output.display();
     // The file the writer will replace (through links); a device or pipe
     // is written into, and a path that cannot be followed is refused here.

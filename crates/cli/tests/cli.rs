@@ -207,6 +207,40 @@ fn an_unwritable_output_fails_before_the_scene_is_read_or_rendered() {
 }
 
 #[test]
+fn an_output_that_is_a_directory_fails_before_the_scene_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    // The scene is broken: had it been read first, its error would show.
+    fs::write(dir.path().join("s.toml"), GOOD.replace("radius = 1", "radius = -1")).unwrap();
+    for d in ["d.png", "sj", "x.aov.exr", "y.depth.png"] {
+        fs::create_dir(dir.path().join(d)).unwrap();
+    }
+    for (args, words) in [
+        (
+            &["-o", "d.png"][..],
+            "error: d.png: the output is a directory; give a file name ending in .png or .exr",
+        ),
+        (
+            &["-o", "x.png", "--stats-json", "sj"],
+            "error: --stats-json: sj: the output is a directory; give a file name such as stats.json",
+        ),
+        (
+            &["-o", "x.png", "--aov", "depth"],
+            "error: x.aov.exr: the output is a directory; give a file name ending in .png or .exr",
+        ),
+        (
+            &["-o", "y.exr", "--aov", "depth", "--aov-preview"],
+            "error: y.depth.png: the output is a directory; give a file name ending in .png or .exr",
+        ),
+    ] {
+        let out = prism(dir.path(), &[&["render", "s.toml"][..], args].concat());
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.trim_end(), words, "{args:?}");
+    }
+    assert_eq!(listing(dir.path()), ["d.png", "s.toml", "sj", "x.aov.exr", "y.depth.png"]);
+}
+
+#[test]
 fn a_bad_stats_json_path_fails_before_the_render() {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("s.toml"), GOOD).unwrap();
