@@ -6,7 +6,9 @@
 //! left midway, and prism exits with status 130 without writing anything, or,
 //! with `--partial`, writes the rows finished so far (the rest black) to
 //! the output path the usual atomic way and says so (still status 130: the
-//! image is not the render that was asked for). A second SIGINT exits at
+//! image is not the render that was asked for). Without `--partial`, the
+//! output folders the run made are removed again (`writable::MadeDirs`).
+//! A second SIGINT exits at
 //! once, also with 130. Before the render starts (while the scene loads)
 //! SIGINT has its default effect and ends prism at once; nothing has been
 //! written then.

@@ -384,22 +384,45 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     if let Some(s) = &args.stats_json {
         overwrite::check_output(s, &loaded.inputs, overwrite::Output::Stats)?;
-        // Made now, as the image's: a render never ends in a missing folder.
-        if let Some(dir) = s.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("--stats-json: cannot create the directory {}", dir.display()))?;
-        }
     }
     let (w, h) = loaded.settings.camera.size();
     if let Some(warning) = writable::check_space(&output, plan.uncompressed_bytes(w, h, &aovs))? {
         eprintln!("warning: {warning}");
     }
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+    // The folders are made now, before the render: a render never ends in
+    // a missing folder. Those made here go again if nothing is written
+    // (an error, or Ctrl-C without --partial).
+    let mut made = writable::MadeDirs::default();
+    let result = make_output_dirs(args, &output, &mut made)
+        .and_then(|()| render_frames(args, &loaded, &plan, &output, &aovs, load_seconds));
+    if result.is_err() {
+        made.remove_empty();
     }
+    result
+}
 
-    let frames = frames::plan(&args.frames, &loaded.settings, &output)?;
+/// Makes the missing folders of the image and of `--stats-json`, noting
+/// them in `made`.
+fn make_output_dirs(args: &RenderArgs, output: &Path, made: &mut writable::MadeDirs) -> Result<()> {
+    if let Some(dir) = args.stats_json.as_deref().and_then(Path::parent) {
+        made.make(dir, "the directory").context("--stats-json")?;
+    }
+    if let Some(dir) = output.parent() {
+        made.make(dir, "the output directory")?;
+    }
+    Ok(())
+}
+
+/// Renders the image, or each frame of a turntable, and writes its files.
+fn render_frames(
+    args: &RenderArgs,
+    loaded: &LoadedScene,
+    plan: &outputs::Plan,
+    output: &Path,
+    aovs: &[Aov],
+    load_seconds: f64,
+) -> Result<()> {
+    let frames = frames::plan(&args.frames, &loaded.settings, output)?;
     if args.stats_json.is_some() && frames.len() > 1 {
         return Err(anyhow!(
             "--stats-json describes one render; with --frames, give --frame I (or --frame-from-env)"
@@ -409,7 +432,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     for (k, (settings, frame_output)) in frames.iter().enumerate() {
         overwrite::check_not_an_input(frame_output, &loaded.inputs)?;
         let plan = plan.for_output(frame_output.clone());
-        let mut written = plan.other_files(&aovs)?;
+        let mut written = plan.other_files(aovs)?;
         for f in &written {
             overwrite::check_not_an_input(f, &loaded.inputs)?;
         }
@@ -417,7 +440,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             written.push(frame_output.clone());
             overwrite::check_stats_apart(s, &written)?;
         }
-        render_to(args, &loaded, settings, &plan, &aovs, load_seconds)
+        render_to(args, loaded, settings, &plan, aovs, load_seconds)
             .map_err(|e| if several { interrupt::in_frame(e, k, frame_output, k) } else { e })?;
     }
     Ok(())

@@ -6,10 +6,10 @@
 
 use crate::overwrite::check_not_an_input;
 use crate::tile::{Tile, read_tile};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use prism_shade::{AovImage, AovImages, Image, OutputFormat};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct MergeArgs {
@@ -53,16 +53,20 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
     for f in plan.other_files(&kinds)? {
         check_not_an_input(&f, &inputs)?;
     }
-    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
-    }
+    // A folder made here goes again if nothing is written.
+    let mut made = crate::writable::MadeDirs::default();
     let passes = has_aovs.then_some(&aovs);
-    plan.write_image(&image, None, passes)?;
-    let written = match passes {
-        Some(p) => plan.write_passes(&image, None, p)?,
-        None => Vec::new(),
-    };
+    let result = made
+        .make(args.output.parent().unwrap_or(Path::new("")), "the output directory")
+        .and_then(|()| Ok(plan.write_image(&image, None, passes)?))
+        .and_then(|()| match passes {
+            Some(p) => Ok(plan.write_passes(&image, None, p)?),
+            None => Ok(Vec::new()),
+        });
+    if result.is_err() {
+        made.remove_empty();
+    }
+    let written = result?;
     if !args.quiet {
         outln!("{}: {}×{} from {} tiles", args.output.display(), image.width, image.height, tiles.len());
         for f in &written {

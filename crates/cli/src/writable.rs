@@ -2,13 +2,15 @@
 //! loaded and rendered, check that the output's directory exists or can
 //! be created (no part of its path is a file) and that a file can be
 //! created in it, so that a long render never ends in "cannot write".
-//! Nothing is created by the check itself. Once the image's size is known
-//! (after the load, before the render), [`check_space`] refuses a full
-//! disk and warns when the files may not fit.
+//! Nothing is created by the check itself; [`MadeDirs`] makes the
+//! missing folders later and removes them again if nothing was written.
+//! Once the image's size is known (after the load, before the render),
+//! [`check_space`] refuses a full disk and warns when the files may not
+//! fit.
 
 use crate::overwrite::{Output, check_not_a_directory};
 use anyhow::{Result, bail};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Checks that `output` (`what` it holds: the image, the statistics)
 /// can be written: it is not itself a directory, the deepest existing
@@ -66,6 +68,51 @@ fn existing_dir<'p>(output: &'p Path, what: &str) -> Result<&'p Path> {
                 Some(up) => dir = up,
                 None => return Ok(Path::new(".")),
             },
+        }
+    }
+}
+
+/// The folders an output needs that this run made, so that a run that
+/// ends without writing can take them away again.
+#[derive(Default)]
+pub struct MadeDirs(Vec<PathBuf>);
+
+impl MadeDirs {
+    /// Makes the missing folders of `dir` (its ancestors first), noting
+    /// each one this call made; folders that exist (or that another
+    /// process makes meanwhile) are not noted.
+    ///
+    /// # Errors
+    /// A folder that cannot be made, named by `what` ("the output
+    /// directory").
+    pub fn make(&mut self, dir: &Path, what: &str) -> Result<()> {
+        if dir.as_os_str().is_empty() {
+            return Ok(());
+        }
+        let mut missing: Vec<&Path> =
+            dir.ancestors().take_while(|d| !d.as_os_str().is_empty() && !d.exists()).collect();
+        missing.reverse();
+        for d in missing {
+            match std::fs::create_dir(d) {
+                Ok(()) => self.0.push(d.to_path_buf()),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && d.is_dir() => {}
+                Err(e) => {
+                    return Err(
+                        anyhow::Error::new(e).context(format!("cannot create {what} {}", dir.display()))
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Removes the folders [`MadeDirs::make`] made that are still empty,
+    /// deepest first: after a run that wrote nothing, none of them stays.
+    /// A folder something was written into stays, and so do those above it.
+    pub fn remove_empty(&self) {
+        for d in self.0.iter().rev() {
+            // Fails, and keeps the folder, when it is not empty.
+            let _ = std::fs::remove_dir(d);
         }
     }
 }

@@ -32,9 +32,19 @@ mod signals {
 
     /// [`start`] with the scene `scene`.
     fn start_scene(dir: &Path, scene: &str, args: &[&str]) -> (Child, BufReader<ChildStderr>, String) {
+        start_to(dir, scene, "img.png", args)
+    }
+
+    /// [`start_scene`] writing to `output`.
+    fn start_to(
+        dir: &Path,
+        scene: &str,
+        output: &str,
+        args: &[&str],
+    ) -> (Child, BufReader<ChildStderr>, String) {
         fs::write(dir.join("s.toml"), scene).unwrap();
         let mut child = prism_cmd(dir)
-            .args(["render", "s.toml", "-o", "img.png", "--threads", "1"])
+            .args(["render", "s.toml", "-o", output, "--threads", "1"])
             .args(args)
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -106,6 +116,28 @@ mod signals {
     }
 
     #[test]
+    fn sigint_takes_away_the_folders_the_render_made() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::create_dir(dir.path().join("keep")).unwrap();
+        let (mut child, err, seen) = start_to(dir.path(), &endless_scene(), "keep/new/deeper/img.png", &[]);
+        assert!(dir.path().join("keep/new/deeper").is_dir(), "made before the render");
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(err.contains("nothing was written"), "{err}");
+        assert_eq!(listing(dir.path()), ["keep", "s.toml"], "{err}");
+        assert!(listing(&dir.path().join("keep")).is_empty(), "a folder it did not make stays: {err}");
+        // With --partial the image is written, and its folders stay.
+        let (mut child, err, seen) = start_to(dir.path(), &endless_scene(), "new/img.png", &["--partial"]);
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert_eq!(listing(&dir.path().join("new")), ["img.png"], "{err}");
+    }
+
+    #[test]
     fn sigint_stops_a_render_of_one_pixel_with_many_samples() {
         // One row of one pixel with 2³² − 1 samples: a cancel checked only
         // between rows would not be seen for hours.
@@ -174,6 +206,18 @@ mod signals {
 /// valid one: the scene, an OBJ mesh, its MTL library and its texture
 /// (also reached through a symbolic link and a `./` path). prism refuses
 /// each and leaves every file as it was.
+#[test]
+fn a_render_that_fails_takes_away_the_folders_it_made() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    // Refused once the folders are made: statistics describe one frame.
+    let args = ["render", "s.toml", "-o", "a/b/img.png", "--frames", "3", "--stats-json", "st/s.json"];
+    let out = prism(dir.path(), &args);
+    assert_clean_failure("--frames with --stats-json", &out);
+    assert!(text(&out.stderr).contains("--stats-json describes one render"), "{}", text(&out.stderr));
+    assert_eq!(listing(dir.path()), ["s.toml"]);
+}
+
 #[test]
 fn no_kind_of_input_is_overwritten() {
     let dir = tempfile::tempdir().unwrap();
