@@ -167,7 +167,8 @@ struct RenderArgs {
     #[arg(long)]
     aov_preview: bool,
     /// Write the render's figures to FILE as JSON: seconds per phase, rays per kind,
-    /// BVH size, peak memory.
+    /// BVH size, peak memory. `-` writes them to standard output, and the closing
+    /// statistics line and `wrote` lines go to standard error instead.
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
     #[command(flatten)]
@@ -180,6 +181,18 @@ struct RenderArgs {
     part: tile::PartArgs,
     #[command(flatten)]
     frames: frames::FrameArgs,
+}
+
+impl RenderArgs {
+    /// Whether `--stats-json -` sends the statistics to standard output.
+    fn stats_to_stdout(&self) -> bool {
+        self.stats_json.as_deref() == Some(Path::new("-"))
+    }
+
+    /// The file `--stats-json` names (not `-`, standard output).
+    fn stats_file(&self) -> Option<&Path> {
+        self.stats_json.as_deref().filter(|_| !self.stats_to_stdout())
+    }
 }
 
 #[derive(Args)]
@@ -343,7 +356,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             }
         }
     }
-    if let Some(s) = &args.stats_json {
+    if let Some(s) = args.stats_file() {
         writable::check_writable(s, overwrite::Output::Stats).context("--stats-json")?;
     }
 
@@ -382,7 +395,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
             loaded.settings.spp
         );
     }
-    if let Some(s) = &args.stats_json {
+    if let Some(s) = args.stats_file() {
         overwrite::check_output(s, &loaded.inputs, overwrite::Output::Stats)?;
     }
     let (w, h) = loaded.settings.camera.size();
@@ -404,7 +417,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
 /// Makes the missing folders of the image and of `--stats-json`, noting
 /// them in `made`.
 fn make_output_dirs(args: &RenderArgs, output: &Path, made: &mut writable::MadeDirs) -> Result<()> {
-    if let Some(dir) = args.stats_json.as_deref().and_then(Path::parent) {
+    if let Some(dir) = args.stats_file().and_then(Path::parent) {
         made.make(dir, "the directory").context("--stats-json")?;
     }
     if let Some(dir) = output.parent() {
@@ -436,7 +449,7 @@ fn render_frames(
         for f in &written {
             overwrite::check_not_an_input(f, &loaded.inputs)?;
         }
-        if let Some(s) = &args.stats_json {
+        if let Some(s) = args.stats_file() {
             written.push(frame_output.clone());
             overwrite::check_stats_apart(s, &written)?;
         }
@@ -571,24 +584,33 @@ fn render_to(
             }
         }
     };
-    if let Some(file) = &args.stats_json {
+    if args.stats_json.is_some() {
         let phases =
             stats::Phases { load: load_seconds, render: wall, write: write_start.elapsed().as_secs_f64() };
         let outputs: Vec<&Path> =
             std::iter::once(output.as_path()).chain(written.iter().map(PathBuf::as_path)).collect();
         let json = stats::to_json(loaded, &args.scene, &outputs, phases, &stats);
-        prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())?;
+        match args.stats_file() {
+            Some(file) => prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())?,
+            None => outln!("{json:#}"),
+        }
     }
     if !args.quiet {
         let mrays = stats.rays as f64 / 1e6;
-        outln!(
+        let mut lines = vec![format!(
             "{}: {w}×{h}, {} spp, {wall:.2} s, {mrays:.2} M rays, {:.2} M rays/s",
             output.display(),
             settings.spp,
             if wall > 0.0 { mrays / wall } else { 0.0 }
-        );
-        for f in &written {
-            outln!("wrote {}", f.display());
+        )];
+        lines.extend(written.iter().map(|f| format!("wrote {}", f.display())));
+        for line in lines {
+            // Standard output holds the JSON alone with `--stats-json -`.
+            if args.stats_to_stdout() {
+                eprintln!("{line}");
+            } else {
+                outln!("{line}");
+            }
         }
     }
     Ok(())

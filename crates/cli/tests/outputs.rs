@@ -343,6 +343,23 @@ fn statistics_never_replace_an_image_of_the_render() {
     }
 }
 
+#[test]
+fn statistics_to_standard_output_come_alone_there() {
+    let dir = scene_dir();
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "a.png", "--aov", "depth", "--stats-json", "-"]);
+    let (stdout, err) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "{err}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("standard output is the JSON alone");
+    assert_eq!(json["outputs"], serde_json::json!(["a.png", "a.aov.exr"]), "{stdout}");
+    // The closing line and the files written are on standard error instead.
+    assert!(err.contains("a.png: ") && err.contains("M rays/s") && err.contains("wrote a.aov.exr"), "{err}");
+    assert_eq!(listing(dir.path()), ["a.aov.exr", "a.png", "s.toml"], "no file named -");
+    // `./-` is a file of that name.
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "a.png", "--quiet", "--stats-json", "./-"]);
+    assert!(out.status.success() && out.stdout.is_empty(), "{}", text(&out.stderr));
+    assert!(fs::read_to_string(dir.path().join("-")).unwrap().contains("\"rays\""));
+}
+
 /// A full disk, by a link to `/dev/full` (which every write fills): both
 /// encoders report the file system's error, not an encoding one.
 #[cfg(target_os = "linux")]
