@@ -381,9 +381,15 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let aovs = aov_flag.unwrap_or_else(|| loaded.aovs.clone());
     let previews = args.aov_preview || loaded.aov_preview;
     if previews && aovs.is_empty() {
-        eprintln!(
-            "warning: --aov-preview without AOV passes (--aov or the scene's `aov`) writes no previews"
-        );
+        // Named as the user gave it: the flag, or the scene's key.
+        let asked = if args.aov_preview {
+            "--aov-preview".to_owned()
+        } else if prism_scene::is_stdin_path(&args.scene) {
+            format!("{}: `aov_preview = true`", prism_scene::STDIN_NAME)
+        } else {
+            format!("{}: `aov_preview = true`", args.scene.display())
+        };
+        eprintln!("warning: {asked} without AOV passes (--aov or the scene's `aov`) writes no previews");
     }
     let (plan, warnings) = args.image.plan(output.clone(), format, !aovs.is_empty(), previews)?;
     for w in warnings {

@@ -123,19 +123,10 @@ pub(crate) fn resolve(
     };
     let ambient = ctx.opt_color(render.and_then(|r| r.ambient.as_ref()), "ambient", Vec3::ONE)?;
 
-    let mut aovs = Vec::new();
-    for name in render.and_then(|r| r.aov.as_ref()).map_or(&[][..], |l| l.get_ref().as_slice()) {
-        let found = if name.get_ref() == "all" {
-            Aov::ALL.to_vec()
-        } else {
-            vec![name.get_ref().parse::<Aov>().map_err(|e| ctx.invalid(&name.span(), e.to_string()))?]
-        };
-        for a in found {
-            if !aovs.contains(&a) {
-                aovs.push(a);
-            }
-        }
-    }
+    // `["none"]` is no pass, as `--aov none`.
+    let names = render.and_then(|r| r.aov.as_ref()).map_or(&[][..], |l| l.get_ref().as_slice());
+    let aovs = Aov::parse_names(names.iter().map(|n| n.get_ref().as_str()))
+        .map_err(|(i, e)| ctx.invalid(&names[i].span(), e.to_string()))?;
     let aov_preview = render.and_then(|r| r.aov_preview).unwrap_or(false);
     let antialias = antialias(ctx, render, ov)?;
     Ok(Settings {

@@ -64,21 +64,41 @@ impl Aov {
     }
 
     /// Parses a comma-separated list such as `"depth,normal,object_id"`
-    /// (the form of a `--aov` flag). Spaces around names are ignored, `all`
-    /// stands for every pass, `none` (alone) for no pass, repeated names
-    /// count once, and the passes keep their first order of appearance.
+    /// (the form of a `--aov` flag). Spaces around names are ignored, and
+    /// the names are then read as [`Aov::parse_names`] reads them.
     ///
     /// # Errors
-    /// [`AovParseError`] naming the first item that is not a pass name
-    /// (an empty item included).
+    /// [`AovParseError`]: an empty list, or the first item that is not a
+    /// pass name (an empty item included).
     pub fn parse_list(list: &str) -> Result<Vec<Aov>, AovParseError> {
+        if list.trim().is_empty() {
+            return Err(AovParseError::EmptyList);
+        }
+        Aov::parse_names(list.split(',').map(str::trim)).map_err(|(_, e)| e)
+    }
+
+    /// Reads pass names, one by one (a `--aov` flag's items, or a scene
+    /// file's `aov` array): `all` stands for every pass, `none` (alone)
+    /// for no pass, repeated names count once, and the passes keep their
+    /// first order of appearance. Names are exact: no spaces are trimmed.
+    ///
+    /// # Errors
+    /// The position of the first name that is not a pass name (empty,
+    /// unknown, or `none` beside others), and why.
+    pub fn parse_names<'a>(
+        names: impl IntoIterator<Item = &'a str>,
+    ) -> Result<Vec<Aov>, (usize, AovParseError)> {
+        let names: Vec<&str> = names.into_iter().collect();
         let mut out = Vec::new();
-        if list.trim() == "none" {
+        if names == ["none"] {
             return Ok(out);
         }
-        for item in list.split(',') {
-            let item = item.trim();
-            let found: Vec<Aov> = if item == "all" { Aov::ALL.to_vec() } else { vec![item.parse()?] };
+        for (i, &name) in names.iter().enumerate() {
+            let found: Vec<Aov> = match name {
+                "all" => Aov::ALL.to_vec(),
+                "none" => return Err((i, AovParseError::NoneWithOthers)),
+                _ => vec![name.parse().map_err(|e| (i, e))?],
+            };
             for a in found {
                 if !out.contains(&a) {
                     out.push(a);
@@ -100,19 +120,43 @@ impl FromStr for Aov {
 
     /// Exact, case-sensitive pass names (see [`Aov`]).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| AovParseError { name: s.to_owned() })
+        if s.is_empty() {
+            return Err(AovParseError::EmptyEntry);
+        }
+        Aov::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| AovParseError::Unknown { name: s.to_owned() })
     }
 }
 
-/// A name that is not an AOV pass.
+/// A list of AOV pass names that cannot be read.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "unknown AOV pass `{name}`{}: expected one of depth, normal, geo_normal, albedo, object_id (or all; or none alone)",
-    crate::names::did_you_mean(.name, &Aov::ALL.map(Aov::name))
-)]
-pub struct AovParseError {
-    /// The name given.
-    pub name: String,
+pub enum AovParseError {
+    /// A name that is not a pass.
+    #[error(
+        "unknown AOV pass `{name}`{}: expected one of depth, normal, geo_normal, albedo, object_id (or all; or none alone)",
+        crate::names::did_you_mean(.name, &Aov::ALL.map(Aov::name))
+    )]
+    Unknown {
+        /// The name given.
+        name: String,
+    },
+    /// An empty name (`depth,,normal`, `""` in a file).
+    #[error(
+        "the list of AOV passes has an empty entry: expected names among depth, normal, geo_normal, albedo, \
+         object_id (or all), separated by single commas"
+    )]
+    EmptyEntry,
+    /// No name at all (`--aov ''`).
+    #[error(
+        "the list of AOV passes is empty: give pass names (depth, normal, geo_normal, albedo, object_id, or all), \
+         or none for no pass"
+    )]
+    EmptyList,
+    /// `none` beside other names (`depth,none`).
+    #[error("`none` means no pass and stands alone; leave it out to write the other passes")]
+    NoneWithOthers,
 }
 
 /// One AOV pass: `aov.channels()` floats per pixel, interleaved, rows in

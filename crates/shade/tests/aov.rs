@@ -59,11 +59,23 @@ fn names_parse_and_print() {
     );
     assert_eq!(Aov::parse_list("all"), Ok(Aov::ALL.to_vec()));
     assert_eq!(Aov::parse_list("albedo,all").map(|v| v[0]), Ok(Aov::Albedo));
-    assert_eq!(Aov::parse_list("depth,Normal"), Err(AovParseError { name: "Normal".into() }));
-    assert_eq!(Aov::parse_list("depth,,normal"), Err(AovParseError { name: String::new() }));
+    assert_eq!(Aov::parse_list("depth,Normal"), Err(AovParseError::Unknown { name: "Normal".into() }));
+    assert_eq!(Aov::parse_list("depth,,normal"), Err(AovParseError::EmptyEntry));
+    assert_eq!(Aov::parse_list(","), Err(AovParseError::EmptyEntry));
+    assert_eq!(Aov::parse_list(" "), Err(AovParseError::EmptyList));
     // `none` alone is no pass (a flag that clears the scene's list).
     assert_eq!(Aov::parse_list(" none "), Ok(vec![]));
-    assert!(Aov::parse_list("depth,none").is_err());
+    assert_eq!(Aov::parse_list("depth,none"), Err(AovParseError::NoneWithOthers));
+    // A file's names are exact, and say which one is wrong.
+    assert_eq!(Aov::parse_names(["none"]), Ok(vec![]));
+    assert_eq!(Aov::parse_names([]), Ok(vec![]));
+    assert_eq!(
+        Aov::parse_names(["depth", " normal"]),
+        Err((1, AovParseError::Unknown { name: " normal".into() }))
+    );
+    assert_eq!(Aov::parse_names(["none", "depth"]), Err((0, AovParseError::NoneWithOthers)));
+    let empty = AovParseError::EmptyEntry.to_string();
+    assert!(!empty.contains("did you mean") && !empty.contains("``"), "{empty}");
     let msg = "zbuffer".parse::<Aov>().expect_err("unknown").to_string();
     assert!(msg.contains("zbuffer") && msg.contains("geo_normal"), "{msg}");
     assert_eq!(Aov::Depth.channels(), 1);
