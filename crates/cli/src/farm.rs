@@ -59,6 +59,8 @@ pub struct SlurmArgs {
     #[command(flatten)]
     limits: crate::LimitArgs,
     #[command(flatten)]
+    alpha: crate::outputs::AlphaArgs,
+    #[command(flatten)]
     image: crate::outputs::ImageArgs,
     /// Where the scripts, tiles, logs and task statuses go (shared by the nodes)
     /// [default: OUT-stem.farm next to OUT].
@@ -315,7 +317,7 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     };
     let job = Job { tiles, count, work, output, tile_files };
 
-    if tiles && a.image.alpha() {
+    if tiles && a.alpha.alpha {
         bail!("--alpha: tiles hold no alpha; render the whole image (--frames, or prism render) for it");
     }
     let mut flags = render_flags(&a.overrides, a.aov.as_deref(), &a.limits);
@@ -323,6 +325,9 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     // The image flags go to whoever writes the image: each frame's task, or the merge.
     let image_flags: Vec<String> = a.image.flags().iter().map(|f| sh(f)).collect();
     if !tiles {
+        if a.alpha.alpha {
+            flags.push("--alpha".to_owned());
+        }
         flags.extend(a.image.flags());
     }
     let flags: Vec<String> = flags.iter().map(|f| sh(f)).collect();

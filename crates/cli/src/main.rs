@@ -176,6 +176,8 @@ struct RenderArgs {
     #[command(flatten)]
     limits: LimitArgs,
     #[command(flatten)]
+    alpha: outputs::AlphaArgs,
+    #[command(flatten)]
     image: outputs::ImageArgs,
     #[command(flatten)]
     part: tile::PartArgs,
@@ -350,7 +352,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         // The passes' files that --aov alone decides (the scene's `aov`
         // and `aov_preview` are known only after the load).
         if let Some(aovs) = aov_flag.as_deref().filter(|a| !a.is_empty()) {
-            let (plan, _) = args.image.plan(first.clone(), format, true, args.aov_preview)?;
+            let (plan, _) =
+                args.image.plan(first.clone(), format, args.alpha.alpha, true, args.aov_preview)?;
             for f in plan.other_files(aovs)? {
                 writable::check_writable(&f, overwrite::Output::Image)?;
             }
@@ -391,7 +394,8 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         };
         eprintln!("warning: {asked} without AOV passes (--aov or the scene's `aov`) writes no previews");
     }
-    let (plan, warnings) = args.image.plan(output.clone(), format, !aovs.is_empty(), previews)?;
+    let (plan, warnings) =
+        args.image.plan(output.clone(), format, args.alpha.alpha, !aovs.is_empty(), previews)?;
     for w in warnings {
         eprintln!("warning: {w}");
     }

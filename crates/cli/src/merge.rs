@@ -22,6 +22,9 @@ pub struct MergeArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub image: crate::outputs::ImageArgs,
+    /// Refused: tiles hold no alpha (hidden from the help; kept to say so).
+    #[arg(long, hide = true)]
+    pub alpha: bool,
     /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png).
     #[arg(long)]
     pub aov_preview: bool,
@@ -32,6 +35,9 @@ pub struct MergeArgs {
 
 /// Runs `prism merge`.
 pub fn merge_command(args: &MergeArgs) -> Result<()> {
+    if args.alpha {
+        bail!("--alpha: tiles hold no alpha; render the whole image with --alpha instead");
+    }
     let format = OutputFormat::from_path(&args.output)?;
     let inputs: Vec<PathBuf> = args.tiles.iter().filter_map(|t| std::fs::canonicalize(t).ok()).collect();
     check_not_an_input(&args.output, &inputs)?;
@@ -42,10 +48,7 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
     if args.aov_preview && !has_aovs {
         eprintln!("warning: --aov-preview: the tiles hold no AOV passes, so no previews are written");
     }
-    let (plan, warnings) = args.image.plan(args.output.clone(), format, has_aovs, args.aov_preview)?;
-    if plan.alpha {
-        bail!("--alpha: tiles hold no alpha; render the whole image with --alpha instead");
-    }
+    let (plan, warnings) = args.image.plan(args.output.clone(), format, false, has_aovs, args.aov_preview)?;
     for w in warnings {
         eprintln!("warning: {w}");
     }

@@ -12,12 +12,18 @@ use prism_shade::{
 };
 use std::path::PathBuf;
 
-/// The image flags of `prism render`.
+/// `--alpha`, apart from [`ImageArgs`]: `prism merge` takes those but not
+/// this (tiles hold no alpha).
 #[derive(Args)]
-pub struct ImageArgs {
+pub struct AlphaArgs {
     /// Make the background transparent: RGBA output (PNG with straight alpha, EXR premultiplied).
     #[arg(long)]
-    alpha: bool,
+    pub alpha: bool,
+}
+
+/// The image flags of `prism render` and `prism merge`.
+#[derive(Args)]
+pub struct ImageArgs {
     /// Bits per channel of a PNG: 8 or 16.
     #[arg(long, value_name = "BITS", default_value = "8", value_parser = ["8", "16"])]
     bit_depth: String,
@@ -91,18 +97,10 @@ impl Plan {
 }
 
 impl ImageArgs {
-    /// Whether `--alpha` was given.
-    pub fn alpha(&self) -> bool {
-        self.alpha
-    }
-
     /// The flags that give another `prism render` or `prism merge` these
     /// choices (the defaults are left out).
     pub fn flags(&self) -> Vec<String> {
         let mut v = Vec::new();
-        if self.alpha {
-            v.push("--alpha".to_owned());
-        }
         if self.bit_depth != "8" {
             v.extend(["--bit-depth".to_owned(), self.bit_depth.clone()]);
         }
@@ -118,7 +116,8 @@ impl ImageArgs {
         v
     }
 
-    /// The plan for `output` (format known), with or without passes; warns
+    /// The plan for `output` (format known), with or without a transparent
+    /// background (`alpha`) and passes; warns
     /// (returned as text) about flags that do not apply.
     ///
     /// # Errors
@@ -127,6 +126,7 @@ impl ImageArgs {
         &self,
         output: PathBuf,
         format: OutputFormat,
+        alpha: bool,
         has_aovs: bool,
         previews: bool,
     ) -> Result<(Plan, Vec<String>)> {
@@ -150,8 +150,7 @@ impl ImageArgs {
                 "--aov-files without AOV passes (--aov or the scene's `aov`) writes no pass files".into(),
             );
         }
-        let plan =
-            Plan { output, format, png, alpha: self.alpha, aov_files: self.aov_files, previews, has_aovs };
+        let plan = Plan { output, format, png, alpha, aov_files: self.aov_files, previews, has_aovs };
         Ok((plan, warnings))
     }
 }

@@ -393,3 +393,17 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
         "{e}"
     );
 }
+
+#[test]
+fn help_lists_alpha_only_where_it_can_be_used() {
+    let d = tempfile::tempdir().unwrap();
+    let help = |args: &[&str]| text(&prism(d.path(), args).stdout);
+    let merge = help(&["merge", "--help"]);
+    assert!(merge.contains("--exposure") && !merge.contains("--alpha"), "{merge}");
+    for cmd in [&["render", "--help"][..], &["farm", "slurm", "--help"]] {
+        assert!(help(cmd).contains("--alpha"), "{cmd:?}");
+    }
+    // Given anyway, merge says why it cannot be.
+    let e = fails(d.path(), &["merge", "t.exr", "--alpha", "-o", "x.png"]);
+    assert!(e.contains("--alpha: tiles hold no alpha; render the whole image with --alpha instead"), "{e}");
+}
