@@ -7,7 +7,7 @@
 //! that `--wait` can name failed tasks without Slurm's accounting
 //! database. See `docs/farm.md`.
 
-use crate::overwrite::check_not_an_input;
+use crate::overwrite::{Output, check_not_an_input};
 use crate::tile::INDEX_VARIABLES;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Subcommand};
@@ -316,6 +316,15 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
         Vec::new()
     };
     let job = Job { tiles, count, work, output, tile_files };
+    // The checks of a real run, made for a dry run too: where the image
+    // (or the first frame) goes, and the work directory, can be written.
+    let first = if tiles { job.output.clone() } else { crate::frames::frame_path(&job.output, 0, count) };
+    crate::writable::check_writable(&first, Output::Image)?;
+    let scripts = crate::writable::check_writable(&job.work.join("tasks.sbatch"), Output::Scripts);
+    match &a.work_dir {
+        Some(_) => scripts.context("--work-dir")?,
+        None => scripts?,
+    }
 
     if tiles && a.alpha.alpha {
         bail!("--alpha: tiles hold no alpha; render the whole image (--frames, or prism render) for it");
@@ -383,6 +392,13 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
         }
         return Ok(());
     }
+    // Before anything is written: a run that cannot submit leaves nothing.
+    if find_program("sbatch").is_none() {
+        bail!(
+            "cannot submit: sbatch is not on the PATH (is Slurm installed here?); nothing was written \
+             (--dry-run prints the scripts)"
+        );
+    }
     eprintln!("{note}");
     for d in ["tiles", "logs", "status"] {
         let dir = job.work.join(d);
@@ -442,6 +458,24 @@ fn stem(p: &Path) -> String {
 }
 fn ext(p: &Path) -> String {
     p.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+/// The file `name` names on the `PATH`, as a shell would find it to run
+/// it (on Unix, a file with an execute bit).
+fn find_program(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|d| d.join(name)).find(|p| {
+        let Ok(m) = std::fs::metadata(p) else { return false };
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            m.is_file() && m.permissions().mode() & 0o111 != 0
+        }
+        #[cfg(not(unix))]
+        {
+            m.is_file()
+        }
+    })
 }
 
 /// `sbatch --parsable [--dependency=afterok:AFTER] EXTRA SCRIPT`: the job id.

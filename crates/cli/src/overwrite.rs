@@ -18,6 +18,8 @@ pub enum Output {
     Image,
     /// The statistics of `--stats-json`.
     Stats,
+    /// A farm job's scripts, in its work directory.
+    Scripts,
 }
 
 impl Output {
@@ -26,6 +28,7 @@ impl Output {
         match self {
             Self::Image => "the image",
             Self::Stats => "the statistics",
+            Self::Scripts => "the job's scripts",
         }
     }
 
@@ -33,6 +36,7 @@ impl Output {
         match self {
             Self::Image => "a file name ending in .png or .exr",
             Self::Stats => "a file name such as stats.json",
+            Self::Scripts => "another --work-dir",
         }
     }
 }

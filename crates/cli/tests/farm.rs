@@ -407,3 +407,52 @@ fn help_lists_alpha_only_where_it_can_be_used() {
     let e = fails(d.path(), &["merge", "t.exr", "--alpha", "-o", "x.png"]);
     assert!(e.contains("--alpha: tiles hold no alpha; render the whole image with --alpha instead"), "{e}");
 }
+
+#[test]
+fn a_dry_run_checks_what_a_real_run_would_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("a.toml"), GOOD).unwrap();
+    let base = ["farm", "slurm", "a.toml", "--tiles", "2", "--dry-run", "--no-shared-check"];
+    for (extra, words) in [
+        (
+            &["-o", "/proc/prism-no-such-dir/f.png"][..],
+            "/proc/prism-no-such-dir/f.png: cannot write the image",
+        ),
+        (&["-o", "a.toml/f.png"], "a.toml is a file, not a directory"),
+        (
+            &["-o", "f.png", "--work-dir", "a.toml"],
+            "a.toml/tasks.sbatch: cannot write the job's scripts there: ",
+        ),
+        (&["-o", "f.png", "--work-dir", "/proc/prism-no-such-dir"], "cannot write the job's scripts"),
+    ] {
+        let out = prism(d, &[&base[..], extra].concat());
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(words), "{extra:?}: {err}");
+        assert!(out.stdout.is_empty(), "{extra:?}: no script printed");
+        if extra.contains(&"--work-dir") {
+            assert!(err.starts_with("error: --work-dir: "), "{err}");
+        }
+    }
+    // A turntable's first frame is checked, as render checks it.
+    fs::create_dir(d.join("t.0000.png")).unwrap();
+    let e = fails(
+        d,
+        &["farm", "slurm", "a.toml", "--frames", "2", "-o", "t.png", "--dry-run", "--no-shared-check"],
+    );
+    assert!(e.contains("t.0000.png: the output is a directory"), "{e}");
+    fs::remove_dir(d.join("t.0000.png")).unwrap();
+    // A real run with no sbatch to run writes nothing.
+    let empty = d.join("empty-bin");
+    fs::create_dir(&empty).unwrap();
+    let out = prism_cmd(d)
+        .args(["farm", "slurm", "a.toml", "--tiles", "2", "-o", "f.png", "--no-shared-check"])
+        .env("PATH", &empty)
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("sbatch is not on the PATH") && err.contains("nothing was written"), "{err}");
+    assert_eq!(listing(d), ["a.toml", "empty-bin"]);
+}
