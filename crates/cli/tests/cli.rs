@@ -128,8 +128,14 @@ fn inputs_are_never_overwritten() {
 fn bad_options_and_files_fail_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("s.toml"), GOOD).unwrap();
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 12] = [
         (&["render", "s.toml", "--width", "0"], "--width: image width must be at least 1"),
+        // A name ending in a dot has an empty extension, not a `.` format.
+        (
+            &["render", "s.toml", "-o", "a.png."],
+            "error: a.png.: the output name needs a .png or .exr extension",
+        ),
+        (&["render", "s.toml", "-o", ".png"], "error: .png: the output name needs a .png or .exr extension"),
         (&["render", "s.toml", "--spp", "0"], "--spp:"),
         (&["render", "s.toml", "--width", "100000"], "--max-side"),
         (&["render", "s.toml", "-o", "x.jpg"], "use a .png or .exr"),

@@ -94,7 +94,9 @@ impl OutputFormat {
     /// # Errors
     /// [`OutputError::Invalid`] for another extension or none.
     pub fn from_path(path: &Path) -> Result<Self, OutputError> {
-        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        // `a.png.` has an empty extension: no format, as `a` has none.
+        let ext =
+            path.extension().filter(|e| !e.is_empty()).map(|e| e.to_string_lossy().to_ascii_lowercase());
         match ext.as_deref() {
             Some("png") => Ok(Self::Png),
             Some("exr") => Ok(Self::Exr),
