@@ -82,7 +82,7 @@ pub fn unit(v: glam::Vec3) -> Option<glam::Vec3> {
 }
 
 /// `v` scaled to length 1 as `Vec3::normalize` does it (the same bits)
-/// where its squared length is a normal finite float, else [`unit`]'s
+/// where its squared length is a normal finite float, else [`unit()`]'s
 /// answer: for the hot paths that must not change their results for
 /// ordinary vectors, but must not lose extreme ones (whose squared length
 /// overflows or is subnormal) to a fallback.
