@@ -509,7 +509,10 @@ fn render_to(
 
     let pixels =
         region.map_or(u64::from(w) * u64::from(h), |r| u64::from(r.0.width()) * u64::from(r.0.height()));
-    let encoded = plan.uncompressed_bytes(1, 1, aovs);
+    // Twice the files' uncompressed bytes: the writers copy the image once
+    // into their own layout (planar floats for EXR, tone-mapped bytes for
+    // PNG) and once more for their encoders.
+    let encoded = 2 * plan.uncompressed_bytes(1, 1, aovs);
     let channels = aovs.iter().map(|a| a.channels() as u64).sum();
     if let Some(warning) =
         memory::check(memory::image_bytes(pixels, plan.alpha, channels, encoded), "this render")?

@@ -215,6 +215,19 @@ fn a_render_that_fails_takes_away_the_folders_it_made() {
     let out = prism(dir.path(), &args);
     assert_clean_failure("--frames with --stats-json", &out);
     assert!(text(&out.stderr).contains("--stats-json describes one render"), "{}", text(&out.stderr));
+    // 6000 × 6000 into an EXR fits the colour buffer but not the EXR
+    // writer's copies (it passed the check and then aborted).
+    let out = std::process::Command::new("bash")
+        .current_dir(dir.path())
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 1000000 && exec {} render s.toml -o new/big.exr --width 6000 --height 6000 --threads 1",
+            env!("CARGO_BIN_EXE_prism")
+        ))
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .unwrap();
+    assert_clean_failure("EXR copies", &out);
     assert_eq!(listing(dir.path()), ["s.toml"]);
 }
 
@@ -310,7 +323,7 @@ fn a_render_too_large_for_memory_is_refused_up_front() {
         .unwrap();
     assert_clean_failure("ulimit -v", &out);
     let err = text(&out.stderr);
-    assert!(err.contains("needs about 10.4 GiB") && err.contains("ulimit -v"), "{err}");
+    assert!(err.contains("needs about 15.6 GiB") && err.contains("ulimit -v"), "{err}");
     assert_eq!(out.status.code(), Some(1), "{err}");
     // More than any machine here holds in memory and swap (12 TB of
     // colour alone), limits raised to let it through.
