@@ -607,7 +607,8 @@ impl<'a> Tracer<'a> {
     /// one's see-through fraction (`transparency + transmission`) times its
     /// colour at the crossing, clamped to `[0, 1]` per channel. A closed
     /// solid (sphere, cuboid, cylinder, cone, closed mesh) counts once, at the crossing
-    /// where the segment enters it; open surfaces (planes, disks,
+    /// where the segment enters it (or, for a point inside it, where the
+    /// segment leaves it); open surfaces (planes, disks,
     /// triangles, open meshes) count at every crossing. Opaque occluders give 0,
     /// from either side: a segment that leaves a closed opaque solid is blocked.
     /// A mesh crossed exactly at an edge or a corner, which each triangle
@@ -645,6 +646,7 @@ impl<'a> Tracer<'a> {
         // through an edge or a corner, every triangle there reports the
         // same crossing of the surface, which must count once.
         let mut counted = Counted::default();
+        let mut inside = Inside::default();
         scene.accel.for_each_crossing(&ray, |c| {
             if c.triangle != SceneHit::NO_TRIANGLE && counted.again(c.object, c.t, c.front_face) {
                 return ControlFlow::Continue(());
@@ -669,22 +671,31 @@ impl<'a> Tracer<'a> {
                 t = Vec3::ZERO;
                 return ControlFlow::Break(());
             }
-            // A see-through closed solid counts once, where the segment
-            // enters it.
-            if !c.front_face && closed {
-                return ControlFlow::Continue(());
-            }
-            let colour = match &m.texture {
-                Texture::Solid(solid) => *solid,
-                _ => match scene.accel.crossing_hit(&ray, c) {
-                    Some(sh) => albedo(scene, m, &sh),
-                    // Not reached: the crossing is this structure's own.
-                    None => return ControlFlow::Continue(()),
-                },
+            let tint = || match &m.texture {
+                Texture::Solid(solid) => Some((through * *solid).clamp(Vec3::ZERO, Vec3::ONE)),
+                // `None` is not reached: the crossing is this structure's own.
+                _ => scene
+                    .accel
+                    .crossing_hit(&ray, c)
+                    .map(|sh| (through * albedo(scene, m, &sh)).clamp(Vec3::ZERO, Vec3::ONE)),
             };
-            t *= (through * colour).clamp(Vec3::ZERO, Vec3::ONE);
+            // A see-through closed solid counts once, where the segment
+            // enters it; its exits are counted below, for a segment that
+            // starts inside it.
+            if closed {
+                inside.cross(c.object, c.front_face, tint);
+                if !c.front_face {
+                    return ControlFlow::Continue(());
+                }
+            }
+            let Some(tint) = tint() else { return ControlFlow::Continue(()) };
+            t *= tint;
             if t.max_element() > 0.0 { ControlFlow::Continue(()) } else { ControlFlow::Break(()) }
         });
+        // A segment that starts inside a see-through solid (a point in a
+        // glass case, the light outside) leaves it once more than it
+        // enters: the surface dims it there, once.
+        t *= inside.started_inside();
         // The shadow ray's direction is unit: `t` is distance. A ray toward
         // a directional light (t_max infinite) that starts inside glass
         // crosses an unbounded length of it in each absorbing channel.
@@ -700,6 +711,44 @@ impl<'a> Tracer<'a> {
         let inside = open.to_array().map(|a| if a > tol { a * ray.t_max } else { 0.0 });
         let tau = tau + Vec3::from_array(inside);
         t * (-tau.max(Vec3::ZERO)).exp()
+    }
+}
+
+/// The closed see-through solids a shadow ray crosses
+/// ([`Tracer::transmittance`]): per solid (the first [`Inside::KEPT`]),
+/// entries minus exits and the tint of its first exit.
+#[derive(Default)]
+struct Inside {
+    solids: [(u32, i32, Vec3); Inside::KEPT],
+    len: usize,
+}
+
+impl Inside {
+    /// Solids followed; a ray starts inside more only in deep nesting.
+    const KEPT: usize = 8;
+
+    /// Notes a crossing of `object`, entering where `front`; `tint` gives
+    /// its tint at the crossing (asked for only at a solid's first exit).
+    fn cross(&mut self, object: u32, front: bool, tint: impl FnOnce() -> Option<Vec3>) {
+        let step = if front { 1 } else { -1 };
+        let kept = self.len.min(Self::KEPT);
+        if let Some(s) = self.solids[..kept].iter_mut().find(|s| s.0 == object) {
+            if !front && s.2 == Vec3::ZERO {
+                s.2 = tint().unwrap_or(Vec3::ONE);
+            }
+            s.1 += step;
+        } else if kept < Self::KEPT {
+            let first_exit = if front { Vec3::ZERO } else { tint().unwrap_or(Vec3::ONE) };
+            self.solids[kept] = (object, step, first_exit);
+            self.len += 1;
+        }
+    }
+
+    /// The product of the first-exit tints of the solids left more often
+    /// than entered: those the segment started in.
+    fn started_inside(&self) -> Vec3 {
+        let kept = self.len.min(Self::KEPT);
+        self.solids[..kept].iter().filter(|s| s.1 < 0).map(|s| s.2).product()
     }
 }
 

@@ -27,7 +27,8 @@ use prism_geometry::glam::Vec3;
 /// the light of `clamp((transparency + transmission) · a_occluder, 0, 1)`
 /// per channel: opaque objects block, transparent ones cast lighter shadows
 /// of their own colour. A closed solid (sphere, cuboid, cylinder, cone)
-/// counts once, where the segment enters it; open surfaces (planes, disks,
+/// counts once, where the segment enters it (where it leaves it, for a
+/// point inside); open surfaces (planes, disks,
 /// triangles, mesh faces) count at every crossing. An absorbing
 /// dielectric also darkens them by Beer–Lambert over the segment's length
 /// inside it, as it darkens the view through it.

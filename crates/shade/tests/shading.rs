@@ -581,3 +581,21 @@ fn a_shadow_ray_through_a_meshs_shared_edge_crosses_it_once() {
     assert!(open.x > 0.01, "{open}");
     assert_close(shaded / open, Vec3::splat(0.5), 1e-4);
 }
+
+#[test]
+fn a_point_inside_a_see_through_solid_is_lit_through_its_surface_once() {
+    // A floor point inside a large transparent sphere, the light outside:
+    // the shadow ray leaves the sphere without entering it, and its light
+    // is dimmed there once, by 0.6 · tint, as a point outside it behind it.
+    let floor_albedo = Vec3::new(0.5, 0.7, 0.9);
+    let floor = Material { ambient: 0.2, diffuse: 0.8, ..Material::diffuse(floor_albedo) };
+    let tint = Vec3::new(1.0, 0.5, 0.25);
+    let case = Material { transparency: 0.6, ..Material::diffuse(tint) };
+    let l = light(Vec3::new(4.0, 4.0, 0.0));
+    let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 20.0, 9, 9);
+    let shot = |objects| px(&render(&scene(objects, vec![l], cam), 1, 4), 4, 4);
+    let bare = shot(vec![(plane(Vec3::ZERO, Vec3::Y), I, floor.clone())]);
+    let cased = shot(vec![(plane(Vec3::ZERO, Vec3::Y), I, floor), (sphere(Vec3::ZERO, 3.0), I, case)]);
+    let ambient = 0.2 * floor_albedo;
+    assert_close((cased - ambient) / (bare - ambient), 0.6 * tint, 1e-4);
+}
