@@ -566,6 +566,13 @@ fn render_to(
         let write = || plan.write_image(&image, alpha.as_deref(), passes.as_ref());
         return Err(interrupt.finish(image.height, output, args.partial, write));
     }
+    if stats.nonfinite_samples > 0 {
+        // Shown even with --quiet: the image is wrong where they fell.
+        eprintln!(
+            "warning: {} samples were not finite (a light's power times a material's coefficients overflowed, or NaN) and were counted as black; lower the lights' intensity",
+            stats.nonfinite_samples
+        );
+    }
     let write_start = Instant::now();
     let written = match region {
         Some((bounds, tile)) if plan.format() == OutputFormat::Exr => {

@@ -366,3 +366,24 @@ fn unknown_values_of_the_tracing_variables_are_warned_of() {
     let good = [("PRISM_BVH_KERNEL", "portable"), ("PRISM_PACKETS", "0"), ("PRISM_BVH_BLAS", "bvh2")];
     assert_eq!(run(&good, &["render", "s.toml", "-o", "b.png", "--quiet"]), "");
 }
+
+/// Light that overflows f32 only where two lights meet renders black
+/// there, and the render says so, even with --quiet.
+#[test]
+fn samples_that_are_not_finite_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "[render]\nwidth = 16\nheight = 12\nspp = 1\n\
+                 [camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\n\
+                 [[lights]]\nposition = [2, 5, 5]\nintensity = 3e38\n\
+                 [[lights]]\nposition = [-2, 5, 5]\nintensity = 3e38\n\
+                 [[objects]]\ntype = \"sphere\"\nradius = 1\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "s.png", "--threads", "1", "-q"]);
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("samples were not finite") && err.contains("lower the lights' intensity"), "{err}");
+    // A sane scene says nothing of the kind.
+    std::fs::write(dir.path().join("s.toml"), scene.replace("3e38", "1")).unwrap();
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "s.png", "--threads", "1", "-q"]);
+    assert!(!text(&out.stderr).contains("not finite"), "{}", text(&out.stderr));
+}
