@@ -98,7 +98,7 @@ pub(crate) fn friendly(m: &str, entry: Option<Entry>) -> String {
         && let Some((n, expected)) = rest.split_once(", expected ")
     {
         let values = if n == "1" { "1 value" } else { &format!("{n} values") };
-        return format!("invalid length {n}: expected {}, got {values}", expected_words(expected));
+        return format!("expected {}, got {values}", expected_words(expected));
     }
     for prefix in ["invalid type: ", "invalid value: "] {
         if let Some(rest) = m.strip_prefix(prefix)
@@ -220,7 +220,7 @@ mod tests {
         );
         assert_eq!(
             friendly("invalid length 2, expected an array of length 3", None),
-            "invalid length 2: expected an array of 3 numbers, got 2 values"
+            "expected an array of 3 numbers, got 2 values"
         );
         let m = friendly("unknown field `widht`, expected one of `width`, `height`, `spp`", None);
         assert_eq!(m, "unknown key `widht`; did you mean `width`? (expected one of: width, height, spp)");

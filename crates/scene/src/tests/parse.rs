@@ -525,7 +525,7 @@ fn large_finite_values_are_not_mistaken_for_zero() {
 
 #[test]
 fn arrays_longer_than_expected_are_refused_where_they_are() {
-    let three = "invalid length 4: expected an array of 3 numbers, got 4 values";
+    let three = "expected an array of 3 numbers, got 4 values";
     refused(&[
         ("[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0, 7]\nradius = 1\n", three, Some("center")),
         ("[[lights]]\nposition = [1, 2, 3, 4]\n", three, Some("position = [1, 2, 3, 4]")),
@@ -542,30 +542,30 @@ fn arrays_longer_than_expected_are_refused_where_they_are() {
         (
             "[[objects]]\ntype = \"sphere\"\nradius = 1\n\
              transform = [{ matrix = [[1, 0, 0, 0, 7], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }]\n",
-            "invalid length 5: expected an array of 4 numbers, got 5 values",
+            "expected an array of 4 numbers, got 5 values",
             Some("matrix"),
         ),
         (
             "[[objects]]\ntype = \"sphere\"\nradius = 1\n\
              transform = [{ matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1], [0, 0, 0, 1]] }]\n",
-            "invalid length 5: expected an array of 4 rows [a, b, c, d], got 5 values",
+            "expected an array of 4 rows [a, b, c, d], got 5 values",
             Some("matrix"),
         ),
         (
             "[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\n",
-            "invalid length 4: expected an array of 3 points [x, y, z], got 4 values",
+            "expected an array of 3 points [x, y, z], got 4 values",
             Some("vertices"),
         ),
         // Too short, in the same words: points and rows, not numbers.
         (
             "[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0]]\n",
-            "invalid length 2: expected an array of 3 points [x, y, z], got 2 values",
+            "expected an array of 3 points [x, y, z], got 2 values",
             Some("vertices"),
         ),
         (
             "[[objects]]\ntype = \"sphere\"\nradius = 1\n\
              transform = [{ matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }]\n",
-            "invalid length 3: expected an array of 4 rows [a, b, c, d], got 3 values",
+            "expected an array of 4 rows [a, b, c, d], got 3 values",
             Some("matrix"),
         ),
         // Every value past the last is counted, whatever it is.
