@@ -716,10 +716,10 @@ impl<'a> Tracer<'a> {
 
 /// The closed see-through solids a shadow ray crosses
 /// ([`Tracer::transmittance`]): per solid (the first [`Inside::KEPT`]),
-/// entries minus exits and the tint of its first exit.
+/// entries minus exits and the tint of its first exit, once one is seen.
 #[derive(Default)]
 struct Inside {
-    solids: [(u32, i32, Vec3); Inside::KEPT],
+    solids: [(u32, i32, Option<Vec3>); Inside::KEPT],
     len: usize,
 }
 
@@ -730,17 +730,23 @@ impl Inside {
     /// Notes a crossing of `object`, entering where `front`; `tint` gives
     /// its tint at the crossing (asked for only at a solid's first exit).
     fn cross(&mut self, object: u32, front: bool, tint: impl FnOnce() -> Option<Vec3>) {
-        let step = if front { 1 } else { -1 };
         let kept = self.len.min(Self::KEPT);
-        if let Some(s) = self.solids[..kept].iter_mut().find(|s| s.0 == object) {
-            if !front && s.2 == Vec3::ZERO {
-                s.2 = tint().unwrap_or(Vec3::ONE);
+        let solid = match self.solids[..kept].iter().position(|s| s.0 == object) {
+            Some(k) => &mut self.solids[k],
+            None if kept < Self::KEPT => {
+                self.len += 1;
+                self.solids[kept] = (object, 0, None);
+                &mut self.solids[kept]
             }
-            s.1 += step;
-        } else if kept < Self::KEPT {
-            let first_exit = if front { Vec3::ZERO } else { tint().unwrap_or(Vec3::ONE) };
-            self.solids[kept] = (object, step, first_exit);
-            self.len += 1;
+            None => return,
+        };
+        if front {
+            solid.1 += 1;
+        } else {
+            solid.1 -= 1;
+            if solid.2.is_none() {
+                solid.2 = Some(tint().unwrap_or(Vec3::ONE));
+            }
         }
     }
 
@@ -748,7 +754,7 @@ impl Inside {
     /// than entered: those the segment started in.
     fn started_inside(&self) -> Vec3 {
         let kept = self.len.min(Self::KEPT);
-        self.solids[..kept].iter().filter(|s| s.1 < 0).map(|s| s.2).product()
+        self.solids[..kept].iter().filter(|s| s.1 < 0).filter_map(|s| s.2).product()
     }
 }
 
