@@ -2,12 +2,13 @@
 //! mirror reflection, unbent transparency, dielectric refraction, and fog
 //! over every segment.
 //!
-//! A [`Tracer`] is made per row of the image; it holds no heap data and
+//! A [`Tracer`] is made per row of the image; it holds no shared data and
 //! counts the rays it traces, so that nothing is shared between threads
 //! while a row is traced.
 
 use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
 use crate::light::{Light, LightSample, Target, sample_seed};
+use crate::media::{Media, MediumCrossing, optical_depth};
 use crate::optics::{fresnel, reflect, refract};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
@@ -76,6 +77,9 @@ pub(crate) struct Tracer<'a> {
     pub shadow_rays: u64,
     /// Of `rays`, those traced in packets.
     pub packet_rays: u64,
+    /// A see-through shadow ray's bookkeeping ([`Tracer::transmittance`]),
+    /// kept between rays: emptied, not made again, for each.
+    scratch: ShadowScratch,
 }
 
 /// The footprint cone of the camera's rays: one pixel wide (the image
@@ -159,6 +163,13 @@ fn is_closed(scene: &Scene, object: u32) -> bool {
     scene.is_closed(object)
 }
 
+/// Whether `object` is a medium: a closed solid of a dielectric material
+/// (`transmission > 0`), with an inside that has an index and absorption.
+#[inline]
+fn is_medium(scene: &Scene, object: u32) -> bool {
+    scene.material_of(object).transmission > 0.0 && is_closed(scene, object)
+}
+
 #[inline]
 fn albedo(scene: &Scene, mat: &Material, h: &SceneHit) -> Vec3 {
     match &mat.texture {
@@ -192,6 +203,7 @@ impl<'a> Tracer<'a> {
             rays: 0,
             shadow_rays: 0,
             packet_rays: 0,
+            scratch: ShadowScratch::default(),
         }
     }
 
@@ -200,7 +212,7 @@ impl<'a> Tracer<'a> {
     #[inline]
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
         self.primary = ray.dir;
-        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone)
+        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone, &Media::default())
     }
 
     /// [`Tracer::trace_camera`] with the ray's closest hit already found
@@ -217,7 +229,7 @@ impl<'a> Tracer<'a> {
         self.primary = ray.dir;
         self.pre_point = hit.map(|h| h.hit.point);
         self.pre = pre;
-        let l = self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone);
+        let l = self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone, &Media::default());
         self.pre_point = None;
         l
     }
@@ -341,7 +353,9 @@ impl<'a> Tracer<'a> {
     /// When the ray leaves object `skip_exit` through its back face (the
     /// unbent continuation through a transparent solid), it goes on from
     /// the far side without shading the exit. `cone` is the ray's footprint
-    /// cone (for texture filtering).
+    /// cone (for texture filtering), `media` the dielectrics it is inside
+    /// ([`Media`]).
+    #[allow(clippy::too_many_arguments)]
     fn trace(
         &mut self,
         ray: &Ray,
@@ -350,9 +364,10 @@ impl<'a> Tracer<'a> {
         path: f32,
         skip_exit: u32,
         cone: RayCone,
+        media: &Media,
     ) -> Vec3 {
         let hit = self.scene.accel.closest_hit(ray);
-        self.trace_hit(ray, hit, depth, weight, path, skip_exit, cone)
+        self.trace_hit(ray, hit, depth, weight, path, skip_exit, cone, media)
     }
 
     /// [`Tracer::trace`] past the closest-hit query: `hit` is the ray's.
@@ -366,6 +381,7 @@ impl<'a> Tracer<'a> {
         path: f32,
         skip_exit: u32,
         cone: RayCone,
+        media: &Media,
     ) -> Vec3 {
         self.rays += 1;
         let scene = self.scene;
@@ -384,30 +400,32 @@ impl<'a> Tracer<'a> {
         let weight = weight * fog_t;
         let cone = RayCone { width: cone.width_at(seg), spread: cone.spread };
         let mat = scene.material_of(h.object);
-        let closed = is_closed(scene, h.object);
         // Beer–Lambert over a segment travelled inside an absorbing
-        // dielectric: it ends on the inside of a closed solid's surface (an
-        // open surface has no inside).
-        let absorb = if !h.hit.front_face && closed && mat.transmission > 0.0 && mat.absorption != Vec3::ZERO
-        {
-            (-mat.absorption * seg).exp()
-        } else {
-            Vec3::ONE
+        // dielectric: the innermost medium the ray is in or, where it was
+        // not seen entering one (a camera inside glass), the solid whose
+        // inner surface the segment ends on.
+        let medium = media
+            .innermost()
+            .or_else(|| (!h.hit.front_face && is_medium(scene, h.object)).then_some(h.object));
+        let absorb = match medium.map(|m| scene.material_of(m).absorption) {
+            Some(a) if a != Vec3::ZERO => (-a * seg).exp(),
+            _ => Vec3::ONE,
         };
-        if h.object == skip_exit && !h.hit.front_face && closed {
+        if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
             // The unbent ray through a see-through solid crossed its inside
             // too, and is absorbed as the refracted one is.
             let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
-            let l = self.trace(&next, depth, weight * absorb, end, NO_OBJECT, cone) * absorb;
+            let media = media.left(h.object);
+            let l = self.trace(&next, depth, weight * absorb, end, NO_OBJECT, cone, &media) * absorb;
             return self.fog_blend(l, fog_t);
         }
-        let l = self.shade(ray, &h, mat, depth, weight * absorb, end, cone) * absorb;
+        let l = self.shade(ray, &h, mat, depth, weight * absorb, end, cone, media) * absorb;
         self.fog_blend(l, fog_t)
     }
 
     /// Radiance leaving the hit `h` toward the origin of `ray`, by the
     /// material formula (see [`Material`]); `cone` is the ray's cone, its
-    /// width the one at the hit.
+    /// width the one at the hit, and `media` the dielectrics the ray is in.
     #[allow(clippy::too_many_arguments)]
     fn shade(
         &mut self,
@@ -418,6 +436,7 @@ impl<'a> Tracer<'a> {
         weight: Vec3,
         path: f32,
         cone: RayCone,
+        media: &Media,
     ) -> Vec3 {
         let hit = &h.hit;
         let d = ray.dir.normalize_or(Vec3::NEG_Z);
@@ -431,35 +450,45 @@ impl<'a> Tracer<'a> {
         if depth >= self.max_depth {
             return out;
         }
-        // Dielectric split: Fresnel reflectance F and the refracted direction.
-        let (fresnel, refracted) = if mat.transmission > 0.0 {
-            let (n1, n2) = if hit.front_face { (1.0, mat.ior) } else { (mat.ior, 1.0) };
+        // Dielectric split: Fresnel reflectance F and the refracted direction,
+        // between the material's index and that of the medium around it.
+        let (fresnel, refracted, eta) = if mat.transmission > 0.0 {
+            let outside = media.around(h.object).map_or(1.0, |m| self.scene.material_of(m).ior);
+            let (n1, n2) = if hit.front_face { (outside, mat.ior) } else { (mat.ior, outside) };
             match refract(d, n, n1 / n2) {
-                Some(t) => (fresnel(-d.dot(n), n1, n2), Some(t)),
-                None => (1.0, None),
+                Some(t) => (fresnel(-d.dot(n), n1, n2), Some(t), n1 / n2),
+                None => (1.0, None, n1 / n2),
             }
         } else {
-            (0.0, None)
+            (0.0, None, 1.0)
+        };
+        // The media beyond the surface: a ray through a dielectric solid's
+        // surface enters or leaves it.
+        let through = if (mat.transmission > 0.0 || mat.transparency > 0.0) && is_medium(self.scene, h.object)
+        {
+            if hit.front_face { media.entered(h.object) } else { media.left(h.object) }
+        } else {
+            *media
         };
         // Mirror reflection and the dielectric's reflected part share one ray.
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 && self.worth(weight * k_mirror) {
             let r = Ray::spawn_scaled(hit.point, hit.geo_normal, reflect(d, n), self.offset);
             let c = cone.reflect(cone.width, curvature(self.scene, h));
-            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c);
+            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c, media);
         }
         if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
             let r = Ray::spawn_scaled(hit.point, hit.geo_normal, d, self.offset);
             let skip = if hit.front_face { h.object } else { NO_OBJECT };
-            out += mat.transparency * self.trace(&r, depth + 1, weight * mat.transparency, path, skip, cone);
+            let w = weight * mat.transparency;
+            out += mat.transparency * self.trace(&r, depth + 1, w, path, skip, cone, &through);
         }
         if let Some(t) = refracted {
             let k = mat.transmission * (1.0 - fresnel);
             if k > 0.0 && self.worth(weight * k) {
                 let r = Ray::spawn_scaled(hit.point, hit.geo_normal, t, self.offset);
-                let eta = if hit.front_face { 1.0 / mat.ior } else { mat.ior };
                 let c = cone.refract(cone.width, eta, curvature(self.scene, h));
-                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c);
+                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c, &through);
             }
         }
         out
@@ -618,9 +647,9 @@ impl<'a> Tracer<'a> {
     /// `transmission > 0` and non-zero `absorption`) is also attenuated by
     /// Beer–Lambert, `exp(−absorption · L)` over the length `L` of the
     /// segment inside it, as the view through it is: green glass casts a
-    /// green shadow. `L` is the sum of exit minus entry distances (crossings
-    /// come unordered); a segment that starts inside a solid counts from its
-    /// start, one that ends inside (a light in the glass) up to its end.
+    /// green shadow. Where solids nest, the innermost absorbs
+    /// ([`crate::media`]); a segment that starts inside a solid counts from
+    /// its start, one that ends inside (a light in the glass) up to its end.
     fn shadow(&mut self, hit: &Hit, target: Target) -> Vec3 {
         self.rays += 1;
         self.shadow_rays += 1;
@@ -635,33 +664,26 @@ impl<'a> Tracer<'a> {
             return if scene.accel.occluded(&ray) { Vec3::ZERO } else { Vec3::ONE };
         }
         let mut t = Vec3::ONE;
-        // Optical depth Σ absorption · (±distance), and the absorption of
-        // the solids entered and not left.
-        let (mut tau, mut open) = (Vec3::ZERO, Vec3::ZERO);
-        let mut peak = 0.0f32;
+        // Mesh crossings counted so far: where the ray runs exactly
+        // through an edge or a corner, every triangle there reports the
+        // same crossing of the surface, which must count once. The solids
+        // entered and left, and the media's crossings (and whether any
+        // medium there absorbs).
+        let ShadowScratch { counted, inside, media } = &mut self.scratch;
+        (counted.len, inside.len) = (0, 0);
+        media.clear();
         let mut absorbed = false;
         // Crossings without their hit records: only a textured see-through
         // occluder's colour needs the point and uv.
-        // Mesh crossings counted so far: where the ray runs exactly
-        // through an edge or a corner, every triangle there reports the
-        // same crossing of the surface, which must count once.
-        let mut counted = Counted::default();
-        let mut inside = Inside::default();
         scene.accel.for_each_crossing(&ray, |c| {
             if c.triangle != SceneHit::NO_TRIANGLE && counted.again(c.object, c.t, c.front_face) {
                 return ControlFlow::Continue(());
             }
             let closed = is_closed(scene, c.object);
             let m = scene.material_of(c.object);
-            if closed && m.transmission > 0.0 && m.absorption != Vec3::ZERO {
-                absorbed = true;
-                peak = peak.max(m.absorption.max_element());
-                let s = m.absorption * c.t;
-                if c.front_face {
-                    (tau, open) = (tau - s, open + m.absorption);
-                } else {
-                    (tau, open) = (tau + s, open - m.absorption);
-                }
+            if closed && m.transmission > 0.0 {
+                absorbed |= m.absorption != Vec3::ZERO;
+                media.push((c.t, c.object, c.front_face));
             }
             let through = m.transparency + m.transmission;
             // An opaque surface blocks from either side: a segment that
@@ -698,20 +720,25 @@ impl<'a> Tracer<'a> {
         t *= inside.started_inside();
         // The shadow ray's direction is unit: `t` is distance. A ray toward
         // a directional light (t_max infinite) that starts inside glass
-        // crosses an unbounded length of it in each absorbing channel.
-        // Entries and exits of different solids arrive in any order, so
-        // `open` may keep a rounding remainder (0.6 + 0.1 − 0.6 − 0.1 ≠ 0 in
-        // f32): only what exceeds that counts as still inside.
-        if !absorbed {
-            // No absorbing solid on the segment: `tau` and `open` are zero,
-            // and `exp(-0)` is 1.
-            return t;
+        // crosses an unbounded length of it in each absorbing channel. An
+        // opaque occluder ended the walk early with `t` zero.
+        if absorbed && t.max_element() > 0.0 {
+            t *= (-optical_depth(media, ray.t_max, |m| scene.material_of(m).absorption)).exp();
         }
-        let tol = 1e-4 * peak;
-        let inside = open.to_array().map(|a| if a > tol { a * ray.t_max } else { 0.0 });
-        let tau = tau + Vec3::from_array(inside);
-        t * (-tau.max(Vec3::ZERO)).exp()
+        t
     }
+}
+
+/// What [`Tracer::transmittance`] notes along one shadow ray.
+#[derive(Default)]
+struct ShadowScratch {
+    /// The mesh crossings counted.
+    counted: Counted,
+    /// The closed see-through solids entered and left.
+    inside: Inside,
+    /// The crossings of media's surfaces, for the optical depth once the
+    /// walk is done (they come unordered).
+    media: Vec<MediumCrossing>,
 }
 
 /// The closed see-through solids a shadow ray crosses

@@ -66,6 +66,7 @@ mod integrator;
 mod layers;
 mod light;
 mod material;
+mod media;
 mod mipmap;
 mod names;
 pub mod optics;

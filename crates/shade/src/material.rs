@@ -36,11 +36,14 @@ use prism_geometry::glam::Vec3;
 /// `L_mirror` reflects the ray about `n`; `L_straight` continues it from
 /// the far side of a closed solid (its exit is not shaded); the dielectric
 /// enters when the ray meets the outer side (`Hit::front_face`, ratio
-/// `1 / ior`) and leaves otherwise (ratio `ior`). Every segment travelled
-/// inside a closed absorbing dielectric (ending on the inner side of its
-/// surface), unbent or refracted, is multiplied by
-/// `exp(−absorption · length)`; open surfaces (planes, disks, triangles,
-/// open meshes) have no inside and absorb nothing. `L_straight` and
+/// `n_around / ior`) and leaves otherwise (ratio `ior / n_around`), where
+/// `n_around` is the `ior` of the closed dielectric around the object along
+/// the ray's path, 1 outside all of them (nested dielectrics: see
+/// `media.rs`). Every segment a ray travels inside a closed absorbing
+/// dielectric, unbent, refracted or reflected, whatever it ends on, is
+/// multiplied by `exp(−absorption · length)` of the innermost one there;
+/// open surfaces (planes, disks, triangles, open meshes) have no inside and
+/// absorb nothing. `L_straight` and
 /// `L_refracted` are not tinted by the albedo; use `absorption` for
 /// coloured glass.
 #[derive(Clone, Debug, PartialEq)]
@@ -63,7 +66,8 @@ pub struct Material {
     pub transparency: f32,
     /// Refractive (dielectric) weight in `[0, 1]`.
     pub transmission: f32,
-    /// Index of refraction of the inside (outside is 1).
+    /// Index of refraction of the inside (outside: that of the dielectric
+    /// around the object, 1 if none).
     pub ior: f32,
     /// Beer–Lambert absorption coefficient per scene unit inside the
     /// object, per channel (zero: clear).
