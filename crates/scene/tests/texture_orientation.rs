@@ -136,11 +136,21 @@ fn every_shape_reads_like_the_image_from_outside() {
         }
         assert_quadrants(what, &pixels, k);
     }
-    // A wall plane facing +Z: world-unit uv from its point, so the image
-    // fills [0, 1] × [−1, 0] of the wall, upright.
-    let wall = "type = \"plane\"\nnormal = [0, 0, 1]";
-    let pixels = render_view(d, wall, "uv", [0.5, -0.5, 4.0], [0.5, -0.5, 0.0], y);
-    assert_quadrants("wall plane", &pixels, 6);
+    // Wall planes facing each way: world-unit uv from the point, so the
+    // image fills one unit square of the wall right of and below the point
+    // (seen from the front), upright.
+    let walls = [
+        ("wall plane facing +Z", [0.0, 0.0, 1.0], [0.5, -0.5, 0.0]),
+        ("wall plane facing −Z", [0.0, 0.0, -1.0], [-0.5, -0.5, 0.0]),
+        ("wall plane facing +X", [1.0, 0.0, 0.0], [0.0, -0.5, -0.5]),
+        ("wall plane facing −X", [-1.0, 0.0, 0.0], [0.0, -0.5, 0.5]),
+    ];
+    for (what, n, centre) in walls {
+        let wall = format!("type = \"plane\"\nnormal = {n:?}");
+        let eye = Vec3::from_array(centre) + 4.0 * Vec3::from_array(n);
+        let pixels = render_view(d, &wall, "uv", eye.to_array(), centre, y);
+        assert_quadrants(what, &pixels, 6);
+    }
     // A floor plane seen from above, the image's top toward −Z.
     let floor = "type = \"plane\"";
     let pixels = render_view(d, floor, "uv", [0.5, 4.0, 0.5], [0.5, 0.0, 0.5], [0.0, 0.0, -1.0]);

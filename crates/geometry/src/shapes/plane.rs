@@ -9,10 +9,13 @@ use glam::{Vec2, Vec3};
 /// uv: world-unit coordinates along two tangent axes: `u` along
 /// [`Plane::tangent`], `v` along `tangent × normal`, measured from `point`,
 /// so that an image seen from the normal's side is not mirrored.
-/// The tangent is +X projected onto the plane (+Z when the normal is near
-/// ±X), so for a floor with `normal = +Y`, `u` runs along +X and `v` along
-/// +Z (the image's top toward −Z), and for a wall facing +Z, `u` runs along
-/// +X and `v` along −Y (the image's top up).
+/// On a wall or slope (a normal more than about 26° from ±Y) the tangent is
+/// `Y × normal`, level and to the right of a viewer on the normal's side,
+/// so `v` runs down the slope and an image stands upright, whichever way
+/// the wall faces: facing +Z, `u` runs along +X and `v` along −Y; facing
+/// −Z, `u` along −X; facing +X, `u` along −Z. On a floor or ceiling the
+/// tangent is +X projected onto the plane: with `normal = +Y`, `u` runs
+/// along +X and `v` along +Z (the image's top toward −Z).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
     point: Vec3,
@@ -39,9 +42,14 @@ impl Plane {
         // Any finite size: `unit` where the squared length under- or overflows.
         let normal =
             normal.try_normalize().or_else(|| crate::unit(normal)).ok_or(GeometryError::Degenerate(zero))?;
-        // Tangent: +X projected onto the plane, or +Z when the normal is ~X.
-        let seed = if normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Z };
-        let tangent = (seed - normal * normal.dot(seed)).normalize();
+        // Tangent: level and to the right, seen from the normal's side, on a
+        // wall or slope; +X projected onto the plane on a floor or ceiling.
+        // Either has length ≥ √(1 − 0.9²) before normalising.
+        let tangent = if normal.y.abs() < 0.9 {
+            Vec3::Y.cross(normal).normalize()
+        } else {
+            (Vec3::X - normal * normal.x).normalize()
+        };
         let bitangent = tangent.cross(normal);
         Ok(Self { point, normal, tangent, bitangent })
     }
@@ -132,12 +140,34 @@ mod tests {
         let p = Plane::new(Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
         let h = p.intersect(&Ray::new(Vec3::new(0.5, 0.25, 0.0), Vec3::NEG_Z)).unwrap();
         check_hit(&h, 2.0, Vec3::new(0.5, 0.25, -2.0), Vec3::Z, Vec2::new(0.5, -0.25), true);
-        // Normal near ±X: the tangent falls back to +Z; the frame is orthonormal.
+        // A wall facing −X: the tangent is level, to the right seen from −X.
         let side = Plane::new(Vec3::ZERO, Vec3::NEG_X).unwrap();
         close3(side.tangent(), Vec3::Z, 1e-6);
         let h = side.intersect(&Ray::new(Vec3::new(-1.0, 2.0, 3.0), Vec3::X)).unwrap();
         // The ray comes from −X, the side the normal points to.
         check_hit(&h, 1.0, Vec3::new(0.0, 2.0, 3.0), Vec3::NEG_X, Vec2::new(3.0, -2.0), true);
+    }
+
+    #[test]
+    fn every_wall_reads_upright_from_its_front() {
+        // For any wall or slope: u level and to the right of a viewer on the
+        // normal's side (looking along −normal with +Y up), v down the
+        // slope, and the frame orthonormal and right-handed with the normal.
+        for k in 0..72 {
+            for tilt in [-0.8f32, -0.3, 0.0, 0.4, 0.85] {
+                let a = (k as f32 * 5.0).to_radians();
+                let n = Vec3::new(a.sin(), tilt, a.cos()).normalize();
+                let p = Plane::new(Vec3::ZERO, n).unwrap();
+                let (u, v) = (p.tangent(), p.tangent().cross(p.normal()));
+                let right = (-n).cross(Vec3::Y).normalize();
+                close3(u, right, 1e-5);
+                assert!(u.y.abs() < 1e-6 && v.y < 0.0, "n {n}: u {u}, v {v}");
+                assert!((u.cross(v).dot(n) + 1.0).abs() < 1e-5 && u.dot(n).abs() < 1e-6);
+            }
+        }
+        // A floor keeps +X; a ceiling too.
+        close3(floor().tangent(), Vec3::X, 1e-6);
+        close3(Plane::new(Vec3::ZERO, Vec3::NEG_Y).unwrap().tangent(), Vec3::X, 1e-6);
     }
 
     #[test]
