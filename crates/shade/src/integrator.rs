@@ -411,6 +411,18 @@ impl<'a> Tracer<'a> {
             Some(a) if a != Vec3::ZERO => (-a * seg).exp(),
             _ => Vec3::ONE,
         };
+        if h.hit.front_face
+            && (h.object == skip_exit || media.contains(h.object))
+            && is_closed(scene, h.object)
+        {
+            // Inside a closed solid its surface is met from behind: its
+            // front face here is the entry met again, where the ray went in
+            // through a mesh's edge or corner and the next triangle's plane
+            // lies beyond the ray's offset. Go on through it, unshaded.
+            let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
+            let l = self.trace(&next, depth, weight * absorb, end, skip_exit, cone, media) * absorb;
+            return self.fog_blend(l, fog_t);
+        }
         if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
             // The unbent ray through a see-through solid crossed its inside
             // too, and is absorbed as the refracted one is.

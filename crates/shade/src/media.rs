@@ -43,6 +43,12 @@ impl Media {
         self.ids[..self.len].iter().rev().find(|&&i| i != object).copied()
     }
 
+    /// Whether the ray is inside `object` (as far as it knows).
+    #[inline]
+    pub(crate) fn contains(&self, object: u32) -> bool {
+        self.ids[..self.len].contains(&object)
+    }
+
     /// These media and then `object`, entered through its surface.
     #[inline]
     #[must_use]
@@ -102,7 +108,7 @@ pub(crate) fn optical_depth(
     for &(_, object, front) in crossings.iter() {
         if front {
             entered = entered.entered(object);
-        } else if entered.ids[..entered.len].contains(&object) {
+        } else if entered.contains(object) {
             entered = entered.left(object);
         } else if let Some(s) = started.get_mut(n) {
             *s = object;
@@ -145,6 +151,7 @@ mod tests {
         assert_eq!(m.around(5), Some(3));
         assert_eq!(m.around(3), Some(5));
         assert_eq!(m.around(7), Some(5));
+        assert!(m.contains(3) && m.contains(5) && !m.contains(7));
         assert_eq!(m.left(5).innermost(), Some(3));
         assert_eq!(m.left(5).left(3), Media::default());
         // Overlapping solids: leaving the outer one keeps the inner.

@@ -649,6 +649,52 @@ fn a_shadow_ray_through_a_meshs_shared_edge_crosses_it_once() {
 }
 
 #[test]
+fn a_ray_through_a_closed_meshs_corner_is_shaded_once() {
+    // A see-through octahedron (a closed mesh) and glass one, seen along
+    // the Z axis exactly through the corner at (0, 0, 1), where four
+    // triangles meet: the surface is entered there once. Half-transparent
+    // and flat white, the corner pixel is 0.5 like its neighbours, not 0.75.
+    use prism_bvh::{Accel, Object};
+    use std::sync::Arc;
+    let corners = vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Y, Vec3::NEG_Z];
+    let faces = vec![[0, 1, 2], [1, 3, 2], [3, 4, 2], [4, 0, 2], [1, 0, 5], [3, 1, 5], [4, 3, 5], [0, 4, 5]];
+    let gem = prism_geometry::TriangleMesh::new(corners, None, None, faces).expect("valid mesh");
+    assert!(gem.is_closed());
+    let shot = |m: Material| {
+        let scene = prism_shade::Scene {
+            accel: Accel::build(vec![Arc::new(gem.clone())], vec![Object::Mesh { mesh: 0, transform: I }])
+                .expect("builds"),
+            object_materials: vec![0],
+            materials: vec![m],
+            lights: vec![],
+            ambient: Vec3::ONE,
+            background: Vec3::new(0.2, 0.4, 0.6),
+            environment: None,
+            fog: None,
+        };
+        let s = prism_shade::RenderSettings {
+            camera: camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 20.0, 21, 21),
+            fog: false,
+            spp: 1,
+            max_depth: 8,
+            min_contribution: 0.0,
+            threads: Some(1),
+            antialias: prism_shade::Antialias::default(),
+        };
+        prism_shade::render(&scene, &s, prism_shade::RenderHooks::default()).0
+    };
+    let img = shot(Material { transparency: 0.5, ..flat(Vec3::ONE) });
+    let want = 0.5 * Vec3::ONE + 0.5 * Vec3::new(0.2, 0.4, 0.6);
+    assert_close(px(&img, 10, 10), want, 1e-5);
+    assert_close(px(&img, 11, 10), want, 1e-5);
+    // Index-matched absorbing glass: no bending, no reflection, so the
+    // corner's ray is absorbed over the octahedron's axis, 2 long, once.
+    let absorption = Vec3::new(0.1, 0.2, 0.3);
+    let img = shot(Material { absorption, ..glass(1.0) });
+    assert_close(px(&img, 10, 10), Vec3::new(0.2, 0.4, 0.6) * (-absorption * 2.0).exp(), 1e-4);
+}
+
+#[test]
 fn a_point_inside_a_see_through_solid_is_lit_through_its_surface_once() {
     // A floor point inside a large transparent sphere, the light outside:
     // the shadow ray leaves the sphere without entering it, and its light
