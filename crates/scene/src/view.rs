@@ -202,11 +202,27 @@ pub(crate) fn choose_camera<'f>(
             names.push(n.get_ref());
         }
     }
-    let Some(wanted) = name else {
-        return all.first().copied().ok_or_else(|| {
+    let chosen = match name {
+        None => all.first().copied().ok_or_else(|| {
             ctx.invalid_file("missing [camera] table (position and look_at are required), or [[cameras]]")
-        });
+        })?,
+        Some(wanted) => find_camera(&all, &names, wanted)?,
     };
+    // Every other camera is checked too, as `--camera` would find it: a
+    // scene that loads has no camera that fails when chosen. (The chosen
+    // one is checked with the overrides, by [`camera`].)
+    for c in all.iter().filter(|c| !std::ptr::eq(**c, chosen)) {
+        camera(ctx, &CameraSource::File(c), &Overrides::default(), 1, 1)?;
+    }
+    Ok(chosen)
+}
+
+/// The camera of `all` named `wanted` (`names`: every camera's name).
+fn find_camera<'f>(
+    all: &[&'f Spanned<CameraDef>],
+    names: &[&str],
+    wanted: &CameraName,
+) -> Result<&'f Spanned<CameraDef>> {
     all.iter()
         .find(|c| c.get_ref().name.as_ref().is_some_and(|n| n.get_ref() == wanted.as_str()))
         .copied()

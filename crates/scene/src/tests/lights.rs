@@ -187,6 +187,37 @@ fn bad_cameras_are_refused_at_their_key() {
             None,
         ),
     ]);
+    // Cameras that are not chosen are checked as `--camera` would find
+    // them: a scene that loads has no camera that fails when chosen.
+    refused(&[
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 1e39, 1]\nlook_at = [0, 0, 0]\n",
+            "camera position",
+            Some("1e39"),
+        ),
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 1]\n",
+            "look_at must differ",
+            Some("look_at = [0, 0, 1]"),
+        ),
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nup = [0, 0, 0]\n",
+            "camera up",
+            Some("up = [0, 0, 0]"),
+        ),
+        (
+            "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 180\n",
+            "camera fov",
+            Some("fov = 180"),
+        ),
+    ]);
+    // Chosen, the first camera's problem is found; a good one chosen, the
+    // bad first camera is still refused.
+    let bad_first = format!("{BASE}{CAMERAS}").replace("look_at = [0, 1, 0]", "look_at = [0, 2, 10]");
+    for chosen in [None, Some("top")] {
+        let err = with_camera(&bad_first, chosen).unwrap_err().to_string();
+        assert!(err.contains("look_at must differ"), "{chosen:?}: {err}");
+    }
     // The file's first camera is checked like the others.
     let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\naperture = -1");
     assert!(parse(&text).unwrap_err().to_string().contains("aperture"));
