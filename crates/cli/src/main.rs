@@ -255,6 +255,7 @@ impl LimitArgs {
             max_side: self.max_side,
             max_pixels: self.max_pixels,
             max_spp: self.max_spp,
+            memory: memory::room(),
             ..Limits::default()
         }
     }

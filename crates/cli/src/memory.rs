@@ -27,7 +27,7 @@ pub fn image_bytes(pixels: u64, alpha: bool, pass_channels: u64, encoded_per_pix
 /// now.
 pub fn check(needed: u64, what: &str) -> Result<Option<String>> {
     let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
-    if let Some((left, limit)) = hard_headroom()
+    if let Some((left, limit, _)) = hard_headroom()
         && needed > left
     {
         return Err(anyhow!(
@@ -54,12 +54,23 @@ pub fn check(needed: u64, what: &str) -> Result<Option<String>> {
     }))
 }
 
-/// The least room any hard limit leaves, with the limit's name.
-fn hard_headroom() -> Option<(u64, String)> {
+/// The memory this process may still take in all: the least room a hard
+/// limit leaves, or the machine's memory and swap, whichever is less; for
+/// the scene's textures ([`prism_scene::Limits::memory`]).
+pub fn room() -> Option<prism_scene::MemoryRoom> {
+    let hard = hard_headroom().map(|(bytes, _, limit)| prism_scene::MemoryRoom { bytes, limit });
+    let machine = machine_total()
+        .map(|bytes| prism_scene::MemoryRoom { bytes, limit: "the machine's memory and swap" });
+    [hard, machine].into_iter().flatten().min_by_key(|r| r.bytes)
+}
+
+/// The least room any hard limit leaves, with the limit's description and
+/// its name.
+fn hard_headroom() -> Option<(u64, String, &'static str)> {
     let status = std::fs::read_to_string("/proc/self/status").ok();
     let kib = |key: &str| status.as_deref().and_then(|s| field_kib(s, key));
     let limits = std::fs::read_to_string("/proc/self/limits").ok();
-    let mut room: Vec<(u64, String)> = Vec::new();
+    let mut room: Vec<(u64, String, &'static str)> = Vec::new();
     if let Some(l) = limits.as_deref() {
         for (name, used, what) in
             [("Max address space", "VmSize:", "ulimit -v"), ("Max data size", "VmData:", "ulimit -d")]
@@ -68,14 +79,19 @@ fn hard_headroom() -> Option<(u64, String)> {
                 room.push((
                     limit.saturating_sub(used.saturating_mul(1024)),
                     format!("{what}: {limit} bytes"),
+                    what,
                 ));
             }
         }
     }
     if let Some((max, current)) = cgroup_memory() {
-        room.push((max.saturating_sub(current), format!("cgroup memory.max: {max} bytes")));
+        room.push((
+            max.saturating_sub(current),
+            format!("cgroup memory.max: {max} bytes"),
+            "cgroup memory.max",
+        ));
     }
-    room.into_iter().min_by_key(|(left, _)| *left)
+    room.into_iter().min_by_key(|(left, ..)| *left)
 }
 
 /// `MemTotal + SwapTotal` of `/proc/meminfo`, in bytes.

@@ -351,3 +351,44 @@ fn a_render_too_large_for_memory_is_refused_up_front() {
     assert!(err.contains("more than this machine's"), "{err}");
     assert_eq!(listing(dir.path()), ["s.toml"]);
 }
+
+/// Image textures that cannot fit in the memory left are refused from
+/// their headers, before their pixels are decoded, naming the file and the
+/// limit; not aborted mid-load by a failed allocation (exit 134), nor
+/// panicked on by the image decoder's conversions (exit 101).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_texture_too_large_for_memory_is_refused_from_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    // 8192 × 4096 black texels: a 100 MB decode into 400 MB of linear
+    // texels, and their mip-map; the file itself is small.
+    image::RgbImage::new(8192, 4096).save(dir.path().join("big.png")).unwrap();
+    let scene = GOOD.replace("color = [0.8, 0.1, 0.1]", "texture = { type = \"image\", path = \"big.png\" }");
+    fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let run = |limit_kib: u64| {
+        std::process::Command::new("bash")
+            .current_dir(dir.path())
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v {limit_kib} && exec {} render s.toml -o out.png --threads 1",
+                env!("CARGO_BIN_EXE_prism")
+            ))
+            .env_remove("RUST_BACKTRACE")
+            .output()
+            .unwrap()
+    };
+    // Under 300 MB of address space.
+    let out = run(300_000);
+    assert_clean_failure("ulimit -v", &out);
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("big.png") && err.contains("8192×4096 texels need about") && err.contains("ulimit -v"),
+        "{err}"
+    );
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(!dir.path().join("out.png").exists());
+    // With room for it, the same scene renders.
+    let out = run(4_000_000);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(dir.path().join("out.png").exists());
+}

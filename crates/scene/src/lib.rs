@@ -92,6 +92,20 @@ pub struct Limits {
     pub max_depth: u32,
     /// Largest number of samples per pixel (default 65536).
     pub max_spp: u32,
+    /// The memory the scene's image textures may take in all (default:
+    /// unchecked). Each texture's cost is checked from its header, before
+    /// its pixels are decoded.
+    pub memory: Option<MemoryRoom>,
+}
+
+/// Memory a process may still take, and what limits it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryRoom {
+    /// Bytes left.
+    pub bytes: u64,
+    /// What sets the limit, for messages (`ulimit -v`, `cgroup memory.max`,
+    /// "the machine's memory and swap").
+    pub limit: &'static str,
 }
 
 impl Default for Limits {
@@ -101,6 +115,7 @@ impl Default for Limits {
             max_pixels: 100_000_000,
             max_depth: prism_shade::MAX_DEPTH_LIMIT,
             max_spp: 65_536,
+            memory: None,
         }
     }
 }
@@ -336,7 +351,7 @@ pub fn load_obj_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene,
         });
     }
     let (canonical, base, name) = read::obj_alone_path(path)?;
-    let res = read::read_obj_alone(&base, &name);
+    let res = read::read_obj_alone(&base, &name, options.limits.memory);
     build::build_obj_scene(check::Ctx::new(path, ""), &name, &canonical, &res, options)
 }
 
@@ -369,7 +384,7 @@ pub fn parse_scene_str_with(
         return Ok(loaded);
     }
     let file = format::SceneFile::parse(text, file_name)?;
-    let res = read::read_resources(&file, base_dir);
+    let res = read::read_resources(&file, base_dir, options.limits.memory);
     let notes = std::cell::RefCell::new(Vec::new());
     let mut loaded =
         build::build_scene(check::Ctx::new(file_name, text).noting(&notes), &file, &res, options)?;

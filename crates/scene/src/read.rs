@@ -9,11 +9,11 @@
 //! kept, and the build reports it at the first place that uses it, so a
 //! scene's errors come in the order of the scene.
 
-use crate::MAX_SCENE_BYTES;
 use crate::error::{Location, SceneError};
 use crate::format::{ObjectKind, SceneFile, TextureKind};
 use crate::obj::{self, NormalMode, ObjFile};
-use prism_shade::{ImageTexture, Wrap};
+use crate::{MAX_SCENE_BYTES, MemoryRoom};
+use prism_shade::{ImageTexture, TextureCost, Wrap};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -97,8 +97,8 @@ impl Resources {
 }
 
 /// Reads every file `file` names, paths relative to `base`.
-pub(crate) fn read_resources(file: &SceneFile, base: &Path) -> Resources {
-    let mut reader = Reader::new(base);
+pub(crate) fn read_resources(file: &SceneFile, base: &Path, room: Option<MemoryRoom>) -> Resources {
+    let mut reader = Reader::new(base, room);
     for def in file.materials.values() {
         if let Some(t) = &def.get_ref().texture
             && *t.get_ref().kind.get_ref() == TextureKind::Image
@@ -123,8 +123,8 @@ pub(crate) fn read_resources(file: &SceneFile, base: &Path) -> Resources {
 
 /// Reads the OBJ file `name` in `base` (and its materials' textures) for
 /// an OBJ file as a scene.
-pub(crate) fn read_obj_alone(base: &Path, name: &str) -> Resources {
-    let mut reader = Reader::new(base);
+pub(crate) fn read_obj_alone(base: &Path, name: &str, room: Option<MemoryRoom>) -> Resources {
+    let mut reader = Reader::new(base, room);
     reader.mesh(name, NormalMode::Auto, true);
     reader.res
 }
@@ -136,11 +136,15 @@ struct Reader<'a> {
     res: Resources,
     objs: HashMap<(PathBuf, NormalMode), Result<Arc<ObjFile>, Failure>>,
     images: HashMap<(PathBuf, bool), Result<TextureFile, Failure>>,
+    /// The memory textures may take in all, if limited.
+    room: Option<MemoryRoom>,
+    /// Bytes the textures read so far keep.
+    kept: u64,
 }
 
 impl<'a> Reader<'a> {
-    fn new(base: &'a Path) -> Self {
-        Self { base, res: Resources::default(), objs: HashMap::new(), images: HashMap::new() }
+    fn new(base: &'a Path, room: Option<MemoryRoom>) -> Self {
+        Self { base, res: Resources::default(), objs: HashMap::new(), images: HashMap::new(), room, kept: 0 }
     }
 
     /// The image written `raw` (a `what`: "texture", "background image").
@@ -158,17 +162,25 @@ impl<'a> Reader<'a> {
         if let Some(t) = self.images.get(&key) {
             return t.clone();
         }
-        let t = ImageTexture::load(&key.0, wrap)
-            .map(|image| TextureFile { path: key.0.clone(), image: Arc::new(image) })
-            .map_err(|e| Failure::Asset {
-                location: Location::file(&key.0),
-                message: match e {
-                    prism_shade::ShadeError::Texture { reason, .. } => {
-                        format!("cannot use this texture: {reason}")
-                    }
-                    other => other.to_string(),
-                },
-            });
+        let (room, kept) = (self.room, self.kept);
+        let mut cost = None;
+        let t = ImageTexture::load_checked(&key.0, wrap, |c| {
+            cost = Some(c.kept);
+            fits(room, kept, c)
+        })
+        .map(|image| TextureFile { path: key.0.clone(), image: Arc::new(image) })
+        .map_err(|e| Failure::Asset {
+            location: Location::file(&key.0),
+            message: match e {
+                prism_shade::ShadeError::Texture { reason, .. } => {
+                    format!("cannot use this texture: {reason}")
+                }
+                other => other.to_string(),
+            },
+        });
+        if t.is_ok() {
+            self.kept = self.kept.saturating_add(cost.unwrap_or(0));
+        }
         self.images.insert(key, t.clone());
         t
     }
@@ -241,6 +253,30 @@ fn read_mtl(path: &Path) -> Option<Vec<u8>> {
 /// The file an MTL material's `map_Kd` value names in `dir`: the value as
 /// a file name if there is such a file, else its last word (options such
 /// as `-s 1 1 1` come before the name); checked to be a regular file.
+/// Whether a texture of cost `c` fits in `room` beside the `kept` bytes of
+/// the textures read before it; the reason it does not.
+fn fits(room: Option<MemoryRoom>, kept: u64, c: &TextureCost) -> Result<(), String> {
+    let Some(room) = room else { return Ok(()) };
+    let left = room.bytes.saturating_sub(kept);
+    if c.peak <= left {
+        return Ok(());
+    }
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    let others = if kept > 0 {
+        format!(" beside the {:.2} GiB of the scene's other textures", gib(kept))
+    } else {
+        String::new()
+    };
+    Err(format!(
+        "{}×{} texels need about {:.2} GiB to load, and this process may take only {:.2} GiB more{others} ({}); use a smaller image",
+        c.width,
+        c.height,
+        gib(c.peak),
+        gib(left),
+        room.limit
+    ))
+}
+
 fn mtl_texture_path(dir: &Path, value: &str) -> Result<PathBuf, Failure> {
     let direct = dir.join(value.trim());
     let path =

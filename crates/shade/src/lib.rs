@@ -105,7 +105,7 @@ pub use render::{
 };
 pub use scene::{Fog, FogMode, PointLight, Scene};
 pub use texture::{
-    ImageTexture, MAX_TEXTURE_EDGE, MAX_TEXTURE_TEXELS, Mapping, Texture, Wrap, srgb_to_linear,
+    ImageTexture, MAX_TEXTURE_EDGE, MAX_TEXTURE_TEXELS, Mapping, Texture, TextureCost, Wrap, srgb_to_linear,
     srgb8_to_linear,
 };
 pub use tonemap::{BitDepth, PngOptions, Tonemap, TonemapParseError, linear_to_srgb};

@@ -243,6 +243,21 @@ impl ImageTexture {
     /// [`ShadeError::Texture`] naming `path` if the file cannot be opened,
     /// is not a supported image, is corrupt, or is too large.
     pub fn load(path: &Path, wrap: Wrap) -> Result<Self, ShadeError> {
+        Self::load_checked(path, wrap, |_| Ok(()))
+    }
+
+    /// [`ImageTexture::load`], asking `check` first, with the image's size
+    /// read from its header and before its pixels are decoded, whether the
+    /// memory it takes ([`TextureCost`]) may be spent; its `Err` is the
+    /// reason the texture is refused.
+    ///
+    /// # Errors
+    /// As [`ImageTexture::load`], and where `check` refuses.
+    pub fn load_checked(
+        path: &Path,
+        wrap: Wrap,
+        check: impl FnOnce(&TextureCost) -> Result<(), String>,
+    ) -> Result<Self, ShadeError> {
         let err = |reason: String| ShadeError::Texture { path: path.to_path_buf(), reason };
         let mut reader = image::ImageReader::open(path)
             .map_err(|e| err(e.to_string()))?
@@ -258,7 +273,7 @@ impl ImageTexture {
                 "not a recognised image format (PNG, JPEG, BMP, EXR or Radiance HDR expected)".into()
             ));
         };
-        let decoded = reader.decode().map_err(|e| {
+        let decoding = |e: image::ImageError| {
             let name = format.extensions_str().first().map_or("image".to_owned(), |x| x.to_uppercase());
             err(match &e {
                 // Plain words first; the decoder's own after them.
@@ -280,37 +295,19 @@ impl ImageTexture {
                 },
                 _ => e.to_string(),
             })
-        })?;
-        let (width, height) = (decoded.width(), decoded.height());
+        };
+        let decoder = reader.into_decoder().map_err(decoding)?;
+        let (width, height) = image::ImageDecoder::dimensions(&decoder);
         if u64::from(width) * u64::from(height) > MAX_TEXTURE_TEXELS {
             return Err(err(format!(
                 "{width}×{height} texels is more than the {MAX_TEXTURE_TEXELS} allowed"
             )));
         }
-        let linear_input = matches!(decoded.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
-        let texels: Vec<Vec3> = if linear_input {
-            decoded
-                .to_rgb32f()
-                .pixels()
-                .map(|p| {
-                    let c = Vec3::from_array(p.0);
-                    // Non-finite or negative texels would poison every pixel that sees them.
-                    if c.is_finite() { c.max(Vec3::ZERO) } else { Vec3::ZERO }
-                })
-                .collect()
-        } else if matches!(
-            decoded.color(),
-            image::ColorType::L8 | image::ColorType::La8 | image::ColorType::Rgb8 | image::ColorType::Rgba8
-        ) {
-            let lut = srgb8_lut();
-            decoded
-                .to_rgb8()
-                .pixels()
-                .map(|p| Vec3::new(lut[p.0[0] as usize], lut[p.0[1] as usize], lut[p.0[2] as usize]))
-                .collect()
-        } else {
-            decoded.to_rgb32f().pixels().map(|p| Vec3::from_array(p.0.map(srgb_to_linear))).collect()
-        };
+        let cost = TextureCost::new(width, height, image::ImageDecoder::total_bytes(&decoder));
+        check(&cost).map_err(err)?;
+        let decoded = image::DynamicImage::from_decoder(decoder).map_err(decoding)?;
+        let texels = linear_texels(&decoded).map_err(|e| err(e.to_string()))?;
+        drop(decoded);
         Self::from_linear(width, height, texels, wrap).map_err(|e| err(e.to_string()))
     }
 
@@ -383,9 +380,124 @@ fn srgb8_lut() -> [f32; 256] {
     std::array::from_fn(|i| srgb8_to_linear(i as u8))
 }
 
+/// The memory loading an image takes ([`ImageTexture::load_checked`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureCost {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Bytes held at once while it loads: the decoded file and the linear
+    /// texels made from it, or the texels and their mip-map.
+    pub peak: u64,
+    /// Bytes the texture keeps: its linear texels and mip-map.
+    pub kept: u64,
+}
+
+impl TextureCost {
+    /// The cost of an image of `width × height` texels whose decoded pixels
+    /// take `decoded` bytes.
+    #[must_use]
+    pub fn new(width: u32, height: u32, decoded: u64) -> Self {
+        let texels = u64::from(width) * u64::from(height) * std::mem::size_of::<Vec3>() as u64;
+        // The levels after the first: a third of it at most.
+        let mips = texels / 3 + 64;
+        Self { width, height, peak: texels + decoded.max(mips), kept: texels + mips }
+    }
+}
+
+/// The decoded image's texels in linear RGB, converted straight from its
+/// own pixels (no full-size copy in between): 8- and 16-bit channels
+/// through the sRGB EOTF, floats taken as linear (non-finite or negative
+/// ones as 0). The buffer is reserved fallibly, so a texture too large for
+/// the memory left is an error, not an abort.
+fn linear_texels(decoded: &image::DynamicImage) -> Result<Vec<Vec3>, std::collections::TryReserveError> {
+    use image::DynamicImage as D;
+    let mut texels = Vec::new();
+    texels.try_reserve_exact(decoded.width() as usize * decoded.height() as usize)?;
+    let lut8 = srgb8_lut();
+    let s8 = |c: &[u8]| Vec3::new(lut8[c[0] as usize], lut8[c[1] as usize], lut8[c[2] as usize]);
+    let s16 = |c: [u16; 3]| Vec3::from_array(c.map(|v| srgb_to_linear(f32::from(v) / 65535.0)));
+    // Non-finite or negative texels would poison every pixel that sees them.
+    let float = |c: Vec3| if c.is_finite() { c.max(Vec3::ZERO) } else { Vec3::ZERO };
+    match decoded {
+        D::ImageLuma8(b) => texels.extend(b.pixels().map(|p| s8(&[p.0[0]; 3]))),
+        D::ImageLumaA8(b) => texels.extend(b.pixels().map(|p| s8(&[p.0[0]; 3]))),
+        D::ImageRgb8(b) => texels.extend(b.pixels().map(|p| s8(&p.0))),
+        D::ImageRgba8(b) => texels.extend(b.pixels().map(|p| s8(&p.0))),
+        D::ImageLuma16(b) => texels.extend(b.pixels().map(|p| s16([p.0[0]; 3]))),
+        D::ImageLumaA16(b) => texels.extend(b.pixels().map(|p| s16([p.0[0]; 3]))),
+        D::ImageRgb16(b) => texels.extend(b.pixels().map(|p| s16(p.0))),
+        D::ImageRgba16(b) => texels.extend(b.pixels().map(|p| s16([p.0[0], p.0[1], p.0[2]]))),
+        D::ImageRgb32F(b) => texels.extend(b.pixels().map(|p| float(Vec3::from_array(p.0)))),
+        D::ImageRgba32F(b) => texels.extend(b.pixels().map(|p| float(Vec3::new(p.0[0], p.0[1], p.0[2])))),
+        // Any other layout a later `image` adds: through its own conversion.
+        other => texels.extend(other.to_rgb32f().pixels().map(|p| Vec3::from_array(p.0.map(srgb_to_linear)))),
+    }
+    Ok(texels)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_pixel_layout_converts_as_images_own_conversion_does() {
+        // The direct conversion against `image`'s conversion to float RGB
+        // and the sRGB EOTF (linear floats kept): each of the ten layouts.
+        use image::DynamicImage as D;
+        let rgba8 =
+            image::RgbaImage::from_fn(7, 5, |x, y| image::Rgba([(x * 37) as u8, (y * 51) as u8, 200, 9]));
+        let base = D::ImageRgba8(rgba8);
+        let layouts = [
+            base.to_luma8().into(),
+            base.to_luma_alpha8().into(),
+            base.to_rgb8().into(),
+            base.clone(),
+            base.to_luma16().into(),
+            base.to_luma_alpha16().into(),
+            base.to_rgb16().into(),
+            base.to_rgba16().into(),
+            base.to_rgb32f().into(),
+            base.to_rgba32f().into(),
+        ];
+        for d in layouts {
+            let float = matches!(d, D::ImageRgb32F(_) | D::ImageRgba32F(_));
+            let want: Vec<Vec3> = d
+                .to_rgb32f()
+                .pixels()
+                .map(|p| Vec3::from_array(if float { p.0 } else { p.0.map(srgb_to_linear) }))
+                .collect();
+            let got = linear_texels(&d).unwrap();
+            assert_eq!(got.len(), want.len());
+            for (g, w) in got.iter().zip(&want) {
+                assert!((*g - *w).abs().max_element() <= 1e-6, "{:?}: {g} against {w}", d.color());
+            }
+        }
+    }
+
+    #[test]
+    fn a_textures_cost_counts_the_decode_texels_and_mip_map() {
+        // 1024 × 512 RGBA 16-bit: 4 MiB decoded, 6 MiB of texels, 2 MiB of
+        // mip-map at most.
+        let c = TextureCost::new(1024, 512, 1024 * 512 * 8);
+        assert_eq!(c.kept, 6 * (1 << 20) + 2 * (1 << 20) + 64);
+        assert_eq!(c.peak, 6 * (1 << 20) + 4 * (1 << 20));
+        // A refusal stops the load before the pixels are decoded, naming
+        // the file, with the size read from the header.
+        let path = temp("cost.png");
+        image::RgbImage::new(40, 30).save(&path).unwrap();
+        let mut seen = None;
+        let e = ImageTexture::load_checked(&path, Wrap::Repeat, |c| {
+            seen = Some((c.width, c.height));
+            Err("too big".into())
+        })
+        .unwrap_err();
+        assert_eq!(seen, Some((40, 30)));
+        assert!(matches!(&e, ShadeError::Texture { reason, .. } if reason == "too big"), "{e}");
+        assert_eq!(ImageTexture::load_checked(&path, Wrap::Repeat, |_| Ok(())).unwrap().width(), 40);
+        let _ = std::fs::remove_file(path);
+    }
 
     fn temp(name: &str) -> std::path::PathBuf {
         std::env::temp_dir().join(format!("prism-shade-test-{}-{name}", std::process::id()))
