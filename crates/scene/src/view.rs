@@ -194,6 +194,9 @@ pub(crate) fn choose_camera<'f>(
         // Every camera's lens is checked, chosen or not.
         lens_values(ctx, c.get_ref())?;
         if let Some(n) = &c.get_ref().name {
+            // A name `--camera` can give.
+            CameraName::new(n.get_ref())
+                .map_err(|e| ctx.invalid(&n.span(), format!("{e}: `--camera` could not choose it")))?;
             if names.contains(&n.get_ref().as_str()) {
                 return Err(
                     ctx.invalid(&n.span(), format!("there is already a camera named `{}`", n.get_ref()))

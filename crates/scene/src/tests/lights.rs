@@ -182,6 +182,11 @@ fn bad_cameras_are_refused_at_their_key() {
         ),
         ("[[cameras]]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\n", "needs a `name`", Some("[[cameras]]")),
         (
+            "[[cameras]]\nname = \"\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\n",
+            "a camera name has 1 to 64 bytes, got 0",
+            Some("name = \"\""),
+        ),
+        (
             "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\n[[cameras]]\nname = \"a\"\nposition = [0, 0, 2]\nlook_at = [0, 0, 0]\n",
             "already a camera named `a`",
             None,
