@@ -48,10 +48,20 @@ fn unixify(path: &str) -> Option<String> {
 /// `usemtl NAME` on its line (a comment, indentation); and, silently, two
 /// valid forms it refuses: `vt u` (read as `vt u 0`) and vertex colours
 /// (`v x y z r g b`, read as `v x y z`: prism does not use them, and tobj
-/// refuses a file where only some vertices have them). Returns the text
-/// and the warnings (`line N: ...`).
+/// refuses a file where only some vertices have them). Polylines (`l`)
+/// and points (`p`) are dropped, with one warning at the first: prism
+/// renders surfaces, and tobj would make them into triangles. Returns the
+/// text and the warnings (`line N: ...`).
 pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
-    fix_lines(text, |no, key, rest, body| match key {
+    let first_element = std::cell::Cell::new(true);
+    fix_lines(text, |no, key, rest, body| {
+        match key {
+        "l" | "p" => Some((
+            String::new(),
+            first_element.replace(false).then(|| {
+                format!("line {no}: `{key}` elements (polylines and points) are not rendered; this one and any others are ignored")
+            }),
+        )),
         "mtllib" if rest.is_empty() => {
             Some((String::new(), Some(format!("line {no}: `mtllib` without a file name; ignored"))))
         }
@@ -84,6 +94,7 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
             )),
         )),
         _ => None,
+    }
     })
 }
 
@@ -186,6 +197,11 @@ mod tests {
                 "line 3: `usemtl\tred` read as `usemtl red`"
             ]
         );
+        // Polylines and points dropped (a malformed one too), one warning.
+        let (t, w) = fix_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nl 1 2 3\np 1\nl 1 x \\\n");
+        assert_eq!(t, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n\n\n\n");
+        assert_eq!(w.len(), 1);
+        assert!(w[0].starts_with("line 5: `l` elements (polylines and points) are not rendered"), "{w:?}");
     }
 
     #[test]
