@@ -140,14 +140,14 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
         ("tint", span_of(&d.tint)),
     ];
     let (kname, allowed): (_, &[&str]) = match kind {
-        TextureKind::Checker => ("checker", &CHECKER_KEYS),
-        TextureKind::Image => ("image", &IMAGE_KEYS),
+        TextureKind::Checker => ("a checker", &CHECKER_KEYS),
+        TextureKind::Image => ("an image", &IMAGE_KEYS),
     };
     if let Some((key, span)) = first_foreign(&keys, allowed) {
         let allowed = allowed.join(", ");
         return Err(ctx.invalid(
             &span,
-            format!("`{key}` is not a key of a {kname} texture (it takes: type, {allowed})"),
+            format!("`{key}` is not a key of {kname} texture (it takes: type, {allowed})"),
         ));
     }
     match kind {
@@ -161,7 +161,7 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
         TextureKind::Image => {
             let Some(p) = &d.path else {
                 return Err(ctx
-                    .invalid(&t.span(), "an image texture needs `path`, the image file (PNG, JPEG or BMP)"));
+                    .invalid(&t.span(), "an image texture needs `path`, the image file (PNG, JPEG, BMP, EXR or Radiance HDR)"));
             };
             let image = image(p, d.wrap())?;
             let mapping = match d.mapping.as_ref().map_or(MappingDef::Uv, |m| *m.get_ref()) {
