@@ -65,8 +65,9 @@ const MAY_PRINT: &[(&str, &str)] = &[
     ),
     (
         "crates/view/src/lib.rs",
-        "the viewer prints the warnings of a scene it (re)loads while its window runs; \
-         candidate to move to the caller",
+        "the viewer prints the warnings of a scene it (re)loads while its window runs \
+         (candidate to move to the caller), and defines errln!/outln!, its prints that \
+         ignore a closed stream",
     ),
 ];
 

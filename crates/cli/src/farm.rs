@@ -399,7 +399,7 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
              (--dry-run prints the scripts)"
         );
     }
-    eprintln!("{note}");
+    errln!("{note}");
     for d in ["tiles", "logs", "status"] {
         let dir = job.work.join(d);
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;

@@ -55,6 +55,17 @@ macro_rules! out {
     }};
 }
 
+/// `eprintln!` that never panics: when standard error is closed
+/// (`prism render s.toml 2>&1 | head -1`), the diagnostic is lost but the
+/// command goes on, writes its files and exits as it would have (0, or 1
+/// after an error). `eprintln!` panics on such a write error (exit 101).
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 mod completions;
 mod env;
 mod farm;
@@ -265,7 +276,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     if matches!(cli.command, Command::Render(_) | Command::Info(_) | Command::View(_)) {
         for w in env::warnings() {
-            eprintln!("warning: {w}");
+            errln!("warning: {w}");
         }
     }
     let result = match cli.command {
@@ -280,7 +291,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", report(&e));
+            errln!("error: {}", report(&e));
             interrupt::exit_code(&e)
         }
     }
@@ -326,7 +337,7 @@ fn info_command(args: &InfoArgs) -> Result<()> {
     };
     let loaded = load_path(&args.scene, &opts)?;
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     if args.json {
         outln!("{:#}", info::to_json(&loaded, &args.scene));
@@ -374,7 +385,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     let loaded = load_path(&args.scene, &opts)?;
     let load_seconds = load_start.elapsed().as_secs_f64();
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     let output = match early {
         Some(o) => o,
@@ -393,15 +404,15 @@ fn render_command(args: &RenderArgs) -> Result<()> {
         } else {
             format!("{}: `aov_preview = true`", args.scene.display())
         };
-        eprintln!("warning: {asked} without AOV passes (--aov or the scene's `aov`) writes no previews");
+        errln!("warning: {asked} without AOV passes (--aov or the scene's `aov`) writes no previews");
     }
     let (plan, warnings) =
         args.image.plan(output.clone(), format, args.alpha.alpha, !aovs.is_empty(), previews)?;
     for w in warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     if loaded.settings.antialias.adaptive.is_some() && (plan.alpha || !aovs.is_empty()) {
-        eprintln!(
+        errln!(
             "warning: adaptive supersampling is off for this render: with --alpha or AOV passes every pixel takes all {} samples",
             loaded.settings.spp
         );
@@ -411,7 +422,7 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     }
     let (w, h) = loaded.settings.camera.size();
     if let Some(warning) = writable::check_space(&output, plan.uncompressed_bytes(w, h, &aovs))? {
-        eprintln!("warning: {warning}");
+        errln!("warning: {warning}");
     }
     // The folders are made now, before the render: a render never ends in
     // a missing folder. Those made here go again if nothing is written
@@ -498,12 +509,12 @@ fn render_to(
         ));
     }
     if tile_file && plan.previews() {
-        eprintln!(
+        errln!(
             "warning: a tile holds no AOV previews; prism merge --aov-preview writes them for the whole image"
         );
     }
     if tile_file && plan.aov_files() {
-        eprintln!(
+        errln!(
             "warning: a tile holds its passes as layers; prism merge --aov-files writes them as files of their own"
         );
     }
@@ -518,7 +529,7 @@ fn render_to(
     if let Some(warning) =
         memory::check(memory::image_bytes(pixels, plan.alpha, channels, encoded), "this render")?
     {
-        eprintln!("warning: {warning}");
+        errln!("warning: {warning}");
     }
 
     let bar = (!args.quiet && std::io::stderr().is_terminal()).then(|| {
@@ -532,7 +543,7 @@ fn render_to(
     });
     let interrupt = interrupt::Interrupt::install()?;
     if bar.is_none() && !args.quiet {
-        eprintln!("rendering {w}×{h} at {} spp (Ctrl-C stops)", settings.spp);
+        errln!("rendering {w}×{h} at {} spp (Ctrl-C stops)", settings.spp);
     }
     let rows = region.map_or(h, |r| r.0.height());
     let progress = |done: u32, total: u32| {
@@ -569,7 +580,7 @@ fn render_to(
     }
     if stats.nonfinite_samples > 0 {
         // Shown even with --quiet: the image is wrong where they fell.
-        eprintln!(
+        errln!(
             "warning: {} samples were not finite (a light's power times a material's coefficients overflowed, or NaN) and were counted as black; lower the lights' intensity",
             stats.nonfinite_samples
         );
@@ -628,7 +639,7 @@ fn render_to(
         for line in lines {
             // Standard output holds the JSON alone with `--stats-json -`.
             if args.stats_to_stdout() {
-                eprintln!("{line}");
+                errln!("{line}");
             } else {
                 outln!("{line}");
             }

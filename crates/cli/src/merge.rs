@@ -46,11 +46,11 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
     let (image, aovs) = assemble(&tiles)?;
     let has_aovs = !aovs.passes.is_empty();
     if args.aov_preview && !has_aovs {
-        eprintln!("warning: --aov-preview: the tiles hold no AOV passes, so no previews are written");
+        errln!("warning: --aov-preview: the tiles hold no AOV passes, so no previews are written");
     }
     let (plan, warnings) = args.image.plan(args.output.clone(), format, false, has_aovs, args.aov_preview)?;
     for w in warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     let kinds: Vec<prism_shade::Aov> = aovs.passes.iter().map(|p| p.aov).collect();
     for f in plan.other_files(&kinds)? {

@@ -27,6 +27,23 @@
 
 #![warn(missing_docs)]
 
+/// `eprintln!` that never panics: with standard error closed the line is
+/// lost, and the viewer goes on (`eprintln!` would panic).
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
+/// `println!` that never panics, as `errln!`.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 pub mod demo;
 mod motion;
 mod save;
@@ -152,7 +169,7 @@ pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, St
     // A TOML scene, or an OBJ mesh as a scene of its own.
     let loaded = prism_scene::load_path(path, &options).map_err(|e| e.to_string())?;
     for w in &loaded.warnings {
-        eprintln!("prism view: warning: {w}");
+        errln!("prism view: warning: {w}");
     }
     Ok(SceneSetup { scene: loaded.scene, settings: loaded.settings })
 }

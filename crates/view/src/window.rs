@@ -180,11 +180,11 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
         while let Ok(ev) = events.try_recv() {
             match ev {
                 Event::Saved(Ok(path)) => {
-                    println!("saved {}", path.display());
+                    outln!("saved {}", path.display());
                     state.set_message(Some(format!("saved {}", path.display())));
                 }
                 Event::Saved(Err(e)) => {
-                    eprintln!("prism view: {e}");
+                    errln!("prism view: {e}");
                     state.set_message(Some(e.to_string()));
                 }
                 Event::Loaded(result) => {
@@ -197,11 +197,11 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                         Ok((scene, settings)) => {
                             state.scene_reloaded(settings, scene.fog.is_some());
                             renderer.submit_scene(state.view(), scene);
-                            println!("reloaded {}", opts.scene.display());
+                            outln!("reloaded {}", opts.scene.display());
                             state.set_message(None);
                         }
                         Err(msg) => {
-                            eprintln!("prism view: reload failed, keeping the last good scene: {msg}");
+                            errln!("prism view: reload failed, keeping the last good scene: {msg}");
                             state.set_message(Some(format!("reload failed: {msg}")));
                         }
                     }
@@ -225,7 +225,7 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
 
         if !renderer.is_running() && !render_dead {
             render_dead = true;
-            eprintln!("prism view: the render thread stopped unexpectedly; the image is no longer updated");
+            errln!("prism view: the render thread stopped unexpectedly; the image is no longer updated");
             state.set_message(Some("render thread stopped".into()));
         }
 
@@ -242,12 +242,12 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
             let latency = state.frame_presented(generation);
             if verbose {
                 if let Some(l) = latency {
-                    eprintln!(
+                    errln!(
                         "prism view: latency gen={generation} key-to-frame={:.1} ms",
                         l.as_secs_f64() * 1000.0
                     );
                 } else if !first_frame_logged {
-                    eprintln!(
+                    errln!(
                         "prism view: first frame after {:.1} ms",
                         started.elapsed().as_secs_f64() * 1000.0
                     );
@@ -256,14 +256,14 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                     FrameKind::Coarse { factor } => format!("coarse/{factor}"),
                     FrameKind::Pass { passes, .. } => format!("passes+{passes}"),
                 };
-                eprintln!(
+                errln!(
                     "prism view: frame gen={generation} {what} samples={}/{} render={:.1} ms",
                     state.samples_done(),
                     state.settings().spp,
                     seconds * 1000.0
                 );
                 if state.converged() && matches!(kind, FrameKind::Pass { .. }) {
-                    eprintln!("prism view: converged gen={generation}");
+                    errln!("prism view: converged gen={generation}");
                 }
             }
             first_frame_logged = true;
