@@ -164,6 +164,21 @@ fn slurm_literal(p: &Path) -> String {
     p.to_string_lossy().replace('%', "%%")
 }
 
+/// Refuses a path with a line break (`\n` or `\r`), named `what` (the flag
+/// or argument it came from). The job scripts hold paths on `#SBATCH`
+/// comment lines, where no quoting can keep a line break: the rest of the
+/// path would become a shell command of the job, and sbatch would stop
+/// reading its directives there.
+fn check_script_path(what: &str, p: &Path) -> Result<()> {
+    if p.as_os_str().as_encoded_bytes().iter().any(|b| matches!(b, b'\n' | b'\r')) {
+        bail!(
+            "{what}: the path {:?} contains a line break, which a Slurm batch script cannot hold",
+            p.as_os_str()
+        );
+    }
+    Ok(())
+}
+
 fn absolute(p: &Path) -> Result<PathBuf> {
     Ok(if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) })
 }
@@ -273,6 +288,13 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     if prism_scene::is_stdin_path(&a.scene) {
         bail!("a farm job needs its scene in a file (every task reads it), not on standard input");
     }
+    // Every path the scripts hold, as they will hold it (absolute: the
+    // current directory is part of it), before the (possibly long) load.
+    check_script_path("the scene", &absolute(&a.scene)?)?;
+    check_script_path("-o", &absolute(&a.output)?)?;
+    if let Some(d) = &a.work_dir {
+        check_script_path("--work-dir", &absolute(d)?)?;
+    }
     // Checked here so that a bad list fails before anything is submitted.
     a.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
     let opts = LoadOptions {
@@ -309,6 +331,9 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     };
     let prism =
         std::env::current_exe().and_then(std::fs::canonicalize).context("cannot find the prism binary")?;
+    // Reached through links: what the scripts hold.
+    check_script_path("the scene", &scene)?;
+    check_script_path("the prism binary", &prism)?;
     let prism = prism.to_string_lossy().into_owned();
     let tile_files = if tiles {
         (0..count).map(|i| work.join(format!("tiles/tile-{i:04}.exr"))).collect()

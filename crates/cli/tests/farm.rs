@@ -456,3 +456,49 @@ fn a_dry_run_checks_what_a_real_run_would_write() {
     assert!(err.contains("sbatch is not on the PATH") && err.contains("nothing was written"), "{err}");
     assert_eq!(listing(d), ["a.toml", "empty-bin"]);
 }
+
+#[test]
+#[cfg(unix)]
+fn a_line_break_in_a_path_the_job_scripts_hold_is_refused() {
+    // In an `#SBATCH` line no quoting can hold a line break: what follows
+    // it would run as a command of the job, and sbatch would stop reading
+    // its directives there.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("a.toml"), GOOD).unwrap();
+    fs::write(d.join("a\nb.toml"), GOOD).unwrap();
+    // A real run would reach this sbatch, which leaves a mark.
+    let bin = d.join("bin");
+    fs::create_dir(&bin).unwrap();
+    let sbatch = bin.join("sbatch");
+    fs::write(&sbatch, format!("#!/bin/sh\ntouch '{}'\necho 1\n", d.join("SUBMITTED").display())).unwrap();
+    let mut perms = fs::metadata(&sbatch).unwrap().permissions();
+    std::os::unix::fs::PermissionsExt::set_mode(&mut perms, 0o755);
+    fs::set_permissions(&sbatch, perms).unwrap();
+    let before = listing(d);
+    for (args, what) in [
+        (&["a.toml", "-o", "f.png", "--work-dir", "wd\ntouch PWNED\n#"][..], "--work-dir"),
+        (&["a.toml", "-o", "f.png", "--work-dir", "wd\rx"], "--work-dir"),
+        (&["a.toml", "-o", "out/x\nid #.png"], "-o"),
+        (&["a\nb.toml", "-o", "f.png"], "the scene"),
+    ] {
+        for dry in [true, false] {
+            let mut cmd = prism_cmd(d);
+            cmd.args(["farm", "slurm", "--tiles", "2", "--no-shared-check"]).args(args);
+            if dry {
+                cmd.arg("--dry-run");
+            }
+            let out = cmd.env("PATH", &bin).output().unwrap();
+            let err = text(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+            assert!(
+                err.starts_with(&format!("error: {what}: the path "))
+                    && err.contains("contains a line break, which a Slurm batch script cannot hold"),
+                "{args:?}: {err}"
+            );
+            assert_eq!(err.lines().count(), 1, "the line break is shown escaped: {err}");
+            assert!(out.stdout.is_empty(), "{args:?}: no script printed");
+            assert_eq!(listing(d), before, "{args:?}: nothing written, nothing submitted");
+        }
+    }
+}
