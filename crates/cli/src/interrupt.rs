@@ -1,17 +1,25 @@
-//! Ctrl-C (SIGINT) during `prism render`.
+//! Ctrl-C (SIGINT), SIGTERM and SIGHUP during `prism render`.
 //!
-//! While the image renders, the first SIGINT sets the render's cancel
-//! flag ([`prism_shade::RenderHooks::cancel`]): the workers stop before
-//! their next pixel (or within 1024 samples of a long one), dropping a row
-//! left midway, and prism exits with status 130 without writing anything, or,
-//! with `--partial`, writes the rows finished so far (the rest black) to
-//! the output path the usual atomic way and says so (still status 130: the
-//! image is not the render that was asked for). Without `--partial`, the
-//! output folders the run made are removed again (`writable::MadeDirs`).
-//! A second SIGINT exits at
-//! once, also with 130. Before the render starts (while the scene loads)
-//! SIGINT has its default effect and ends prism at once; nothing has been
-//! written then.
+//! The three are treated alike: SIGTERM is what `kill`, `timeout`,
+//! systemd, Slurm (`scancel`, a time limit) and Kubernetes send, SIGHUP
+//! what a closing terminal sends. While the image renders, the first such
+//! signal sets the render's cancel flag ([`prism_shade::RenderHooks::cancel`]):
+//! the workers stop before their next pixel (or within 1024 samples of a
+//! long one), dropping a row left midway, and prism exits with status
+//! 128 + the signal's number (130 for SIGINT, 143 for SIGTERM, 129 for
+//! SIGHUP) without writing anything, or, with `--partial`, writes the rows
+//! finished so far (the rest black) to the output path the usual atomic way
+//! and says so (still that status: the image is not the render that was
+//! asked for). Without `--partial`, the output folders the run made are
+//! removed again (`writable::MadeDirs`). A signal that comes while the
+//! finished image is being written lets the write finish (the image is
+//! whole, and no temporary file is left); a turntable then stops before
+//! its next frame. A second signal exits at once, with 128 + its number.
+//!
+//! The handlers are installed once, just before the output folders are
+//! made; before that (while the scene loads) the signals have their default
+//! effect and end prism at once, and nothing has been written then. A
+//! SIGHUP that was ignored when prism started (`nohup`) stays ignored.
 //!
 //! Images are written by `prism_shade::write_image` to a temporary file
 //! `.<name>.<pid>.<n>.tmp` in the output's own directory, synced and
@@ -22,43 +30,94 @@
 //! path.
 
 use prism_shade::OutputError;
-use signal_hook::consts::SIGINT;
 use std::fmt;
 use std::path::Path;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
+use std::sync::{Arc, OnceLock};
 
-/// The exit status of an interrupted render (128 + SIGINT, as shells use).
+/// The exit status of a render interrupted by Ctrl-C (128 + SIGINT, as
+/// shells use); other signals give 128 + their number.
 pub const EXIT_INTERRUPTED: u8 = 130;
 
-/// SIGINT handling for one render.
-pub struct Interrupt {
+/// The signals that stop a render, each with the words that name it in
+/// messages.
+fn signals() -> Vec<(i32, &'static str)> {
+    let mut v = vec![(signal_hook::consts::SIGINT, "Ctrl-C")];
+    #[cfg(unix)]
+    v.extend([(signal_hook::consts::SIGTERM, "SIGTERM"), (signal_hook::consts::SIGHUP, "SIGHUP")]);
+    v
+}
+
+/// The process's handlers, installed once for all the renders of a run
+/// (a turntable's frames share them).
+struct Handlers {
+    /// Set by the first signal: the render's cancel flag.
     flag: Arc<AtomicBool>,
+    /// The number of the first signal (0 before one came).
+    signal: Arc<AtomicUsize>,
+}
+
+static HANDLERS: OnceLock<Result<Handlers, String>> = OnceLock::new();
+
+/// Whether `signal` was ignored when prism started (`nohup` ignores
+/// SIGHUP), as Linux's `/proc/self/status` tells; false where it cannot
+/// be told.
+#[cfg(unix)]
+fn ignored_at_start(signal: i32) -> bool {
+    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
+        return false;
+    };
+    let mask = status
+        .lines()
+        .find_map(|l| l.strip_prefix("SigIgn:"))
+        .and_then(|m| u64::from_str_radix(m.trim(), 16).ok());
+    matches!((mask, u32::try_from(signal)), (Some(m), Ok(n @ 1..=64)) if (m >> (n - 1)) & 1 == 1)
+}
+
+fn install_handlers() -> Result<Handlers, std::io::Error> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let first = Arc::new(AtomicUsize::new(0));
+    for (sig, _) in signals() {
+        #[cfg(unix)]
+        if sig == signal_hook::consts::SIGHUP && ignored_at_start(sig) {
+            continue;
+        }
+        // In this order for each signal: the shutdown sees the flag as
+        // the signal before left it, and the number is stored before the
+        // flag that makes the render stop and read it.
+        let status = 128 + sig;
+        signal_hook::flag::register_conditional_shutdown(sig, status, Arc::clone(&flag))?;
+        // Stored by the first signal only: a second one has exited above.
+        signal_hook::flag::register_usize(sig, Arc::clone(&first), usize::try_from(sig).unwrap_or(0))?;
+        signal_hook::flag::register(sig, Arc::clone(&flag))?;
+    }
+    Ok(Handlers { flag, signal: first })
+}
+
+/// Signal handling for one render (or one frame of a turntable).
+pub struct Interrupt {
+    handlers: &'static Handlers,
     rows: AtomicU32,
 }
 
 impl Interrupt {
-    /// Installs the handlers: the first SIGINT sets [`Interrupt::flag`],
-    /// a second one exits with [`EXIT_INTERRUPTED`].
+    /// Installs the handlers (once per process; later calls share them):
+    /// the first SIGINT, SIGTERM or SIGHUP sets [`Interrupt::flag`], a
+    /// second one exits with 128 + its number.
     ///
     /// # Errors
     /// If the handlers cannot be installed.
     pub fn install() -> anyhow::Result<Self> {
-        let flag = Arc::new(AtomicBool::new(false));
-        // Registered first, so it sees the flag as the first signal left it.
-        signal_hook::flag::register_conditional_shutdown(
-            SIGINT,
-            i32::from(EXIT_INTERRUPTED),
-            Arc::clone(&flag),
-        )?;
-        signal_hook::flag::register(SIGINT, Arc::clone(&flag))?;
-        Ok(Self { flag, rows: AtomicU32::new(0) })
+        match HANDLERS.get_or_init(|| install_handlers().map_err(|e| e.to_string())) {
+            Ok(handlers) => Ok(Self { handlers, rows: AtomicU32::new(0) }),
+            Err(e) => Err(anyhow::anyhow!("cannot install the signal handlers: {e}")),
+        }
     }
 
     /// The render's cancel flag.
     pub fn flag(&self) -> &AtomicBool {
-        &self.flag
+        &self.handlers.flag
     }
 
     /// Records `done` rows finished (from the progress callback).
@@ -76,7 +135,13 @@ impl Interrupt {
         write: impl FnOnce() -> Result<(), OutputError>,
     ) -> anyhow::Error {
         let rows = self.rows.load(Ordering::Relaxed).min(height);
-        let done = format!("interrupted (Ctrl-C) after {rows} of {height} rows");
+        // Stored before the flag was set; SIGINT should it not be.
+        let signal = match self.handlers.signal.load(Ordering::SeqCst) {
+            0 => signal_hook::consts::SIGINT,
+            n => i32::try_from(n).unwrap_or(signal_hook::consts::SIGINT),
+        };
+        let name = signals().into_iter().find(|(s, _)| *s == signal).map_or("a signal", |(_, n)| n);
+        let done = format!("interrupted ({name}) after {rows} of {height} rows");
         let message = if !partial {
             format!("{done}; nothing was written (--partial writes the rows done)")
         } else {
@@ -88,14 +153,17 @@ impl Interrupt {
                 Err(e) => format!("{done}; the partial image could not be written: {e:#}"),
             }
         };
-        Interrupted { message }.into()
+        Interrupted { message, signal }.into()
     }
 }
 
-/// A render stopped by SIGINT (exit status [`EXIT_INTERRUPTED`]).
+/// A render stopped by a signal (exit status 128 + its number:
+/// [`EXIT_INTERRUPTED`] for SIGINT).
 #[derive(Debug)]
 pub struct Interrupted {
     message: String,
+    /// The signal's number.
+    signal: i32,
 }
 
 impl fmt::Display for Interrupted {
@@ -117,18 +185,21 @@ pub fn in_frame(e: anyhow::Error, index: usize, output: &Path, written: usize) -
                 1 => "the frame before it was written".to_owned(),
                 n => format!("the {n} frames before it were written"),
             };
-            Interrupted { message: format!("frame {index} ({}): {}; {before}", output.display(), i.message) }
-                .into()
+            Interrupted {
+                message: format!("frame {index} ({}): {}; {before}", output.display(), i.message),
+                signal: i.signal,
+            }
+            .into()
         }
         Err(e) => e,
     }
 }
 
-/// The exit status for a failed command: 130 after an interrupt, else 1.
+/// The exit status for a failed command: 128 + the signal's number after
+/// an interrupt (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP), else 1.
 pub fn exit_code(e: &anyhow::Error) -> ExitCode {
-    if e.downcast_ref::<Interrupted>().is_some() {
-        ExitCode::from(EXIT_INTERRUPTED)
-    } else {
-        ExitCode::FAILURE
+    match e.downcast_ref::<Interrupted>() {
+        Some(i) => ExitCode::from(u8::try_from(128 + i.signal).unwrap_or(EXIT_INTERRUPTED)),
+        None => ExitCode::FAILURE,
     }
 }

@@ -166,7 +166,7 @@ struct RenderArgs {
     /// No progress bar and no closing statistics line.
     #[arg(short, long)]
     quiet: bool,
-    /// On Ctrl-C, write the rows rendered so far (the rest black) instead of nothing.
+    /// On Ctrl-C (or SIGTERM, SIGHUP), write the rows rendered so far (the rest black) instead of nothing.
     #[arg(long)]
     partial: bool,
     /// AOV passes, comma-separated: depth, normal, geo_normal, albedo, object_id, or all
@@ -428,6 +428,9 @@ fn render_command(args: &RenderArgs) -> Result<()> {
     // a missing folder. Those made here go again if nothing is written
     // (an error, or Ctrl-C without --partial).
     let mut made = writable::MadeDirs::default();
+    // From here on SIGINT, SIGTERM and SIGHUP cancel the render (and so
+    // let the folders be removed) rather than end prism at once.
+    interrupt::Interrupt::install()?;
     let result = make_output_dirs(args, &output, &mut made)
         .and_then(|()| render_frames(args, &loaded, &plan, &output, &aovs, load_seconds));
     if result.is_err() {

@@ -1,6 +1,7 @@
-//! Output safety: Ctrl-C stops a render promptly and writes nothing (or,
-//! with `--partial`, a valid image of the rows done); SIGKILL mid-render
-//! leaves nothing at the output path and no temporary file; no input of
+//! Output safety: Ctrl-C, SIGTERM and SIGHUP stop a render promptly and
+//! write nothing (or, with `--partial`, a valid image of the rows done),
+//! and one during the write lets it finish; SIGKILL mid-render leaves
+//! nothing at the output path and no temporary file; no input of
 //! any kind is overwritten; the same settings give the same image bit for
 //! bit, with 1 and 2 threads and from run to run.
 
@@ -191,13 +192,104 @@ mod signals {
     }
 
     #[test]
+    fn sigterm_and_sighup_stop_the_render_as_sigint_does() {
+        // What `kill`, `timeout`, Slurm and Kubernetes send, and what a
+        // closing terminal sends: the render stops, nothing is written,
+        // the folders it made go, and the status is 128 + the signal.
+        for (sig, name, code) in [("-TERM", "SIGTERM", 143), ("-HUP", "SIGHUP", 129)] {
+            let dir = tempfile::tempdir().unwrap();
+            fs::create_dir(dir.path().join("keep")).unwrap();
+            let (mut child, err, seen) =
+                start_to(dir.path(), &endless_scene(), "keep/new/deeper/img.png", &[]);
+            assert!(dir.path().join("keep/new/deeper").is_dir(), "made before the render");
+            signal(&child, sig);
+            let status = wait(&mut child);
+            let err = rest(err, seen);
+            assert_eq!(status.code(), Some(code), "{name}: {err}");
+            assert!(
+                err.contains(&format!("error: interrupted ({name}) after"))
+                    && err.contains("nothing was written"),
+                "{name}: {err}"
+            );
+            assert!(!err.contains("panicked"), "{err}");
+            assert_eq!(listing(dir.path()), ["keep", "s.toml"], "{name}: {err}");
+            assert!(listing(&dir.path().join("keep")).is_empty(), "{name}: no folder and no temporary file");
+            // With --partial the rows done are written, under the same status.
+            let (mut child, err, seen) = start(dir.path(), &["--partial"]);
+            signal(&child, sig);
+            let status = wait(&mut child);
+            let err = rest(err, seen);
+            assert_eq!(status.code(), Some(code), "{name}: {err}");
+            assert!(err.contains("wrote the partial image to img.png"), "{name}: {err}");
+            assert_eq!(listing(dir.path()), ["img.png", "keep", "s.toml"], "{name}: no temporary file");
+        }
+    }
+
+    #[test]
+    fn sigterm_while_the_image_is_written_leaves_the_whole_image_and_no_temporary_file() {
+        // A plain background at 2048×2048 renders in a moment and takes a
+        // while to encode as EXR (48 MiB): the signal is sent once the
+        // temporary file is there.
+        let dir = tempfile::tempdir().unwrap();
+        let scene = "[render]\nwidth = 2048\nheight = 2048\nspp = 1\nbackground = [0.2, 0.3, 0.4]\n\
+                     [camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+        let (mut child, err, seen) = start_to(dir.path(), scene, "new/img.exr", &[]);
+        let new = dir.path().join("new");
+        let start = Instant::now();
+        let mut sent = false;
+        while child.try_wait().expect("wait").is_none() && start.elapsed() < Duration::from_secs(30) {
+            let tmp = listing(&new).iter().any(|f| f.starts_with(".img.exr.") && f.ends_with(".tmp"));
+            if tmp {
+                signal(&child, "-TERM");
+                sent = true;
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert!(sent, "the temporary file was never seen: {err}");
+        // The write is let finish, as for Ctrl-C.
+        assert_eq!(status.code(), Some(0), "{err}");
+        assert_eq!(listing(&new), ["img.exr"], "the image, and no temporary file: {err}");
+        let img = image::open(new.join("img.exr")).expect("a whole EXR").to_rgb32f();
+        assert_eq!((img.width(), img.height()), (2048, 2048));
+    }
+
+    #[test]
+    fn a_sighup_ignored_at_start_stays_ignored() {
+        // `nohup prism render …`: the terminal closing does not stop it.
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("s.toml"), endless_scene()).unwrap();
+        let mut child = std::process::Command::new("sh")
+            .current_dir(dir.path())
+            .args(["-c", "trap '' HUP; exec \"$0\" render s.toml -o img.png --threads 1"])
+            .arg(env!("CARGO_BIN_EXE_prism"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start sh");
+        let mut err = BufReader::new(child.stderr.take().expect("stderr"));
+        let mut seen = String::new();
+        assert!(read_until_started(&mut err, &mut seen), "{seen}");
+        signal(&child, "-HUP");
+        std::thread::sleep(Duration::from_millis(300));
+        assert!(child.try_wait().expect("wait").is_none(), "SIGHUP stopped it: {seen}");
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(err.contains("interrupted (Ctrl-C)"), "{err}");
+    }
+
+    #[test]
     fn sigkill_mid_render_leaves_no_file() {
         let dir = tempfile::tempdir().unwrap();
         let (mut child, _err, _) = start(dir.path(), &["--partial"]);
         child.kill().expect("SIGKILL");
         let status = wait(&mut child);
         assert!(!status.success());
-        // Nothing at the output path, and no `.prism-*.tmp` beside it.
+        // Nothing at the output path, and no `.img.png.<pid>.<n>.tmp` beside it.
         assert_eq!(listing(dir.path()), ["s.toml"]);
     }
 }
