@@ -10,7 +10,7 @@
 //!                    [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
 //! prism info SCENE [the same overrides as render] [--set KEY=VALUE]... [--json]
 //! prism view SCENE [the same overrides as render] [--set KEY=VALUE]... [--view VIEW] [--light X,Y,Z] [--floor]
-//!                  [--save-dir DIR] [--verbose]
+//!                  [--max-side N] [--max-pixels N] [--max-spp N] [--save-dir DIR] [--verbose]
 //! prism render SCENE (--pixel-bounds X0,X1,Y0,Y1 | --tile I/N | --tile-from-env N) -o TILE.exr
 //! prism render SCENE --frames N [--orbit DEGREES] [--frame I | --frame-from-env] -o OUT.png
 //! prism merge TILE... -o OUT
@@ -141,6 +141,8 @@ struct ViewArgs {
     set: Vec<String>,
     #[command(flatten)]
     obj: ObjArgs,
+    #[command(flatten)]
+    limits: LimitArgs,
     /// Where `s` saves snapshots [default: the current directory].
     #[arg(long, value_name = "DIR")]
     save_dir: Option<PathBuf>,
@@ -322,6 +324,7 @@ fn view_command(args: ViewArgs) -> Result<()> {
         overrides: args.overrides,
         sets: args.set,
         obj: args.obj.options(),
+        limits: args.limits.limits(),
         save_dir: args.save_dir,
         verbose: args.verbose,
     })?;

@@ -144,6 +144,44 @@ fn no_display_fails_clearly() {
 }
 
 #[test]
+fn view_takes_the_limit_flags_its_messages_name() {
+    // An error says "raise it with --max-side": `view` takes that flag, as
+    // render does. Raised, the scene loads, and the viewer goes on to find
+    // no display.
+    let dir = tempfile::tempdir().unwrap();
+    let scene =
+        "[render]\nwidth = 20000\nheight = 100\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    std::fs::write(dir.path().join("wide.toml"), scene).unwrap();
+    let view = |args: &[&str]| {
+        let out = Command::new(BIN)
+            .arg("view")
+            .args(args)
+            .current_dir(dir.path())
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    for (args, flag, raised) in [
+        (&["wide.toml"][..], "--max-side", &["--max-side", "20000"][..]),
+        (
+            &["wide.toml", "--width", "16000", "--height", "16000"],
+            "--max-pixels",
+            &["--max-pixels", "256000000"],
+        ),
+        (&["wide.toml", "--width", "64", "--spp", "70000"], "--max-spp", &["--max-spp", "70000"]),
+    ] {
+        let (code, err) = view(args);
+        assert_eq!(code, Some(1), "{args:?}: {err}");
+        assert!(err.contains(&format!("(raise it with {flag})")), "{args:?}: {err}");
+        let (code, err) = view(&[args, raised].concat());
+        assert_eq!(code, Some(1), "{args:?} {raised:?}: {err}");
+        assert!(err.contains("no display") && !err.contains("over the limit"), "{args:?} {raised:?}: {err}");
+    }
+}
+
+#[test]
 fn bad_arguments_are_usage_errors() {
     let out = Command::new(BIN).args(["view", "x.toml", "--width", "zero"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));

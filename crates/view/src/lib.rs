@@ -123,6 +123,9 @@ pub struct ViewOptions {
     /// OBJ mode's choices (`--view`, `--light`, `--floor`) for an OBJ file;
     /// refused by the loader for a TOML scene.
     pub obj: prism_scene::ObjOptions,
+    /// The limits on image size and samples (`--max-side`, `--max-pixels`,
+    /// `--max-spp`), on every load.
+    pub limits: prism_scene::Limits,
     /// Where `s` saves snapshots (`None`: the current directory).
     pub save_dir: Option<PathBuf>,
     /// Print timings (key-to-frame latency, every frame) to stderr.
@@ -164,7 +167,7 @@ pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, St
         overrides: opts.overrides,
         sets: opts.sets.clone(),
         obj: opts.obj,
-        ..prism_scene::LoadOptions::default()
+        limits: opts.limits,
     };
     // A TOML scene, or an OBJ mesh as a scene of its own.
     let loaded = prism_scene::load_path(path, &options).map_err(|e| e.to_string())?;
