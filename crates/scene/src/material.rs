@@ -145,10 +145,8 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
     };
     if let Some((key, span)) = first_foreign(&keys, allowed) {
         let allowed = allowed.join(", ");
-        return Err(ctx.invalid(
-            &span,
-            format!("`{key}` is not a key of {kname} texture (it takes: type, {allowed})"),
-        ));
+        return Err(ctx
+            .invalid(&span, format!("`{key}` is not a key of {kname} texture (it takes: type, {allowed})")));
     }
     match kind {
         TextureKind::Checker => {
@@ -160,8 +158,10 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
         }
         TextureKind::Image => {
             let Some(p) = &d.path else {
-                return Err(ctx
-                    .invalid(&t.span(), "an image texture needs `path`, the image file (PNG, JPEG, BMP, EXR or Radiance HDR)"));
+                return Err(ctx.invalid(
+                    &t.span(),
+                    "an image texture needs `path`, the image file (PNG, JPEG, BMP, EXR or Radiance HDR)",
+                ));
             };
             let image = image(p, d.wrap())?;
             let mapping = match d.mapping.as_ref().map_or(MappingDef::Uv, |m| *m.get_ref()) {
