@@ -138,6 +138,25 @@ impl<'a> Ctx<'a> {
         Ok(v)
     }
 
+    /// A surface's own colour (its albedo): [`Ctx::color`], and a warning
+    /// where a channel is above 1, which reflects more light than reaches
+    /// the surface (allowed, as other renderers allow it).
+    pub fn surface_color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
+        let v = self.color(c, what)?;
+        if v.max_element() > 1.0 && !looks_8bit(&c.get_ref().0) {
+            self.note(
+                &c.span(),
+                &format!("{what} {v} is above 1: the surface reflects more light than reaches it (components are 0–1)"),
+            );
+        }
+        Ok(v)
+    }
+
+    /// [`Ctx::surface_color`], or `default` when it is not given.
+    pub fn opt_surface_color(&self, c: Option<&Spanned<Color>>, what: &str, default: Vec3) -> Result<Vec3> {
+        c.map_or(Ok(default), |c| self.surface_color(c, what))
+    }
+
     /// Three numbers >= 0 that may exceed 1 by meaning (a light's
     /// radiance, an absorption coefficient): checked, no 8-bit warning.
     pub fn rgb(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {

@@ -84,7 +84,7 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
         ));
     }
     if let Some(c) = &d.color {
-        m.texture = Texture::Solid(ctx.color(c, "color")?);
+        m.texture = Texture::Solid(ctx.surface_color(c, "color")?);
     }
     if let Some(t) = &d.texture {
         m.texture = texture(ctx, t, image)?;
@@ -150,8 +150,8 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
     }
     match kind {
         TextureKind::Checker => {
-            let a = ctx.opt_color(d.a.as_ref(), "checker colour a", Vec3::splat(0.9))?;
-            let b = ctx.opt_color(d.b.as_ref(), "checker colour b", Vec3::splat(0.1))?;
+            let a = ctx.opt_surface_color(d.a.as_ref(), "checker colour a", Vec3::splat(0.9))?;
+            let b = ctx.opt_surface_color(d.b.as_ref(), "checker colour b", Vec3::splat(0.1))?;
             let size = ctx.opt_num(d.size.as_ref(), 1.0, |n| ctx.positive(n, "checker size"))?;
             let world = d.space.as_ref().is_none_or(|s| *s.get_ref() == SpaceDef::World);
             Ok(Texture::Checker { a, b, size, world })

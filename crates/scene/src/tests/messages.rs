@@ -112,6 +112,31 @@ fn colours_that_look_8_bit_warn_and_hex_is_offered() {
 }
 
 #[test]
+fn surface_colours_above_1_warn_and_light_colours_do_not() {
+    let above = |w: &String| w.contains("is above 1");
+    let text = BASE.replace("color = [0.8, 0.1, 0.1]", "color = [1.5, 0, 0]");
+    let line = text.lines().position(|l| l.contains("[1.5, 0, 0]")).unwrap() + 1;
+    let w: Vec<String> = parse(&text).unwrap().warnings.into_iter().filter(above).collect();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].starts_with(&format!("test.toml:{line}:9: color [1.5, 0, 0] is above 1")), "{}", w[0]);
+    let checker = BASE.replace(
+        "color = [0.8, 0.1, 0.1]",
+        "texture = { type = \"checker\", a = [2, 2, 2.5], b = [0, 0, 0] }",
+    );
+    assert!(parse(&checker).unwrap().warnings.iter().any(|w| w.contains("checker colour a") && above(w)));
+    // 0–1 colours, 8-bit-looking ones (their own warning), lights and the
+    // background say nothing of it.
+    for c in ["[1, 1, 1]", "[0.8, 0.1, 0.1]", "[255, 0, 0]"] {
+        let loaded = parse(&BASE.replace("[0.8, 0.1, 0.1]", c)).unwrap();
+        assert!(!loaded.warnings.iter().any(above), "{c}: {:?}", loaded.warnings);
+    }
+    let hdr = BASE
+        .replace("[[lights]]", "[[lights]]\ncolor = [20, 20, 20]")
+        .replace("spp = 2", "spp = 2\nbackground = [3, 3, 3.5]");
+    assert!(!parse(&hdr).unwrap().warnings.iter().any(above));
+}
+
+#[test]
 fn a_name_given_as_another_type_says_a_string_is_wanted() {
     let objects = "(one of: sphere, plane, cuboid, cylinder, cone, disk, triangle, mesh)";
     refused(&[
