@@ -16,7 +16,10 @@ use std::sync::Arc;
 /// acos(d.y) / π`: the image's centre column is the −Z direction (where the
 /// default camera looks), its top row straight up, and a positive rotation
 /// turns the picture counter-clockwise seen from above, as a transform's
-/// `rotate_y` turns an object (what was at +X comes to −Z at 90°).
+/// `rotate_y` turns an object (what was at +X comes to −Z at 90°). The
+/// image is filtered across its left and right edges, which meet, but not
+/// across its top or bottom: within half a row of a pole it reads the
+/// first (or last) row.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
     /// The image, linear RGB.
@@ -33,7 +36,12 @@ impl Environment {
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
         let d = dir.normalize_or(Vec3::Y);
         let u = 0.5 + d.x.atan2(-d.z) / TAU + self.rotation_deg / 360.0;
-        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        // Around the poles, between the first (or last) row's centres and
+        // the pole: that row's colour. The image wraps left to right only;
+        // filtering across the top edge would mix in the bottom row, the
+        // other pole.
+        let half = 0.5 / self.image.height() as f32;
+        let v = (d.y.clamp(-1.0, 1.0).acos() / PI).clamp(half, 1.0 - half);
         self.image.sample(Vec2::new(u - u.floor(), v))
     }
 }
@@ -68,6 +76,22 @@ mod tests {
         let r = env(90.0);
         assert!((r.radiance(at(-45.0)) - e.radiance(at(45.0))).length() < 1e-5);
         assert!(e.radiance(Vec3::ZERO).is_finite());
+    }
+
+    #[test]
+    fn the_poles_show_their_own_rows_not_the_other_pole() {
+        // Rows of 0, 1, 2 … 7 (top to bottom): straight up, and just off it,
+        // reads the top row; straight down the bottom one.
+        let texels = (0..32).map(|i| Vec3::splat((i / 4) as f32)).collect();
+        let image = Arc::new(ImageTexture::from_linear(4, 8, texels, Wrap::Repeat).unwrap());
+        let e = Environment { image, rotation_deg: 0.0 };
+        for d in [Vec3::Y, Vec3::new(0.0, 1.0, -1e-3), Vec3::new(2e-3, 1.0, 1e-3)] {
+            assert_eq!(e.radiance(d), Vec3::ZERO, "{d}");
+            assert_eq!(e.radiance(-d), Vec3::splat(7.0), "{}", -d);
+        }
+        // Between rows, the filter as before: 45° up is v = ¼, between
+        // rows 1 and 2.
+        assert!((e.radiance(Vec3::new(0.0, 1.0, -1.0)) - Vec3::splat(1.5)).length() < 1e-5);
     }
 
     #[test]
