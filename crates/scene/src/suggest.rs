@@ -117,19 +117,22 @@ fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
         Some((w, e)) => (w.trim_matches('`'), backticked(e)),
         None => (rest.split(',').next().unwrap_or(rest).trim_matches('`'), Vec::new()),
     };
+    // The key as shown: a long one cut short (a stray paste would fill the
+    // terminal); the suggestion is made from the whole of it.
+    let shown = shortened(word);
     if let Some(entry) = entry {
         let (own, common) = entry.keys();
         let all: Vec<&str> = own.iter().chain(common.iter()).copied().collect();
         let name = entry.what();
         return format!(
-            "unknown key `{word}` in a {name}{} (a {name} takes: {}, plus {})",
+            "unknown key `{shown}` in a {name}{} (a {name} takes: {}, plus {})",
             did_you_mean(word, &all),
             own.join(", "),
             common.join(", ")
         );
     }
     if expected.is_empty() {
-        return format!("unknown {what} `{word}`: this table takes no keys");
+        return format!("unknown {what} `{shown}`: this table takes no keys");
     }
     // A texture's keys are those of both kinds: list them by kind.
     let (checker, image) = (crate::material::CHECKER_KEYS, crate::material::IMAGE_KEYS);
@@ -139,17 +142,26 @@ fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
     given.sort_unstable();
     if given == texture {
         return format!(
-            "unknown key `{word}`{} (a checker texture takes: type, {}; an image texture: type, {})",
+            "unknown key `{shown}`{} (a checker texture takes: type, {}; an image texture: type, {})",
             did_you_mean(word, &expected),
             checker.join(", "),
             image.join(", ")
         );
     }
     format!(
-        "unknown {what} `{word}`{} (expected one of: {})",
+        "unknown {what} `{shown}`{} (expected one of: {})",
         did_you_mean(word, &expected),
         expected.join(", ")
     )
+}
+
+/// `word`, cut to its first 60 characters and "…" when it is longer.
+fn shortened(word: &str) -> std::borrow::Cow<'_, str> {
+    const SHOWN: usize = 60;
+    match word.char_indices().nth(SHOWN) {
+        Some((end, _)) => format!("{}…", &word[..end]).into(),
+        None => word.into(),
+    }
 }
 
 /// What serde expected, in scene terms.
@@ -226,6 +238,13 @@ mod tests {
         assert_eq!(m, "unknown key `widht`; did you mean `width`? (expected one of: width, height, spp)");
         let m = friendly("unknown field `zzz`, expected `a` or `b`", None);
         assert_eq!(m, "unknown key `zzz` (expected one of: a, b)");
+        // A long key is shown cut short, whatever its characters.
+        let long = "ké".repeat(50_000);
+        let m = friendly(&format!("unknown field `{long}`, expected `a` or `b`"), None);
+        assert_eq!(m, format!("unknown key `{}…` (expected one of: a, b)", "ké".repeat(30)));
+        let sixty = "k".repeat(60);
+        let m = friendly(&format!("unknown field `{sixty}`, expected `a` or `b`"), None);
+        assert_eq!(m, format!("unknown key `{sixty}` (expected one of: a, b)"));
         let m = friendly("unknown variant `spheer`, expected one of `sphere`, `plane`", None);
         assert_eq!(m, "unknown name `spheer`; did you mean `sphere`? (expected one of: sphere, plane)");
         for m in ["f64", "u64", "struct Fields", "a sequence"] {
