@@ -21,6 +21,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use toml::Spanned;
 
+/// Above this depth, a scene with glass and no contribution cut-off is
+/// warned about: up to 2^depth rays a sample.
+const SPLIT_WARN_DEPTH: u32 = 12;
+
 /// The vertical field of view (degrees) of an OBJ file as a scene.
 const OBJ_FOV: f32 = 40.0;
 
@@ -407,6 +411,17 @@ impl<'a> Build<'a> {
     ) -> Result<LoadedScene> {
         if self.objects.is_empty() {
             self.warn("the scene has no objects");
+        }
+        // A dielectric splits each ray it meets in two; without a cut-off
+        // only the depth limit ends the doubling.
+        let list = &self.materials.list;
+        let splits =
+            self.object_materials.iter().any(|&m| list.get(m as usize).is_some_and(|m| m.transmission > 0.0));
+        if settings.min_contribution == 0.0 && settings.max_depth > SPLIT_WARN_DEPTH && splits {
+            let d = settings.max_depth;
+            self.warn(&format!(
+                "min_contribution = 0 with max_depth {d}: a glass surface splits each ray in two (reflected and refracted), so a pixel may trace up to 2^{d} rays; a cut-off such as 0.001 (the default) ends the paths that no longer change the picture"
+            ));
         }
         let objects_len = self.objects.len();
         let accel = Accel::build(std::mem::take(&mut self.meshes), std::mem::take(&mut self.objects))

@@ -167,3 +167,21 @@ fn a_name_given_as_another_type_says_a_string_is_wanted() {
     );
     assert!(!err.contains("wanted"), "{err}");
 }
+
+#[test]
+fn glass_without_a_cut_off_at_a_high_depth_is_warned_about() {
+    let glass = "[materials.glass]\ntransmission = 1\n[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"glass\"\n";
+    let splits = |w: &String| w.contains("splits each ray in two");
+    let with = |render: &str| {
+        let text = format!("{BASE}{glass}").replace("spp = 2", &format!("spp = 2\n{render}"));
+        parse(&text).unwrap().warnings
+    };
+    let w = with("min_contribution = 0\nmax_depth = 40");
+    assert!(w.iter().any(|w| splits(w) && w.contains("up to 2^40 rays")), "{w:?}");
+    // The default cut-off, a low depth, or no glass: nothing said.
+    assert!(!with("max_depth = 40").iter().any(splits));
+    assert!(!with("min_contribution = 0\nmax_depth = 12").iter().any(splits));
+    let mirror = "[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"red\"\n";
+    let text = format!("{BASE}{mirror}").replace("spp = 2", "spp = 2\nmin_contribution = 0\nmax_depth = 40");
+    assert!(!parse(&text).unwrap().warnings.iter().any(splits));
+}
