@@ -612,10 +612,10 @@ fn render_to(
             Vec::new()
         }
         _ => {
-            // On the render's threads (`--threads`): the PNG encoder is parallel.
-            prism_shade::in_pool(settings.threads, || {
-                plan.write_image(&image, alpha.as_deref(), passes.as_ref())
-            })?;
+            // On the render's threads (`--threads`): the PNG encoder is
+            // parallel, by rows (no more workers than rows: idle ones cost).
+            let threads = settings.threads.map(|n| n.min(image.height.max(1) as usize));
+            prism_shade::in_pool(threads, || plan.write_image(&image, alpha.as_deref(), passes.as_ref()))?;
             match &passes {
                 Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
                 None => Vec::new(),

@@ -409,7 +409,11 @@ pub(crate) fn render_pixels<'a>(
     let row_len = rw as usize;
     let (x0, y0) = (xs.start as usize, ys.start as usize);
     let cols = x0..xs.end as usize;
-    in_pool(settings.threads, || match (beauty, aov_rows.is_empty()) {
+    // A row is the unit of work: more workers than rows only wait, and
+    // thousands of idle ones cost more than the render (each looks for
+    // work in every other's queue).
+    let threads = settings.threads.map(|n| n.min(rh.max(1) as usize));
+    in_pool(threads, || match (beauty, aov_rows.is_empty()) {
         (true, true) => {
             match adaptive {
                 None => {
