@@ -25,6 +25,10 @@ use toml::Spanned;
 /// warned about: up to 2^depth rays a sample.
 const SPLIT_WARN_DEPTH: u32 = 12;
 
+/// The farthest an OBJ file's framed camera stands from the mesh, in
+/// radii of its bounding sphere.
+const FRAMING_REACH: f32 = 1e4;
+
 /// The vertical field of view (degrees) of an OBJ file as a scene.
 const OBJ_FOV: f32 = 40.0;
 
@@ -105,7 +109,21 @@ pub(crate) fn build_obj_scene(
     let half_v = (vfov / 2.0).to_radians();
     let half_h = (half_v.tan() * w.max(1) as f32 / h.max(1) as f32).atan();
     let framing = crate::obj_view::Framing::new(options.obj.view.unwrap_or_default(), bounds);
-    let eye = c + framing.toward_eye * (r / half_v.min(half_h).sin());
+    // The eye stands back so the bounding sphere fills the view; a field of
+    // view so narrow that it stands more than `FRAMING_REACH` radii away
+    // leaves the mesh smaller than 32-bit floats resolve at the eye.
+    let away = 1.0 / half_v.min(half_h).sin();
+    if let Some(fov) = ov.fov
+        && !(away <= FRAMING_REACH)
+    {
+        return Err(SceneError::Option {
+            flag: "--fov",
+            message: format!(
+                "{fov}° is too narrow to frame the mesh: the camera would stand {away:.1e} times the mesh's radius away (at most {FRAMING_REACH:.0e}); give 0.02° or more"
+            ),
+        });
+    }
+    let eye = c + framing.toward_eye * (r * away);
     let light = match options.obj.light {
         Some(l) if l.is_finite() => l,
         Some(l) => {

@@ -127,3 +127,26 @@ fn an_obj_file_refuses_named_cameras_and_sets_naming_the_flag() {
     let e = load_obj_scene(&path, &opts).unwrap_err().to_string();
     assert!(e.starts_with("--set: render.spp=2"), "{e}");
 }
+
+#[test]
+fn a_field_of_view_too_narrow_to_frame_the_mesh_names_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = deep_box(dir.path());
+    let with_fov = |fov: f32| {
+        let opts = LoadOptions {
+            overrides: Overrides { fov: Some(fov), ..Overrides::default() },
+            ..LoadOptions::default()
+        };
+        load_obj_scene(&path, &opts)
+    };
+    for fov in [1e-45, 1e-30, 1e-3] {
+        let e = with_fov(fov).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("--fov: {fov}° is too narrow to frame the mesh")), "{e}");
+    }
+    // Narrow but usable: the eye within 10⁴ radii, the view on the mesh.
+    let cam = with_fov(0.02).unwrap().settings.camera;
+    let centre = Vec3::new(0.0, 0.5, 0.0);
+    let radius = Vec3::new(2.0, 1.0, 6.0).length() / 2.0;
+    let away = (cam.position() - centre).length() / radius;
+    assert!(away > 5000.0 && away <= 1e4, "{away}");
+}
