@@ -250,9 +250,6 @@ fn read_mtl(path: &Path) -> Option<Vec<u8>> {
     std::fs::read(path).ok()
 }
 
-/// The file an MTL material's `map_Kd` value names in `dir`: the value as
-/// a file name if there is such a file, else its last word (options such
-/// as `-s 1 1 1` come before the name); checked to be a regular file.
 /// Whether a texture of cost `c` fits in `room` beside the `kept` bytes of
 /// the textures read before it; the reason it does not.
 fn fits(room: Option<MemoryRoom>, kept: u64, c: &TextureCost) -> Result<(), String> {
@@ -277,6 +274,9 @@ fn fits(room: Option<MemoryRoom>, kept: u64, c: &TextureCost) -> Result<(), Stri
     ))
 }
 
+/// The file an MTL material's `map_Kd` value names in `dir`: the value as
+/// a file name if there is such a file, else its last word (options such
+/// as `-s 1 1 1` come before the name); checked to be a regular file.
 fn mtl_texture_path(dir: &Path, value: &str) -> Result<PathBuf, Failure> {
     let direct = dir.join(value.trim());
     let path =

@@ -21,6 +21,13 @@ use std::ops::ControlFlow;
 /// exhaust the stack).
 pub const MAX_DEPTH_LIMIT: u32 = 64;
 
+/// How near its start (relative to the size of its origin's coordinates,
+/// or the scene's offset scale near the origin) a ray inside a closed
+/// solid may meet the solid's front face for that to count as the entry
+/// met again ([`Tracer::trace_hit`]): a few thousand units in the last
+/// place, well past a spawned ray's offset of 256.
+const REENTRY: f32 = 4096.0 * f32::EPSILON;
+
 /// No object: the "skip the exit of" argument of an ordinary ray.
 const NO_OBJECT: u32 = u32::MAX;
 
@@ -413,12 +420,14 @@ impl<'a> Tracer<'a> {
         };
         if h.hit.front_face
             && (h.object == skip_exit || media.contains(h.object))
+            && seg <= REENTRY * ray.origin.abs().max_element().max(self.offset)
             && is_closed(scene, h.object)
         {
             // Inside a closed solid its surface is met from behind: its
-            // front face here is the entry met again, where the ray went in
-            // through a mesh's edge or corner and the next triangle's plane
-            // lies beyond the ray's offset. Go on through it, unshaded.
+            // front face right at the ray's start is the entry met again,
+            // where the ray went in through a mesh's edge or corner and the
+            // next triangle's plane lies beyond the ray's offset. Go on
+            // through it, unshaded.
             let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
             let l = self.trace(&next, depth, weight * absorb, end, skip_exit, cone, media) * absorb;
             return self.fog_blend(l, fog_t);
@@ -465,8 +474,16 @@ impl<'a> Tracer<'a> {
         // Dielectric split: Fresnel reflectance F and the refracted direction,
         // between the material's index and that of the medium around it.
         let (fresnel, refracted, eta) = if mat.transmission > 0.0 {
-            let outside = media.around(h.object).map_or(1.0, |m| self.scene.material_of(m).ior);
-            let (n1, n2) = if hit.front_face { (outside, mat.ior) } else { (mat.ior, outside) };
+            let ior = |m: u32| self.scene.material_of(m).ior;
+            let (n1, n2) = match media.innermost() {
+                // Leaving a solid that one entered after it overlaps: the
+                // ray stays in that one, and this surface does not bend it.
+                Some(m) if !hit.front_face && m != h.object && media.contains(h.object) => (ior(m), ior(m)),
+                _ => {
+                    let outside = media.around(h.object).map_or(1.0, ior);
+                    if hit.front_face { (outside, mat.ior) } else { (mat.ior, outside) }
+                }
+            };
             match refract(d, n, n1 / n2) {
                 Some(t) => (fresnel(-d.dot(n), n1, n2), Some(t), n1 / n2),
                 None => (1.0, None, n1 / n2),
@@ -475,32 +492,38 @@ impl<'a> Tracer<'a> {
             (0.0, None, 1.0)
         };
         // The media beyond the surface: a ray through a dielectric solid's
-        // surface enters or leaves it.
-        let through = if (mat.transmission > 0.0 || mat.transparency > 0.0) && is_medium(self.scene, h.object)
+        // surface enters or leaves it. Whether a new ray goes through is
+        // which side of the geometric surface it leaves on (a shading
+        // normal can send a reflected ray through, or a refracted one back).
+        let beyond = if (mat.transmission > 0.0 || mat.transparency > 0.0) && is_medium(self.scene, h.object)
         {
             if hit.front_face { media.entered(h.object) } else { media.left(h.object) }
         } else {
             *media
         };
+        let side = d.dot(hit.geo_normal);
+        let media_along = |dir: Vec3| if dir.dot(hit.geo_normal) * side > 0.0 { &beyond } else { media };
         // Mirror reflection and the dielectric's reflected part share one ray.
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 && self.worth(weight * k_mirror) {
-            let r = Ray::spawn_scaled(hit.point, hit.geo_normal, reflect(d, n), self.offset);
+            let dir = reflect(d, n);
+            let r = Ray::spawn_scaled(hit.point, hit.geo_normal, dir, self.offset);
             let c = cone.reflect(cone.width, curvature(self.scene, h));
-            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c, media);
+            let m = media_along(dir);
+            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c, m);
         }
         if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
             let r = Ray::spawn_scaled(hit.point, hit.geo_normal, d, self.offset);
             let skip = if hit.front_face { h.object } else { NO_OBJECT };
             let w = weight * mat.transparency;
-            out += mat.transparency * self.trace(&r, depth + 1, w, path, skip, cone, &through);
+            out += mat.transparency * self.trace(&r, depth + 1, w, path, skip, cone, media_along(d));
         }
         if let Some(t) = refracted {
             let k = mat.transmission * (1.0 - fresnel);
             if k > 0.0 && self.worth(weight * k) {
                 let r = Ray::spawn_scaled(hit.point, hit.geo_normal, t, self.offset);
                 let c = cone.refract(cone.width, eta, curvature(self.scene, h));
-                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c, &through);
+                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c, media_along(t));
             }
         }
         out

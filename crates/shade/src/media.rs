@@ -10,10 +10,13 @@
 //! A solid inside another replaces it: where a ray is inside both, the
 //! inner one's index and absorption hold (a clear air bubble in green glass
 //! is clear, and bends light as air in glass does). Where solids overlap
-//! rather than nest, the one entered last along the ray holds; scenes
-//! should nest solids, not overlap them. A shadow segment's crossings come
+//! rather than nest, the one entered last along the ray holds, and the
+//! surface of an earlier one inside it does not bend the ray (a liquid
+//! reaching into its glass wall). A shadow segment's crossings come
 //! unordered from the acceleration structure: [`optical_depth`] sorts them
-//! and applies the same rule.
+//! and applies the same rule. A ray starts outside every solid: a camera
+//! inside glass is not known to be in it (the integrator then absorbs only
+//! the segments that end on the glass's inner surface).
 
 use prism_geometry::glam::Vec3;
 

@@ -285,6 +285,43 @@ fn an_air_gap_inside_glass_bends_as_air_in_glass_does() {
 }
 
 #[test]
+fn a_liquid_overlapping_its_glass_wall_bends_once_at_each_interface() {
+    // Liquid (1.33) from z = 0.8 down to −0.3, overlapping the glass wall
+    // (1.5) from z = 0.5 to −0.5: air → liquid at 0.8, liquid → glass at
+    // 0.5 (the glass, entered last, counts), no surface where the liquid
+    // ends inside the glass at −0.3, glass → air at −0.5. So 0.3 of liquid
+    // and the 1.0 of glass displace the ray.
+    let (n_glass, n_liquid) = (1.5f32, 1.33f32);
+    let wall_of_glass = cuboid(Vec3::new(-50.0, -50.0, -0.5), Vec3::new(50.0, 50.0, 0.5));
+    let liquid = cuboid(Vec3::new(-40.0, -40.0, -0.3), Vec3::new(40.0, 40.0, 0.8));
+    let (wall, wall_m) = ramp_wall();
+    let eye = Vec3::new(-3.0, 0.0, 5.0);
+    let cam = camera(eye, Vec3::ZERO, Vec3::Y, 10.0, 1, 1);
+    let s = scene(
+        vec![(liquid, I, glass(n_liquid)), (wall_of_glass, I, glass(n_glass)), (wall, I, wall_m)],
+        vec![],
+        cam,
+    );
+    let img = render(&s, 1, 4);
+    let d = cam.ray(0.5, 0.5).dir;
+    let cos_i = -d.z;
+    let theta_i = cos_i.acos();
+    let (theta_l, theta_g) = ((theta_i.sin() / n_liquid).asin(), (theta_i.sin() / n_glass).asin());
+    let f = prism_shade::optics::fresnel;
+    let w = (1.0 - f(cos_i, 1.0, n_liquid))
+        * (1.0 - f(theta_l.cos(), n_liquid, n_glass))
+        * (1.0 - f(theta_g.cos(), n_glass, 1.0));
+    let x_got = wall_x(px(&img, 0, 0).x / w);
+    let x_straight = eye.x + d.x * (eye.z + 3.0) / cos_i;
+    let shift = 0.3 * (theta_i.tan() - theta_l.tan()) + 1.0 * (theta_i.tan() - theta_g.tan());
+    assert!(
+        (x_got - (x_straight - shift)).abs() < 2e-3,
+        "wall hit at {x_got}, expected {}",
+        x_straight - shift
+    );
+}
+
+#[test]
 fn an_object_inside_absorbing_glass_is_seen_through_it() {
     // A white ball inside a block of absorbing glass of index 1 (no bending,
     // no reflection): the view ray crosses 1.5 of glass before the ball.
@@ -692,6 +729,68 @@ fn a_ray_through_a_closed_meshs_corner_is_shaded_once() {
     let absorption = Vec3::new(0.1, 0.2, 0.3);
     let img = shot(Material { absorption, ..glass(1.0) });
     assert_close(px(&img, 10, 10), Vec3::new(0.2, 0.4, 0.6) * (-absorption * 2.0).exp(), 1e-4);
+}
+
+#[test]
+fn a_ray_that_leaves_absorbing_glass_by_a_bent_normal_is_not_absorbed_outside_it() {
+    // A glass cube mesh whose top face's shading normal leans 45° toward
+    // +Z. A ray inside meets the top beyond the critical angle; its
+    // reflection about the leaning normal goes out through the top. Out
+    // there it is outside the glass: a ceiling at y = 1.5 and one at y = 6
+    // look the same through it (before, the glass absorbed the way up).
+    use prism_bvh::{Accel, Object};
+    use std::sync::Arc;
+    let corners =
+        [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]];
+    let quads: [([usize; 4], Vec3); 6] = [
+        ([4, 5, 6, 7], Vec3::Z),
+        ([1, 0, 3, 2], Vec3::NEG_Z),
+        ([5, 1, 2, 6], Vec3::X),
+        ([0, 4, 7, 3], Vec3::NEG_X),
+        ([7, 6, 2, 3], Vec3::new(0.0, 1.0, 1.0).normalize()),
+        ([0, 1, 5, 4], Vec3::NEG_Y),
+    ];
+    let (mut positions, mut normals, mut faces) = (Vec::new(), Vec::new(), Vec::new());
+    for (quad, n) in quads {
+        let base = positions.len() as u32;
+        for k in quad {
+            positions.push(Vec3::from_array(corners[k].map(|c| c as f32)));
+            normals.push(n);
+        }
+        faces.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+    }
+    let cube = prism_geometry::TriangleMesh::new(positions, Some(normals), None, faces).expect("valid mesh");
+    assert!(cube.is_closed());
+    let glass = Material { absorption: Vec3::new(0.0, 0.5, 0.5), ..glass(1.5) };
+    let seen = |ceiling: f32| {
+        let objects = vec![
+            Object::Mesh { mesh: 0, transform: I },
+            Object::Shape(prism_geometry::Instance::new(plane(Vec3::new(0.0, ceiling, 0.0), Vec3::NEG_Y), I)),
+        ];
+        let scene = prism_shade::Scene {
+            accel: Accel::build(vec![Arc::new(cube.clone())], objects).expect("builds"),
+            object_materials: vec![0, 1],
+            materials: vec![glass.clone(), flat(Vec3::ONE)],
+            lights: vec![],
+            ambient: Vec3::ONE,
+            background: Vec3::ZERO,
+            environment: None,
+            fog: None,
+        };
+        let s = prism_shade::RenderSettings {
+            camera: camera(Vec3::new(0.0, 0.0, 6.0), Vec3::new(0.0, 0.8, 1.0), Vec3::Y, 0.01, 1, 1),
+            fog: false,
+            spp: 1,
+            max_depth: 6,
+            min_contribution: 0.0,
+            threads: Some(1),
+            antialias: prism_shade::Antialias::default(),
+        };
+        px(&prism_shade::render(&scene, &s, prism_shade::RenderHooks::default()).0, 0, 0)
+    };
+    let (near, far) = (seen(1.5), seen(6.0));
+    assert!(near.y > 0.1, "the ceiling is seen: {near}");
+    assert_close(far, near, 1e-5);
 }
 
 #[test]
