@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{GOOD, assert_clean_failure, listing, png_bytes, prism, prism_cmd, text};
+use common::{GOOD, assert_clean_failure, listing, png_bytes, prism, text};
 use std::fs;
 use std::path::Path;
 
@@ -44,7 +44,14 @@ mod signals {
         args: &[&str],
     ) -> (Child, BufReader<ChildStderr>, String) {
         fs::write(dir.join("s.toml"), scene).unwrap();
-        let mut child = prism_cmd(dir)
+        // SIGHUP at its default, whatever the test runs under: under
+        // `nohup` it is inherited ignored, and prism then keeps ignoring it
+        // (`a_sighup_ignored_at_start_stays_ignored`). GNU env execs prism,
+        // so the child's id is prism's.
+        let mut child = std::process::Command::new("env")
+            .current_dir(dir)
+            .arg("--default-signal=HUP")
+            .arg(env!("CARGO_BIN_EXE_prism"))
             .args(["render", "s.toml", "-o", output, "--threads", "1"])
             .args(args)
             .stdout(Stdio::null())
