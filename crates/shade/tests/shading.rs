@@ -206,6 +206,18 @@ fn wall_x(value: f32) -> f32 {
     (value * 0.5 + 0.25) * 8.0 - 2.0
 }
 
+/// Where a straight ray from `eye` along `d` meets the ramp wall (z = −3).
+fn wall_x_straight(eye: Vec3, d: Vec3) -> f32 {
+    eye.x + d.x * (eye.z + 3.0) / -d.z
+}
+
+/// Asserts that the wall's `value` seen along the ray from `eye` along `d`
+/// was met `shift` short of the straight ray's point (to 2e-3).
+fn assert_wall_hit(value: f32, eye: Vec3, d: Vec3, shift: f32) {
+    let (got, want) = (wall_x(value), wall_x_straight(eye, d) - shift);
+    assert!((got - want).abs() < 2e-3, "wall hit at {got}, expected {want}");
+}
+
 #[test]
 fn glass_slab_displaces_the_ray_by_the_analytic_amount() {
     let (n, thick) = (1.5f32, 1.0f32);
@@ -224,26 +236,19 @@ fn glass_slab_displaces_the_ray_by_the_analytic_amount() {
     // Beer–Lambert over the path inside: thick / cos θt.
     let inside = thick / theta_t.cos();
     let got = px(&img, 0, 0) / ((1.0 - f) * (1.0 - f));
-    let x_got = wall_x(got.x);
     let absorbed = (-absorption * inside).exp();
     assert_close(got, got.x * absorbed, 1e-4);
-    // Without the slab the ray would meet the wall at x_straight; inside the
-    // glass it runs at θt instead of θi for `thick`.
-    let x_straight = eye.x + d.x * (eye.z + 3.0) / cos_i;
+    // Inside the glass the ray runs at θt instead of θi for `thick`.
     let shift = thick * (theta_i.tan() - theta_t.tan());
     // Perpendicular displacement, the textbook form.
     let perp = thick * (theta_i - theta_t).sin() / theta_t.cos();
     assert!((perp - shift * theta_i.cos()).abs() < 1e-5);
     assert!(shift > 0.2);
-    assert!(
-        (x_got - (x_straight - shift)).abs() < 2e-3,
-        "wall hit at {x_got}, expected {}",
-        x_straight - shift
-    );
+    assert_wall_hit(got.x, eye, d, shift);
     // And without the slab: straight.
     s.materials[0] = Material { transparency: 1.0, ..flat(Vec3::ZERO) };
     let img = render(&s, 1, 2);
-    assert!((wall_x(px(&img, 0, 0).x) - x_straight).abs() < 2e-3);
+    assert_wall_hit(px(&img, 0, 0).x, eye, d, 0.0);
 }
 
 #[test]
@@ -274,14 +279,7 @@ fn an_air_gap_inside_glass_bends_as_air_in_glass_does() {
     let got = px(&img, 0, 0) / ((1.0 - f_in) * (1.0 - f_out)).powi(2);
     let absorbed = (-absorption * (thick - gap) / theta_t.cos()).exp();
     assert_close(got, got.x * absorbed, 1e-4);
-    let x_straight = eye.x + d.x * (eye.z + 3.0) / cos_i;
-    let shift = (thick - gap) * (theta_i.tan() - theta_t.tan());
-    let x_got = wall_x(got.x);
-    assert!(
-        (x_got - (x_straight - shift)).abs() < 2e-3,
-        "wall hit at {x_got}, expected {}",
-        x_straight - shift
-    );
+    assert_wall_hit(got.x, eye, d, (thick - gap) * (theta_i.tan() - theta_t.tan()));
 }
 
 #[test]
@@ -311,14 +309,8 @@ fn a_liquid_overlapping_its_glass_wall_bends_once_at_each_interface() {
     let w = (1.0 - f(cos_i, 1.0, n_liquid))
         * (1.0 - f(theta_l.cos(), n_liquid, n_glass))
         * (1.0 - f(theta_g.cos(), n_glass, 1.0));
-    let x_got = wall_x(px(&img, 0, 0).x / w);
-    let x_straight = eye.x + d.x * (eye.z + 3.0) / cos_i;
     let shift = 0.3 * (theta_i.tan() - theta_l.tan()) + 1.0 * (theta_i.tan() - theta_g.tan());
-    assert!(
-        (x_got - (x_straight - shift)).abs() < 2e-3,
-        "wall hit at {x_got}, expected {}",
-        x_straight - shift
-    );
+    assert_wall_hit(px(&img, 0, 0).x / w, eye, d, shift);
 }
 
 #[test]
