@@ -224,7 +224,7 @@ fn cases() -> Vec<Case> {
     let s = with("radius = 1\n", "");
     v.push(Case::new("missing radius", s.clone(), last_objects(&s), "a sphere needs `radius`"));
     let s = with("look_at = [0, 1, 0]\n", "");
-    v.push(Case::new("missing camera look_at", s.clone(), on(&s, "[camera]"), "missing field `look_at`"));
+    v.push(Case::new("missing camera look_at", s.clone(), on(&s, "[camera]"), "missing key `look_at`"));
     let s = format!("{GOOD}[[objects]]\ntype = \"mesh\"\n");
     v.push(Case::new("mesh without path", s.clone(), last_objects(&s), "a mesh needs `path`"));
     v.push(Case::new("empty scene file", "", "s.toml", "missing [camera]"));

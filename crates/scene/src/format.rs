@@ -15,28 +15,103 @@ use toml::Spanned;
 
 /// A spanned number.
 pub type Num = Spanned<f64>;
+
+/// A struct that is written as a table and nothing else. serde's derived
+/// structs also take an array, field by field in declaration order, and
+/// drop the elements past the last field without a word
+/// (`camera = [[0, 0, 5], [0, 0, 0]]` would be a camera): the fields
+/// holding these structs read them through [`table`], which refuses an
+/// array with an example of the table.
+pub trait Keyed {
+    /// A short example of the table, shown when something else is given:
+    /// `` `{ position = [0, 2, 8], look_at = [0, 0, 0] }` ``.
+    const EXAMPLE: &'static str;
+}
+
+/// `deserialize_with` functions for fields holding [`Keyed`] structs,
+/// one per container the scene format puts them in.
+pub mod table {
+    use super::Keyed;
+    use serde::de::{self, Deserialize, Deserializer, MapAccess, Visitor};
+    use std::collections::BTreeMap;
+    use std::fmt;
+    use std::marker::PhantomData;
+    use toml::Spanned;
+
+    /// `T` read from a table only.
+    struct Table<T>(T);
+
+    impl<'de, T: Deserialize<'de> + Keyed> Deserialize<'de> for Table<T> {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V<T>(PhantomData<T>);
+            impl<'de, T: Deserialize<'de> + Keyed> Visitor<'de> for V<T> {
+                type Value = Table<T>;
+                fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                    write!(f, "a table of named keys such as {}", T::EXAMPLE)
+                }
+                fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Table<T>, A::Error> {
+                    T::deserialize(de::value::MapAccessDeserializer::new(map)).map(Table)
+                }
+            }
+            d.deserialize_map(V(PhantomData))
+        }
+    }
+
+    fn unwrapped<T>(t: Spanned<Table<T>>) -> Spanned<T> {
+        let span = t.span();
+        Spanned::new(span, t.into_inner().0)
+    }
+
+    /// `key = { ... }`.
+    pub fn one<'de, D: Deserializer<'de>, T: Deserialize<'de> + Keyed>(d: D) -> Result<Spanned<T>, D::Error> {
+        Spanned::<Table<T>>::deserialize(d).map(unwrapped)
+    }
+
+    /// An optional `key = { ... }` (or `[key]`); the field also needs
+    /// `#[serde(default)]`.
+    pub fn opt<'de, D: Deserializer<'de>, T: Deserialize<'de> + Keyed>(
+        d: D,
+    ) -> Result<Option<Spanned<T>>, D::Error> {
+        Ok(Option::<Spanned<Table<T>>>::deserialize(d)?.map(unwrapped))
+    }
+
+    /// `[[key]]` entries (or `key = [{ ... }, ...]`).
+    pub fn vec<'de, D: Deserializer<'de>, T: Deserialize<'de> + Keyed>(
+        d: D,
+    ) -> Result<Vec<Spanned<T>>, D::Error> {
+        Ok(Vec::<Spanned<Table<T>>>::deserialize(d)?.into_iter().map(unwrapped).collect())
+    }
+
+    /// `[key.name]` tables by name.
+    pub fn named<'de, D: Deserializer<'de>, T: Deserialize<'de> + Keyed>(
+        d: D,
+    ) -> Result<BTreeMap<Spanned<String>, Spanned<T>>, D::Error> {
+        let tables = BTreeMap::<Spanned<String>, Spanned<Table<T>>>::deserialize(d)?;
+        Ok(tables.into_iter().map(|(k, v)| (k, unwrapped(v))).collect())
+    }
+}
 /// A spanned 3-vector.
 pub type V3 = Spanned<Exact<f64, 3>>;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::opt")]
     pub render: Option<Spanned<RenderDef>>,
     /// The camera; optional where `[[cameras]]` names some.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::opt")]
     pub camera: Option<Spanned<CameraDef>>,
     /// Named cameras (`--camera NAME`); the first is the default where
     /// there is no `[camera]`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::vec")]
     pub cameras: Vec<Spanned<CameraDef>>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::vec")]
     pub lights: Vec<Spanned<LightDef>>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::opt")]
     pub fog: Option<Spanned<FogDef>>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::named")]
     pub materials: BTreeMap<Spanned<String>, Spanned<MaterialDef>>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "table::vec")]
     pub objects: Vec<Spanned<ObjectDef>>,
 }
 
@@ -102,12 +177,28 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
     {
         return format!("{head}got the date {at}");
     }
+    // Where a table is read field by field, a date is a table with one
+    // odd key (`texture = 07:32:00`).
+    if message.starts_with("unknown key `a date`") && date(at) {
+        return format!("expected a table, got the date {}", at.trim());
+    }
     // A transform step is a one-key table; serde's words for another count.
+    // Steps are written inline (`transform = [{ scale = 2 }]`) or as
+    // `[[objects.transform]]` tables, where toml points at the header.
     let in_transform = || {
         innermost_open(text, span.start).is_some_and(|o| {
             text[..o].trim_end().strip_suffix('=').is_some_and(|k| k.trim_end().ends_with("transform"))
-        })
+        }) || at.starts_with("[[") && at.lines().next().is_some_and(|h| h.trim_end().ends_with("transform]]"))
     };
+    // A step that is not a table at all: a number, a bare name, an array.
+    if (message.starts_with("wanted string or table") || message.starts_with("expected newtype variant"))
+        && in_transform()
+    {
+        return format!(
+            "expected a transform step, a table of one key such as `{{ scale = 2 }}` or `{{ rotate_y = 30 }}`, got {}",
+            value_words(at)
+        );
+    }
     if message.starts_with("wanted exactly 1 element") && in_transform() {
         let step = "translate, rotate_x, rotate_y, rotate_z, rotate, scale, shear, shear_angle or matrix";
         return if message.ends_with("more than 1 element") {
@@ -120,7 +211,9 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
     }
     // A name (`type`, `projection`, ...) given as a number, an array or
     // a table: toml says only "wanted string or table".
-    if (message.starts_with("wanted string or table") || message.starts_with("wanted exactly 1 element"))
+    if (message.starts_with("wanted string or table")
+        || message.starts_with("wanted exactly 1 element")
+        || message.starts_with("expected table, found"))
         && let Some(m) = name_wanted(text, span.clone(), at)
     {
         return m;
@@ -169,19 +262,26 @@ fn name_wanted(text: &str, span: std::ops::Range<usize>, at: &str) -> Option<Str
     let names = names.lines().next()?.trim();
     let names: Vec<&str> = names.split('`').skip(1).step_by(2).collect();
     let first = names.first()?;
-    let at = at.trim();
-    let got = match at.as_bytes().first() {
-        Some(b'[') => "an array".to_owned(),
-        Some(b'{') => "a table".to_owned(),
-        _ if at == "true" || at == "false" => at.to_owned(),
-        _ if toml::from_str::<toml::Table>(&format!("v = {at}"))
-            .is_ok_and(|t| t["v"].is_integer() || t["v"].is_float()) =>
-        {
-            format!("the number {at}")
-        }
-        _ => format!("`{at}`"),
-    };
+    let got = value_words(at);
     Some(format!("`{key}` must be a string such as \"{first}\" (one of: {}), got {got}", names.join(", ")))
+}
+
+/// A value as written, in words for "got ...": "an array", "a table",
+/// "true", "the number 3", "the string \"scale\"", or the text itself.
+fn value_words(at: &str) -> String {
+    let at = at.trim();
+    match at.as_bytes().first() {
+        Some(b'[') => return "an array".to_owned(),
+        Some(b'{') => return "a table".to_owned(),
+        _ => {}
+    }
+    match toml::from_str::<toml::Table>(&format!("v = {at}")).ok().and_then(|mut t| t.remove("v")) {
+        Some(toml::Value::Boolean(b)) => b.to_string(),
+        Some(toml::Value::Integer(_) | toml::Value::Float(_)) => format!("the number {at}"),
+        Some(toml::Value::String(_)) => format!("the string {at}"),
+        Some(toml::Value::Datetime(_)) => format!("the date {at}"),
+        _ => format!("`{at}`"),
+    }
 }
 
 /// toml's messages, made to say what was expected in scene terms
@@ -219,6 +319,10 @@ pub struct RenderDef {
     pub adaptive: Option<Num>,
 }
 
+impl Keyed for RenderDef {
+    const EXAMPLE: &'static str = "`{ width = 640, height = 360 }`";
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDef {
@@ -233,6 +337,10 @@ pub struct CameraDef {
     /// Distance of the plane in focus (default: to `look_at`).
     pub focus_distance: Option<Num>,
     pub projection: Option<Spanned<ProjectionDef>>,
+}
+
+impl Keyed for CameraDef {
+    const EXAMPLE: &'static str = "`{ position = [0, 2, 8], look_at = [0, 0, 0] }`";
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
@@ -284,6 +392,10 @@ pub struct LightDef {
     pub samples: Option<Spanned<u64>>,
     pub two_sided: Option<Spanned<bool>>,
     pub adaptive: Option<Spanned<bool>>,
+}
+
+impl Keyed for LightDef {
+    const EXAMPLE: &'static str = "`{ position = [0, 5, 5], intensity = 1 }`";
 }
 
 /// `[render] background`: a colour, or an environment image
@@ -363,10 +475,15 @@ pub struct FogDef {
     pub enabled: Option<bool>,
 }
 
+impl Keyed for FogDef {
+    const EXAMPLE: &'static str = "`{ mode = \"linear\", start = 5, end = 30 }`";
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDef {
     pub color: Option<Spanned<Color>>,
+    #[serde(default, deserialize_with = "table::opt")]
     pub texture: Option<Spanned<TextureDef>>,
     pub ambient: Option<Num>,
     pub diffuse: Option<Num>,
@@ -378,6 +495,10 @@ pub struct MaterialDef {
     pub transmission: Option<Num>,
     pub ior: Option<Num>,
     pub absorption: Option<Spanned<Color>>,
+}
+
+impl Keyed for MaterialDef {
+    const EXAMPLE: &'static str = "`{ color = [0.8, 0.2, 0.2], reflectivity = 0.3 }`";
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
@@ -426,6 +547,10 @@ pub struct TextureDef {
     pub wrap: Option<Spanned<WrapDef>>,
     pub scale: Option<Spanned<Scale2>>,
     pub tint: Option<Spanned<Color>>,
+}
+
+impl Keyed for TextureDef {
+    const EXAMPLE: &'static str = "`{ type = \"checker\", a = [1, 1, 1], b = [0, 0, 0] }`";
 }
 
 impl TextureDef {
@@ -504,6 +629,10 @@ pub struct ObjectDef {
     pub crease_angle: Option<Num>,
 }
 
+impl Keyed for ObjectDef {
+    const EXAMPLE: &'static str = "`{ type = \"sphere\", center = [0, 1, 0], radius = 1 }`";
+}
+
 impl ObjectDef {
     /// How a mesh's vertex normals are chosen (`auto` unless `normals` says).
     pub fn normal_mode(&self) -> NormalMode {
@@ -533,8 +662,8 @@ pub enum Step {
     RotateZ(Num),
     Rotate(Spanned<AxisAngle>),
     Scale(Spanned<Scale3>),
-    Shear(Spanned<ShearDef>),
-    ShearAngle(Spanned<ShearDef>),
+    Shear(#[serde(deserialize_with = "table::one")] Spanned<ShearDef>),
+    ShearAngle(#[serde(deserialize_with = "table::one")] Spanned<ShearDef>),
     Matrix(Spanned<Exact<Row, 4>>),
 }
 
@@ -602,6 +731,10 @@ pub struct ShearDef {
     pub zx: f64,
     #[serde(default)]
     pub zy: f64,
+}
+
+impl Keyed for ShearDef {
+    const EXAMPLE: &'static str = "`{ xy = 0.5 }` (keys xy, xz, yx, yz, zx, zy)";
 }
 
 /// A colour: `[r, g, b]` (linear) or `"#rrggbb"` (sRGB, decoded to linear).

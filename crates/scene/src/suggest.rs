@@ -94,6 +94,9 @@ pub(crate) fn friendly(m: &str, entry: Option<Entry>) -> String {
     if let Some(rest) = m.strip_prefix("unknown variant ") {
         return unknown(rest, "name", None);
     }
+    if let Some(key) = m.strip_prefix("missing field ") {
+        return format!("missing key {key}");
+    }
     if let Some(rest) = m.strip_prefix("invalid length ")
         && let Some((n, expected)) = rest.split_once(", expected ")
     {

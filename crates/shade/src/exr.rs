@@ -408,7 +408,8 @@ pub fn read_layered_exr(path: &Path) -> Result<LayeredExr, OutputError> {
         return Err(bad("the display window is too large".into()));
     };
     if display.position != Vec2(0, 0) {
-        return Err(bad(format!("the display window starts at {:?}, not at the origin", display.position)));
+        let Vec2(x, y) = display.position;
+        return Err(bad(format!("the display window starts at ({x}, {y}), not at the origin (0, 0)")));
     }
     let pos = part.attributes.layer_position;
     let window = u32::try_from(pos.x()).ok().zip(u32::try_from(pos.y()).ok()).and_then(|(x, y)| {

@@ -285,13 +285,20 @@ impl ImageTexture {
                 image::ImageError::Limits(_) => match image::ImageReader::open(path)
                     .and_then(image::ImageReader::with_guessed_format)
                     .map_err(image::ImageError::IoError)
-                    .and_then(image::ImageReader::into_dimensions)
-                {
+                    .and_then(|mut r| {
+                        // Nothing is decoded here; the header's size may be
+                        // beyond any limit (2³¹ × 2¹⁴).
+                        r.no_limits();
+                        r.into_dimensions()
+                    }) {
                     Ok((w, h)) if w.max(h) > MAX_TEXTURE_EDGE => {
                         format!("{w}×{h} texels is more than the {MAX_TEXTURE_EDGE} allowed per side")
                     }
                     Ok((w, h)) => format!("{w}×{h} texels need more memory to decode than the 1 GiB allowed"),
-                    Err(_) => e.to_string(),
+                    // PNG allows sides up to 2³¹ − 1.
+                    Err(_) => format!(
+                        "the size in its header is beyond what can be read, more than the {MAX_TEXTURE_EDGE} texels allowed per side ({e})"
+                    ),
                 },
                 _ => e.to_string(),
             })
@@ -653,38 +660,64 @@ mod tests {
         }
         std::fs::write(&truncated, &ok[..ok.len() / 2]).expect("can write");
         let t = ImageTexture::load(&truncated, Wrap::Clamp);
-        // A PNG header claiming 100000 × 100000 texels.
-        let huge = temp("huge.dat"); // named as no format: read by its content
-        let mut f = b"\x89PNG\r\n\x1a\n".to_vec();
-        let mut ihdr = b"IHDR".to_vec();
-        ihdr.extend_from_slice(&100_000u32.to_be_bytes());
-        ihdr.extend_from_slice(&100_000u32.to_be_bytes());
-        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
-        f.extend_from_slice(&13u32.to_be_bytes());
-        f.extend_from_slice(&ihdr);
-        f.extend_from_slice(&crc32(&ihdr).to_be_bytes());
-        // Then a small (wrong) IDAT and the end: decoding must stop at the size.
-        let mut idat = b"IDAT".to_vec();
-        idat.extend_from_slice(&[0x78, 0x9c, 0x63, 0, 0, 0, 1, 0, 1]);
-        f.extend_from_slice(&9u32.to_be_bytes());
-        f.extend_from_slice(&idat);
-        f.extend_from_slice(&crc32(&idat).to_be_bytes());
-        f.extend_from_slice(&0u32.to_be_bytes());
-        f.extend_from_slice(b"IEND");
-        f.extend_from_slice(&crc32(b"IEND").to_be_bytes());
-        std::fs::write(&huge, &f).expect("can write");
-        let h = ImageTexture::load(&huge, Wrap::Clamp);
-        for p in [&garbage, &truncated, &huge] {
+        // PNG headers claiming 100000 × 100000 texels, 2³¹ − 1 × 2¹⁴ (the
+        // widest PNG allows: beyond the image library's own limit on a
+        // header), and 2³² − 1 squared (beyond PNG's rules).
+        let huge = |w: u32, h: u32| {
+            let path = temp(&format!("huge-{w}-{h}.dat")); // named as no format: read by its content
+            let mut f = b"\x89PNG\r\n\x1a\n".to_vec();
+            let mut ihdr = b"IHDR".to_vec();
+            ihdr.extend_from_slice(&w.to_be_bytes());
+            ihdr.extend_from_slice(&h.to_be_bytes());
+            ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+            f.extend_from_slice(&13u32.to_be_bytes());
+            f.extend_from_slice(&ihdr);
+            f.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+            // Then a small (wrong) IDAT and the end: decoding must stop at the size.
+            let mut idat = b"IDAT".to_vec();
+            idat.extend_from_slice(&[0x78, 0x9c, 0x63, 0, 0, 0, 1, 0, 1]);
+            f.extend_from_slice(&9u32.to_be_bytes());
+            f.extend_from_slice(&idat);
+            f.extend_from_slice(&crc32(&idat).to_be_bytes());
+            f.extend_from_slice(&0u32.to_be_bytes());
+            f.extend_from_slice(b"IEND");
+            f.extend_from_slice(&crc32(b"IEND").to_be_bytes());
+            std::fs::write(&path, &f).expect("can write");
+            let r = ImageTexture::load(&path, Wrap::Clamp);
+            let _ = std::fs::remove_file(&path);
+            r
+        };
+        let h = huge(100_000, 100_000);
+        let widest = huge(i32::MAX as u32, 16_384);
+        let beyond = huge(u32::MAX, u32::MAX);
+        for p in [&garbage, &truncated] {
             let _ = std::fs::remove_file(p);
         }
-        for (what, r) in [("garbage", e), ("truncated", t), ("huge", h)] {
+        for (what, r) in
+            [("garbage", e), ("truncated", t), ("huge", h), ("widest", widest), ("beyond", beyond)]
+        {
             match r {
                 Err(ShadeError::Texture { path, reason }) => {
                     assert!(path.to_string_lossy().contains("prism-shade-test"), "{what}: {path:?}");
                     assert!(!reason.is_empty());
-                    if what == "huge" {
-                        // Its size, from the header, against the limit.
-                        assert_eq!(reason, "100000×100000 texels is more than the 16384 allowed per side");
+                    // Its size, from the header, against the limit.
+                    match what {
+                        "huge" => {
+                            assert_eq!(reason, "100000×100000 texels is more than the 16384 allowed per side")
+                        }
+                        "widest" => {
+                            assert_eq!(
+                                reason,
+                                "2147483647×16384 texels is more than the 16384 allowed per side"
+                            );
+                        }
+                        "beyond" => assert!(
+                            reason.starts_with(
+                                "the size in its header is beyond what can be read, more than the 16384"
+                            ),
+                            "{reason}"
+                        ),
+                        _ => {}
                     }
                 }
                 other => panic!("{what}: expected a texture error, got {other:?}"),

@@ -185,3 +185,122 @@ fn glass_without_a_cut_off_at_a_high_depth_is_warned_about() {
     let text = format!("{BASE}{mirror}").replace("spp = 2", "spp = 2\nmin_contribution = 0\nmax_depth = 40");
     assert!(!parse(&text).unwrap().warnings.iter().any(splits));
 }
+
+/// A table given as an array is refused where it stands, with an example
+/// of the table: serde's derived structs would read the array field by
+/// field and drop what is left over (fuzz finding 6).
+#[test]
+fn a_table_given_as_an_array_is_refused() {
+    let camera = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    let cases: &[(String, &str, &str)] = &[
+        (
+            "camera = [[0, 0, 5], [0, 0, 0], [0, 1, 0], 45, \"main\", 0, 1, \"perspective\", \"x\", 42]\n"
+                .into(),
+            "[[0, 0, 5]",
+            "`{ position = [0, 2, 8], look_at = [0, 0, 0] }`",
+        ),
+        (
+            "cameras = [[[0, 5, 0], [0, 0, 0], [0, 0, -1], 45, \"top\", 0, 1, \"orthographic\", 99]]\n"
+                .into(),
+            "[[0, 5, 0]",
+            "`{ position = [0, 2, 8], look_at = [0, 0, 0] }`",
+        ),
+        (
+            format!(
+                "render = [64, 36, 1, 2, 0.001, [0, 0, 0], [1, 1, 1], [], false, \"box\", 0.1, \"x\"]\n{camera}"
+            ),
+            "[64",
+            "`{ width = 640, height = 360 }`",
+        ),
+        (
+            format!("lights = [[[0, 5, 5]]]\n{camera}"),
+            "[[0, 5, 5]]]",
+            "`{ position = [0, 5, 5], intensity = 1 }`",
+        ),
+        (format!("fog = [[]]\n{camera}"), "[[]]", "`{ mode = \"linear\", start = 5, end = 30 }`"),
+        (
+            format!("objects = [[\"sphere\", \"m\"]]\n{camera}"),
+            "[\"sphere\"",
+            "`{ type = \"sphere\", center = [0, 1, 0], radius = 1 }`",
+        ),
+        (
+            format!("{camera}[materials]\nm = [[1, 0, 0], [0, 0, 0]]\n"),
+            "[[1, 0, 0]",
+            "`{ color = [0.8, 0.2, 0.2], reflectivity = 0.3 }`",
+        ),
+        (
+            format!("{camera}[materials.m]\ntexture = [\"checker\", [1, 1, 1]]\n"),
+            "[\"checker\"",
+            "`{ type = \"checker\", a = [1, 1, 1], b = [0, 0, 0] }`",
+        ),
+        (
+            format!(
+                "{camera}[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{{ shear = [1, 2, 3, 4, 5, 6, 7] }}]\n"
+            ),
+            "[1, 2, 3, 4",
+            "`{ xy = 0.5 }` (keys xy, xz, yx, yz, zx, zy)",
+        ),
+        (
+            format!(
+                "{camera}[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{{ shear_angle = [89] }}]\n"
+            ),
+            "[89]",
+            "`{ xy = 0.5 }` (keys xy, xz, yx, yz, zx, zy)",
+        ),
+    ];
+    for (text, at, example) in cases {
+        let err = parse(text).err().unwrap_or_else(|| panic!("accepted:\n{text}")).to_string();
+        let offset = text.find(at).unwrap_or_else(|| panic!("{at:?} in {text:?}"));
+        let (line, column) = crate::error::line_col(text, offset);
+        assert_eq!(
+            err,
+            format!(
+                "test.toml:{line}:{column}: expected a table of named keys such as {example}, got an array"
+            ),
+            "{text}"
+        );
+    }
+    // The same tables written as tables are read.
+    let shear = format!(
+        "{camera}[[objects]]\ntype = \"sphere\"\nradius = 1\ntransform = [{{ shear = {{ xy = 0.5 }} }}]\n"
+    );
+    assert!(parse(&shear).is_ok());
+}
+
+/// A transform step that is not a one-key table, and a texture given as
+/// a date, are described in scene terms (fuzz finding 9).
+#[test]
+fn a_step_that_is_not_a_table_is_named_in_scene_terms() {
+    let step =
+        "expected a transform step, a table of one key such as `{ scale = 2 }` or `{ rotate_y = 30 }`, got";
+    refused(&[
+        ("[[objects]]\ntype = \"sphere\"\ntransform = [2]\n", &format!("{step} the number 2"), Some("2]")),
+        ("[[objects]]\ntype = \"sphere\"\ntransform = [true]\n", &format!("{step} true"), Some("true")),
+        ("[[objects]]\ntype = \"sphere\"\ntransform = [[2]]\n", &format!("{step} an array"), Some("[2]]")),
+        (
+            "[[objects]]\ntype = \"sphere\"\ntransform = [\"scale\"]\n",
+            &format!("{step} the string \"scale\""),
+            Some("\"scale\""),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\ntransform = [{ rotate = { axis = [0, 1, 0] } }]\n",
+            "missing key `degrees`",
+            Some("{ axis"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\n[[objects.transform]]\nscale = 2\ntranslate = [0, 1, 0]\n",
+            "a transform step takes one key; give each step its own table",
+            Some("[[objects.transform]]"),
+        ),
+        (
+            "[[objects]]\ntype = \"sphere\"\n[[objects.transform]]\n",
+            "a transform step needs one key: translate, rotate_x",
+            Some("[[objects.transform]]"),
+        ),
+        (
+            "[materials.m]\ntexture = 1979-05-27T07:32:00Z\n",
+            "expected a table, got the date 1979-05-27T07:32:00Z",
+            Some("1979"),
+        ),
+    ]);
+}
