@@ -31,6 +31,29 @@ pub(crate) fn brackets(b: &[u8]) -> impl Iterator<Item = (usize, u8)> + '_ {
     })
 }
 
+/// The 1-based lines of TOML `text` that hold a table header (`[t]`,
+/// `[[t]]`): a `[` first on its line, outside any array, inline table,
+/// string or comment. In order.
+pub(crate) fn header_lines(text: &str) -> Vec<usize> {
+    let b = text.as_bytes();
+    let (mut depth, mut line, mut counted) = (0usize, 1usize, 0usize);
+    let mut headers = Vec::new();
+    for (i, c) in brackets(b) {
+        if matches!(c, b'[' | b'{') {
+            line += b[counted..i].iter().filter(|&&c| c == b'\n').count();
+            counted = i;
+            let first = b[..i].iter().rev().take_while(|&&c| c != b'\n').all(|&c| c == b' ' || c == b'\t');
+            if depth == 0 && c == b'[' && first {
+                headers.push(line);
+            }
+            depth += 1;
+        } else {
+            depth = depth.saturating_sub(1);
+        }
+    }
+    headers
+}
+
 /// The end of the string that starts at byte `i` of `b` with quote `q`:
 /// the byte after its closing quote, or its line's end (a one-line
 /// string) or `b`'s end if it is not closed.
@@ -127,6 +150,13 @@ mod tests {
         assert_eq!(found("a = [\"]\nb = {}"), "[{}");
         // A multi-line one runs to the end.
         assert_eq!(found("a = [\"\"\"]\nb = {}"), "[");
+    }
+
+    #[test]
+    fn header_lines_are_tables_not_arrays() {
+        let text = "a = 1\n[camera]\nv = [\n  [0, 1],\n  [2, 3],\n]\ns = \"\"\"\n[x]\n\"\"\"\n# [y]\n  [[objects]]\nt = { u = [1] }\n[materials.m]\n";
+        assert_eq!(header_lines(text), vec![2, 11, 13]);
+        assert_eq!(header_lines(""), Vec::<usize>::new());
     }
 
     #[test]

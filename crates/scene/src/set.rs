@@ -181,7 +181,7 @@ impl Edited {
         if let SceneError::Asset { location, message, mut referenced_at } = e {
             return match self.place(&referenced_at, file) {
                 Some(Place::Set(set)) => flag_error(set, format!("{location}: {message}")),
-                Some(Place::Line(line)) => {
+                Some(Place::Line(line) | Place::Table(line, _)) => {
                     referenced_at.line = Some(line);
                     SceneError::Asset { location, message, referenced_at }
                 }
@@ -209,6 +209,17 @@ impl Edited {
                 | SceneError::Read { location, .. } = &mut e
                 {
                     location.line = Some(line);
+                }
+            }
+            Place::Table(line, sets) => {
+                if let SceneError::Syntax { location, message } | SceneError::Invalid { location, message } =
+                    &mut e
+                {
+                    location.line = Some(line);
+                    let sets: Vec<String> = sets.iter().map(|s| format!("{FLAG} {s}")).collect();
+                    let values = if sets.len() == 1 { "a value" } else { "values" };
+                    message
+                        .push_str(&format!(" (this table holds {values} given by {})", sets.join(" and ")));
                 }
             }
         }
@@ -244,7 +255,26 @@ impl Edited {
             }
         }
         let shift: usize = self.edits.iter().filter(|d| d.lines > 0 && d.line < line).map(|d| d.lines).sum();
-        Some(Place::Line(line - shift.min(line - 1)))
+        let own = line - shift.min(line - 1);
+        // A problem with a whole table (a camera's up along its view, a
+        // mesh without `path`), told at its header: the sets that changed
+        // a value in that table take part in it.
+        if !self.edits.is_empty() {
+            let headers = crate::scan::header_lines(&self.text);
+            if headers.binary_search(&line).is_ok() {
+                let end = headers.iter().copied().find(|&h| h > line).unwrap_or(usize::MAX);
+                let mut sets: Vec<&str> = Vec::new();
+                for edit in self.edits.iter().filter(|e| e.line > line && e.line < end) {
+                    if !sets.contains(&edit.set.as_str()) {
+                        sets.push(&edit.set);
+                    }
+                }
+                if !sets.is_empty() {
+                    return Some(Place::Table(own, sets));
+                }
+            }
+        }
+        Some(Place::Line(own))
     }
 }
 
@@ -254,6 +284,9 @@ enum Place<'a> {
     Set(&'a str),
     /// The file's own line.
     Line(usize),
+    /// The file's own line of a table's header, the table holding values
+    /// of these sets.
+    Table(usize, Vec<&'a str>),
 }
 
 impl Edited {

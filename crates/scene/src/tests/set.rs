@@ -172,6 +172,40 @@ fn other_errors_keep_the_files_own_lines() {
     assert_eq!(err, plain);
 }
 
+/// A problem with a whole table, told at its header, names the sets that
+/// changed a value in that table (fuzz finding 10): the camera's up along
+/// a view a set made vertical, a mesh that a set made of a plane.
+#[test]
+fn a_tables_problem_names_the_sets_in_that_table() {
+    let text = scene();
+    let camera = place(&text, "[camera]");
+    let err = set_err(&text, &["camera.position=[0, 3, 1]", "camera.look_at=[0, 0, 1]"]);
+    assert!(err.starts_with(&format!("{camera}: camera up [0, 1, 0] is zero or parallel")), "{err}");
+    assert!(
+        err.ends_with(
+            " (this table holds values given by --set camera.position=[0, 3, 1] and --set camera.look_at=[0, 0, 1])"
+        ),
+        "{err}"
+    );
+    // A key the set adds to the table counts too; a set in another table does not.
+    let err = set_err(&text, &["render.spp=4", "objects.0.type=mesh", "objects.0.normals=\"flat\""]);
+    let plane = format!("{BASE}[[objects]]\n").len();
+    let (line, col) = line_col(&text, plane - "[[objects]]\n".len());
+    assert_eq!(
+        err,
+        format!(
+            "s.toml:{line}:{col}: a mesh needs `path`, an OBJ file (relative to the scene file) \
+             (this table holds values given by --set objects.0.type=mesh and --set objects.0.normals=\"flat\")"
+        )
+    );
+    // The same problem written in the file names no set.
+    let bad = text
+        .replace("position = [0, 2, 10]", "position = [0, 3, 1]")
+        .replace("look_at = [0, 1, 0]", "look_at = [0, 0, 1]");
+    let plain = set_err(&bad, &["render.spp=4"]);
+    assert!(!plain.contains("--set"), "{plain}");
+}
+
 #[test]
 fn warnings_keep_the_files_lines_or_name_the_set() {
     let eight = scene().replace("[0.8, 0.1, 0.1]", "[255, 0, 0]");
