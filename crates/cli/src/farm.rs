@@ -51,6 +51,10 @@ pub struct SlurmArgs {
     /// AOV passes, as for `prism render --aov` (written next to the merged image).
     #[arg(long, value_name = "LIST")]
     aov: Option<String>,
+    /// Also write an 8-bit PNG preview of each AOV pass (OUT-stem.PASS.png), as for
+    /// `prism render --aov-preview`: by the merge job for tiles, by each task for frames.
+    #[arg(long)]
+    aov_preview: bool,
     /// Replace a scene value by its dotted path, as for `prism render --set` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -296,7 +300,7 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
         check_script_path("--work-dir", &absolute(d)?)?;
     }
     // Checked here so that a bad list fails before anything is submitted.
-    a.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
+    let aov_flag = a.aov.as_deref().map(Aov::parse_list).transpose().map_err(|e| anyhow!("--aov: {e}"))?;
     let opts = LoadOptions {
         limits: a.limits.limits(),
         overrides: a.overrides,
@@ -356,11 +360,28 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     }
     let mut flags = render_flags(&a.overrides, a.aov.as_deref(), &a.limits);
     flags.extend(scene_flags(&a.set, &a.obj));
+    // The previews asked for by the flag or the scene's `aov_preview`; a
+    // tile holds none, so for tiles the merge writes them.
+    let previews = a.aov_preview || loaded.aov_preview;
+    if previews && aov_flag.as_ref().unwrap_or(&loaded.aovs).is_empty() {
+        let asked = if a.aov_preview {
+            "--aov-preview".to_owned()
+        } else {
+            format!("{}: `aov_preview = true`", a.scene.display())
+        };
+        errln!("warning: {asked} without AOV passes (--aov or the scene's `aov`) writes no previews");
+    }
     // The image flags go to whoever writes the image: each frame's task, or the merge.
-    let image_flags: Vec<String> = a.image.flags().iter().map(|f| sh(f)).collect();
+    let mut image_flags: Vec<String> = a.image.flags().iter().map(|f| sh(f)).collect();
+    if tiles && previews {
+        image_flags.push("--aov-preview".to_owned());
+    }
     if !tiles {
         if a.alpha.alpha {
             flags.push("--alpha".to_owned());
+        }
+        if a.aov_preview {
+            flags.push("--aov-preview".to_owned());
         }
         flags.extend(a.image.flags());
     }

@@ -394,6 +394,49 @@ fn farm_dry_run_prints_the_job_and_writes_nothing() {
     );
 }
 
+/// `--aov-preview` (or the scene's `aov_preview = true`) goes to whoever
+/// writes the image: the merge job for tiles (a tile holds no previews),
+/// each task for frames; without AOV passes it warns, as `render` does.
+#[test]
+fn farm_aov_previews_go_to_whoever_writes_the_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("a.toml"), GOOD).unwrap();
+    let with_previews = GOOD.replacen("[render]", "[render]\naov = [\"depth\"]\naov_preview = true", 1);
+    assert_ne!(with_previews, GOOD);
+    fs::write(d.join("p.toml"), with_previews).unwrap();
+    let dry = ["-o", "x.png", "--dry-run", "--no-shared-check"];
+    let line = |out: &str, what: &str| -> String {
+        out.lines().find(|l| l.contains(what)).unwrap_or_else(|| panic!("{what} in\n{out}")).to_owned()
+    };
+    for args in [
+        &["farm", "slurm", "a.toml", "--tiles", "2", "--aov", "depth", "--aov-preview"][..],
+        &["farm", "slurm", "p.toml", "--tiles", "2"][..],
+    ] {
+        let out = ok(d, &[args, &dry[..]].concat());
+        assert!(line(&out, " merge ").ends_with(" --aov-preview"), "{args:?}:\n{out}");
+        assert!(!line(&out, "--tile-from-env").contains("--aov-preview"), "{args:?}:\n{out}");
+    }
+    let out = ok(
+        d,
+        &[&["farm", "slurm", "a.toml", "--frames", "2", "--aov", "depth", "--aov-preview"][..], &dry[..]]
+            .concat(),
+    );
+    assert!(line(&out, "--frame-from-env").contains("--aov-preview"), "{out}");
+    let out = ok(d, &[&["farm", "slurm", "a.toml", "--tiles", "2"][..], &dry[..]].concat());
+    assert!(!out.contains("--aov-preview"), "{out}");
+    let bare =
+        prism(d, &[&["farm", "slurm", "a.toml", "--tiles", "2", "--aov-preview"][..], &dry[..]].concat());
+    assert!(bare.status.success());
+    let e = text(&bare.stderr);
+    assert!(
+        e.contains(
+            "warning: --aov-preview without AOV passes (--aov or the scene's `aov`) writes no previews"
+        ),
+        "{e}"
+    );
+}
+
 #[test]
 fn help_lists_alpha_only_where_it_can_be_used() {
     let d = tempfile::tempdir().unwrap();
