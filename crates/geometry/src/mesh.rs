@@ -137,6 +137,36 @@ impl TriangleMesh {
             .count()
     }
 
+    /// The volume the faces enclose: positive where they wind
+    /// counter-clockwise seen from outside (face normals, `(b − a) × (c −
+    /// a)`, point out of the solid), negative where they wind inward. It
+    /// means a volume only for a closed mesh ([`TriangleMesh::is_closed`]).
+    /// Summed in `f64` about the bounds' centre, so that a mesh far from
+    /// the origin loses no precision.
+    #[must_use]
+    pub fn signed_volume(&self) -> f64 {
+        if self.bounds.is_empty() {
+            return 0.0;
+        }
+        let o = self.bounds.center().as_dvec3();
+        let sum: f64 = (0..self.len())
+            .map(|f| {
+                let [a, b, c] = self.triangle(f).map(|p| p.as_dvec3() - o);
+                a.dot(b.cross(c))
+            })
+            .sum();
+        sum / 6.0
+    }
+
+    /// Turns every face over (its second and third corners swapped), so
+    /// that face normals point the other way; positions, normals and uvs
+    /// stay, and a closed mesh stays closed.
+    pub fn reverse_faces(&mut self) {
+        for tri in &mut self.indices {
+            tri.swap(1, 2);
+        }
+    }
+
     /// Replaces the vertex normals by area-weighted averages of the face
     /// normals (smooth shading for meshes that come without normals).
     pub fn compute_smooth_normals(&mut self) {
@@ -374,6 +404,24 @@ mod tests {
         // A flat quad and an empty mesh are open.
         assert!(!quad(None, None).is_closed());
         assert!(!TriangleMesh::new(Vec::new(), None, None, Vec::new()).unwrap().is_closed());
+    }
+
+    #[test]
+    fn a_solid_turned_inside_out_has_a_negative_volume_until_its_faces_are_reversed() {
+        let (p, idx) = split_cube();
+        // The unit cube, far from the origin and scaled: volume 8.
+        let p: Vec<Vec3> = p.into_iter().map(|v| v * 2.0 + Vec3::new(1e4, -3e3, 5e2)).collect();
+        let m = TriangleMesh::new(p.clone(), None, None, idx.clone()).unwrap();
+        assert!((m.signed_volume() - 8.0).abs() < 1e-9, "{}", m.signed_volume());
+        let inward: Vec<[u32; 3]> = idx.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        let mut inside_out = TriangleMesh::new(p, None, None, inward).unwrap();
+        assert!(inside_out.is_closed());
+        assert!((inside_out.signed_volume() + 8.0).abs() < 1e-9, "{}", inside_out.signed_volume());
+        inside_out.reverse_faces();
+        assert_eq!(inside_out, m);
+        assert!(inside_out.is_closed());
+        // No faces, no volume.
+        assert_eq!(TriangleMesh::new(Vec::new(), None, None, Vec::new()).unwrap().signed_volume(), 0.0);
     }
 
     #[test]

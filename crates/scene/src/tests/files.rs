@@ -241,6 +241,48 @@ fn valid_obj_forms_tobj_refuses_are_read() {
     assert!(uvs.contains(&Vec2::new(0.25, 1.0)) && uvs.contains(&Vec2::new(0.5, 0.5)), "{uvs:?}");
 }
 
+/// A closed OBJ solid whose faces wind inward is turned outward, with a
+/// warning: else glass made of it would be entered where it is left.
+#[test]
+fn a_solid_wound_inward_is_turned_outward() {
+    let dir = tempfile::tempdir().unwrap();
+    // One model (no `usemtl`, which would split it into open pieces).
+    let cube: String = CUBE_OBJ
+        .lines()
+        .filter(|l| !l.starts_with("usemtl") && !l.starts_with("mtllib"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    fs::write(dir.path().join("cube.obj"), &cube).unwrap();
+    // The same cube with every face's corners in reverse order.
+    let inward: String = cube
+        .lines()
+        .map(|l| match l.strip_prefix("f ") {
+            Some(corners) => {
+                format!("f {}\n", corners.split_whitespace().rev().collect::<Vec<_>>().join(" "))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    assert_ne!(inward, cube);
+    fs::write(dir.path().join("inward.obj"), &inward).unwrap();
+    for (file, turned) in [("cube.obj", false), ("inward.obj", true)] {
+        let text = format!("{BASE}[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\n");
+        let loaded = parse_scene_str(&text, dir.path(), Path::new("s.toml")).unwrap();
+        let warned: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("wind inward")).collect();
+        assert_eq!(warned.len(), usize::from(turned), "{file}: {:?}", loaded.warnings);
+        if turned {
+            assert!(
+                warned[0].contains("inward.obj: model `cube` is a closed solid whose faces wind inward"),
+                "{warned:?}"
+            );
+        }
+        let mesh = &loaded.scene.accel.meshes()[0];
+        assert!(mesh.is_closed(), "{file}");
+        // The 2-unit cube, its faces outward.
+        assert!((mesh.signed_volume() - 8.0).abs() < 1e-6, "{file}: {}", mesh.signed_volume());
+    }
+}
+
 #[test]
 fn corrupt_textures_are_reported() {
     let dir = tempfile::tempdir().unwrap();
