@@ -325,6 +325,7 @@ fn view_command(args: ViewArgs) -> Result<()> {
         sets: args.set,
         obj: args.obj.options(),
         limits: args.limits.limits(),
+        memory: Some(memory::room),
         save_dir: args.save_dir,
         verbose: args.verbose,
     })?;

@@ -109,7 +109,7 @@ fn scene_message(path: &Path, message: &str) -> String {
 }
 
 /// How to view a scene.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct ViewOptions {
     /// The scene file.
     pub scene: PathBuf,
@@ -126,6 +126,11 @@ pub struct ViewOptions {
     /// The limits on image size and samples (`--max-side`, `--max-pixels`,
     /// `--max-spp`), on every load.
     pub limits: prism_scene::Limits,
+    /// Where the memory the process may still take comes from: asked again
+    /// on every load, so that a reload's textures are checked against the
+    /// room left with the last scene held ([`prism_scene::Limits::memory`]).
+    /// `None`: `limits.memory` as it is.
+    pub memory: Option<fn() -> Option<prism_scene::MemoryRoom>>,
     /// Where `s` saves snapshots (`None`: the current directory).
     pub save_dir: Option<PathBuf>,
     /// Print timings (key-to-frame latency, every frame) to stderr.
@@ -167,7 +172,10 @@ pub fn load_scene_file(path: &Path, opts: &ViewOptions) -> Result<SceneSetup, St
         overrides: opts.overrides,
         sets: opts.sets.clone(),
         obj: opts.obj,
-        limits: opts.limits,
+        limits: prism_scene::Limits {
+            memory: opts.memory.map_or(opts.limits.memory, |room| room()),
+            ..opts.limits
+        },
     };
     // A TOML scene, or an OBJ mesh as a scene of its own.
     let loaded = prism_scene::load_path(path, &options).map_err(|e| e.to_string())?;
@@ -328,5 +336,27 @@ mod tests {
         let obj = prism_scene::ObjOptions { floor: true, ..prism_scene::ObjOptions::default() };
         let err = load_scene_file(&seed, &ViewOptions { obj, ..ViewOptions::new(&seed) });
         assert!(err.is_err_and(|e| e.contains("--floor")));
+    }
+
+    /// The memory a load may take is asked for again on every load (a
+    /// reload's room is what is left with the last scene held), not fixed
+    /// when the viewer starts.
+    #[test]
+    fn every_load_asks_for_the_memory_left() {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        static ROOM: AtomicU64 = AtomicU64::new(u64::MAX);
+        fn room() -> Option<prism_scene::MemoryRoom> {
+            Some(prism_scene::MemoryRoom { bytes: ROOM.load(Ordering::SeqCst), limit: "the test's limit" })
+        }
+        let seed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/seed.toml");
+        let opts = ViewOptions { memory: Some(room), ..ViewOptions::new(&seed) };
+        let loader = file_loader(&opts);
+        assert!(loader(&seed).is_ok());
+        // Less room now than at the first load: the planet's texture no longer fits.
+        ROOM.store(1000, Ordering::SeqCst);
+        let err = loader(&seed).err().unwrap_or_default();
+        assert!(err.contains("gas-giant.png") && err.contains("the test's limit"), "{err}");
+        ROOM.store(u64::MAX, Ordering::SeqCst);
+        assert!(loader(&seed).is_ok());
     }
 }
