@@ -42,8 +42,10 @@ pub(crate) fn header_lines(text: &str) -> Vec<usize> {
         if matches!(c, b'[' | b'{') {
             line += b[counted..i].iter().filter(|&&c| c == b'\n').count();
             counted = i;
-            let first = b[..i].iter().rev().take_while(|&&c| c != b'\n').all(|&c| c == b' ' || c == b'\t');
-            if depth == 0 && c == b'[' && first {
+            // (Looked back only at the top level: a long line of nested
+            // arrays is not read again for each of its brackets.)
+            let first = || b[..i].iter().rev().take_while(|&&c| c != b'\n').all(|&c| c == b' ' || c == b'\t');
+            if depth == 0 && c == b'[' && first() {
                 headers.push(line);
             }
             depth += 1;
