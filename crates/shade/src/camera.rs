@@ -1,8 +1,8 @@
 //! The camera: a pinhole or thin lens, perspective or orthographic.
 
 use crate::ShadeError;
-use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
+use prism_geometry::{Aabb, Ray};
 
 /// How the camera projects the scene onto the image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -209,6 +209,43 @@ impl Camera {
         self.forward
     }
 
+    /// The offset in the image plane at unit distance of image point
+    /// `(x, y)` from the view's centre.
+    #[inline]
+    fn offset(&self, x: f32, y: f32) -> Vec3 {
+        let (w, h) = (self.size.0 as f32, self.size.1 as f32);
+        // (2x/w − 1)·tan·(w/h) and (1 − 2y/h)·tan, with one division.
+        let k = self.tan_half / h;
+        let (sx, sy) = ((2.0 * x - w) * k, (h - 2.0 * y) * k);
+        sx * self.right + sy * self.true_up
+    }
+
+    /// The orthographic ray's origin at `offset` ([`Camera::offset`]).
+    #[inline]
+    fn ortho_origin(&self, offset: Vec3) -> Vec3 {
+        self.position + offset * (self.look_at - self.position).length()
+    }
+
+    /// A box that holds the origin of every ray [`Camera::ray`] gives for
+    /// image points up to `margin` pixels outside the image: the eye for a
+    /// pinhole, the view rectangle's box for an orthographic camera, each
+    /// grown by the lens's radius.
+    #[must_use]
+    pub(crate) fn origin_bounds(&self, margin: f32) -> Aabb {
+        let (w, h) = (self.size.0 as f32, self.size.1 as f32);
+        let mut b = Aabb::EMPTY.grow(self.position);
+        if self.projection == Projection::Orthographic {
+            for (x, y) in
+                [(-margin, -margin), (w + margin, -margin), (-margin, h + margin), (w + margin, h + margin)]
+            {
+                b = b.grow(self.ortho_origin(self.offset(x, y)));
+            }
+        }
+        // The lens disk lies in the plane of `right` and `true_up`, unit
+        // and perpendicular: no coordinate moves by more than its radius.
+        Aabb::new(b.min - Vec3::splat(self.aperture), b.max + Vec3::splat(self.aperture))
+    }
+
     /// The primary ray through image point `(x, y)` (continuous pixel
     /// coordinates: `(i + 0.5, j + 0.5)` is the centre of pixel `(i, j)`).
     /// The direction is unit length, so `t` is distance. With a lens, the
@@ -217,16 +254,10 @@ impl Camera {
     #[inline]
     #[must_use]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let (w, h) = (self.size.0 as f32, self.size.1 as f32);
-        // (2x/w − 1)·tan·(w/h) and (1 − 2y/h)·tan, with one division.
-        let k = self.tan_half / h;
-        let (sx, sy) = ((2.0 * x - w) * k, (h - 2.0 * y) * k);
-        let offset = sx * self.right + sy * self.true_up;
+        let offset = self.offset(x, y);
         let (origin, dir) = match self.projection {
             Projection::Perspective => (self.position, (self.forward + offset).normalize()),
-            Projection::Orthographic => {
-                (self.position + offset * (self.look_at - self.position).length(), self.forward)
-            }
+            Projection::Orthographic => (self.ortho_origin(offset), self.forward),
         };
         if self.aperture > 0.0 {
             // The plane in focus is perpendicular to the view direction.
@@ -288,5 +319,19 @@ mod tests {
         assert!((height - 10.0 * (30f32).to_radians().tan()).abs() < 1e-4, "{height}");
         assert_eq!(c.with_size(10, 10).unwrap().projection(), Projection::Orthographic);
         assert_eq!(c.moved(Vec3::X, Vec3::ZERO, Vec3::Y).unwrap().projection(), Projection::Orthographic);
+    }
+
+    #[test]
+    fn origin_bounds_hold_every_rays_origin() {
+        let ortho = cam().with_projection(Projection::Orthographic);
+        for c in [cam(), cam().with_lens(0.5, 3.0).unwrap(), ortho, ortho.with_lens(0.25, 2.0).unwrap()] {
+            let b = c.origin_bounds(2.0);
+            for k in 0..200 {
+                let (x, y) = (-2.0 + (k % 20) as f32 * 3.4, -2.0 + (k / 20) as f32 * 3.6);
+                assert!(b.contains(c.ray(x, y).origin, 1e-5), "{c:?} at {x},{y}");
+            }
+        }
+        let pin = cam().origin_bounds(2.0);
+        assert_eq!((pin.min, pin.max), (cam().position(), cam().position()));
     }
 }

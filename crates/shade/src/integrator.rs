@@ -8,7 +8,7 @@
 
 use crate::footprint::{Footprint, RayCone, curvature, uv_axes};
 use crate::light::{Light, LightSample, Target, sample_seed};
-use crate::media::{Media, MediumCrossing, optical_depth};
+use crate::media::{CameraMedia, Media, MediumCrossing, is_medium, optical_depth};
 use crate::optics::{fresnel, reflect, refract};
 use crate::{FogMode, Material, RenderSettings, Scene, Texture};
 use prism_bvh::SceneHit;
@@ -71,6 +71,8 @@ pub(crate) struct Tracer<'a> {
     pre_point: Option<Vec3>,
     /// Its shadow toward each of the first [`PRE_LIGHTS`] lights.
     pre: [PreShadow; PRE_LIGHTS],
+    /// The media the camera rays start in.
+    camera_media: &'a CameraMedia,
     /// The cone of every camera ray (one pixel wide): from a point at the
     /// eye for a perspective camera; a parallel beam one pixel wide at the
     /// look-at distance for an orthographic one.
@@ -170,11 +172,14 @@ fn is_closed(scene: &Scene, object: u32) -> bool {
     scene.is_closed(object)
 }
 
-/// Whether `object` is a medium: a closed solid of a dielectric material
-/// (`transmission > 0`), with an inside that has an index and absorption.
+/// Beer–Lambert transmittance `exp(−absorption · seg)` of a stretch of
+/// length `seg` inside `medium` (1 outside every medium).
 #[inline]
-fn is_medium(scene: &Scene, object: u32) -> bool {
-    scene.material_of(object).transmission > 0.0 && is_closed(scene, object)
+fn absorbed(scene: &Scene, medium: Option<u32>, seg: f32) -> Vec3 {
+    match medium.map(|m| scene.material_of(m).absorption) {
+        Some(a) if a != Vec3::ZERO => (-a * seg).exp(),
+        _ => Vec3::ONE,
+    }
 }
 
 #[inline]
@@ -191,7 +196,14 @@ impl<'a> Tracer<'a> {
         scene.materials.iter().any(Material::is_see_through)
     }
 
-    pub(crate) fn new(scene: &'a Scene, settings: &RenderSettings, see_through: bool) -> Self {
+    /// A tracer of `scene` as `settings` render it, whose camera rays
+    /// start in `camera_media` (found once per render).
+    pub(crate) fn new(
+        scene: &'a Scene,
+        settings: &RenderSettings,
+        see_through: bool,
+        camera_media: &'a CameraMedia,
+    ) -> Self {
         let min_contribution =
             if settings.min_contribution.is_finite() { settings.min_contribution.max(0.0) } else { 0.0 };
         Self {
@@ -205,6 +217,7 @@ impl<'a> Tracer<'a> {
             packets: false,
             pre_point: None,
             pre: [PreShadow::Unknown; PRE_LIGHTS],
+            camera_media,
             camera_cone: camera_cone(settings),
             offset: offset_scale(scene, settings),
             rays: 0,
@@ -219,7 +232,24 @@ impl<'a> Tracer<'a> {
     #[inline]
     pub(crate) fn trace_camera(&mut self, ray: &Ray) -> Vec3 {
         self.primary = ray.dir;
-        self.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone, &Media::default())
+        self.in_camera_media(ray.origin, |t, media| {
+            t.trace(ray, 0, Vec3::ONE, 0.0, NO_OBJECT, t.camera_cone, media)
+        })
+    }
+
+    /// `f` of this tracer and the media a camera ray from `origin` starts
+    /// in: those of every camera ray, found once, where they all start in
+    /// the same (no work per ray).
+    #[inline]
+    fn in_camera_media<R>(&mut self, origin: Vec3, f: impl FnOnce(&mut Self, &Media) -> R) -> R {
+        let camera_media = self.camera_media;
+        match camera_media.fixed() {
+            Some(media) => f(self, media),
+            None => {
+                let media = camera_media.at(self.scene, origin, &mut self.scratch.media);
+                f(self, &media)
+            }
+        }
     }
 
     /// [`Tracer::trace_camera`] with the ray's closest hit already found
@@ -236,7 +266,9 @@ impl<'a> Tracer<'a> {
         self.primary = ray.dir;
         self.pre_point = hit.map(|h| h.hit.point);
         self.pre = pre;
-        let l = self.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, self.camera_cone, &Media::default());
+        let l = self.in_camera_media(ray.origin, |t, media| {
+            t.trace_hit(ray, hit, 0, Vec3::ONE, 0.0, NO_OBJECT, t.camera_cone, media)
+        });
         self.pre_point = None;
         l
     }
@@ -408,16 +440,13 @@ impl<'a> Tracer<'a> {
         let cone = RayCone { width: cone.width_at(seg), spread: cone.spread };
         let mat = scene.material_of(h.object);
         // Beer–Lambert over a segment travelled inside an absorbing
-        // dielectric: the innermost medium the ray is in or, where it was
-        // not seen entering one (a camera inside glass), the solid whose
-        // inner surface the segment ends on.
+        // dielectric: the innermost medium the ray is in or, where it is
+        // not known to be in one (one forgotten in deep nesting), the solid
+        // whose inner surface the segment ends on.
         let medium = media
             .innermost()
             .or_else(|| (!h.hit.front_face && is_medium(scene, h.object)).then_some(h.object));
-        let absorb = match medium.map(|m| scene.material_of(m).absorption) {
-            Some(a) if a != Vec3::ZERO => (-a * seg).exp(),
-            _ => Vec3::ONE,
-        };
+        let absorb = absorbed(scene, medium, seg);
         if h.hit.front_face
             && (h.object == skip_exit || media.contains(h.object))
             && seg <= REENTRY * ray.origin.abs().max_element().max(self.offset)

@@ -2,6 +2,7 @@
 
 use crate::aov::{Aov, AovRow, render_passes};
 use crate::integrator::{PRE_LIGHTS, PreShadow, Tracer};
+use crate::media::CameraMedia;
 use crate::{Antialias, AovImages, BoundsError, Camera, PixelBounds, Scene};
 use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
@@ -260,6 +261,7 @@ pub(crate) fn render_pixels<'a>(
     // then refines the region's.
     let all_rows = rh + if adaptive.is_some() { base_rows.len() as u32 } else { 0 };
     let see_through = beauty && Tracer::scene_is_see_through(scene);
+    let camera_media = CameraMedia::new(scene, settings);
     let choice = packet_choice(scene, see_through);
     let packets = choice.camera && beauty && aovs.is_empty() && !alpha && adaptive.is_none();
     let rays = AtomicU64::new(0);
@@ -295,7 +297,7 @@ pub(crate) fn render_pixels<'a>(
             return stop(row, sink);
         }
         let mut stopped = false;
-        let mut tracer = Tracer::new(scene, settings, see_through);
+        let mut tracer = Tracer::new(scene, settings, see_through, &camera_media);
         tracer.packets = choice.area_shadows;
         let mut bad = 0u64;
         // Camera rays traced for the beauty (fewer than pixels × spp under adaptive sampling).

@@ -282,6 +282,19 @@ fn an_air_gap_inside_glass_bends_as_air_in_glass_does() {
     assert_wall_hit(got.x, eye, d, (thick - gap) * (theta_i.tan() - theta_t.tan()));
 }
 
+/// The ramp wall seen from (−3, 0, 5) toward the origin through `solids`
+/// (glass of the index given), one pixel traced to depth `depth`: the
+/// wall's value there, the eye and the view direction.
+fn ramp_through(solids: Vec<(prism_geometry::Shape, f32)>, depth: u32) -> (f32, Vec3, Vec3) {
+    let (wall, wall_m) = ramp_wall();
+    let eye = Vec3::new(-3.0, 0.0, 5.0);
+    let cam = camera(eye, Vec3::ZERO, Vec3::Y, 10.0, 1, 1);
+    let mut objects: Vec<_> = solids.into_iter().map(|(shape, n)| (shape, I, glass(n))).collect();
+    objects.push((wall, I, wall_m));
+    let img = render(&scene(objects, vec![], cam), 1, depth);
+    (px(&img, 0, 0).x, eye, cam.ray(0.5, 0.5).dir)
+}
+
 #[test]
 fn a_liquid_overlapping_its_glass_wall_bends_once_at_each_interface() {
     // Liquid (1.33) from z = 0.8 down to −0.3, overlapping the glass wall
@@ -292,16 +305,7 @@ fn a_liquid_overlapping_its_glass_wall_bends_once_at_each_interface() {
     let (n_glass, n_liquid) = (1.5f32, 1.33f32);
     let wall_of_glass = cuboid(Vec3::new(-50.0, -50.0, -0.5), Vec3::new(50.0, 50.0, 0.5));
     let liquid = cuboid(Vec3::new(-40.0, -40.0, -0.3), Vec3::new(40.0, 40.0, 0.8));
-    let (wall, wall_m) = ramp_wall();
-    let eye = Vec3::new(-3.0, 0.0, 5.0);
-    let cam = camera(eye, Vec3::ZERO, Vec3::Y, 10.0, 1, 1);
-    let s = scene(
-        vec![(liquid, I, glass(n_liquid)), (wall_of_glass, I, glass(n_glass)), (wall, I, wall_m)],
-        vec![],
-        cam,
-    );
-    let img = render(&s, 1, 4);
-    let d = cam.ray(0.5, 0.5).dir;
+    let (value, eye, d) = ramp_through(vec![(liquid, n_liquid), (wall_of_glass, n_glass)], 4);
     let cos_i = -d.z;
     let theta_i = cos_i.acos();
     let (theta_l, theta_g) = ((theta_i.sin() / n_liquid).asin(), (theta_i.sin() / n_glass).asin());
@@ -310,7 +314,30 @@ fn a_liquid_overlapping_its_glass_wall_bends_once_at_each_interface() {
         * (1.0 - f(theta_l.cos(), n_liquid, n_glass))
         * (1.0 - f(theta_g.cos(), n_glass, 1.0));
     let shift = 0.3 * (theta_i.tan() - theta_l.tan()) + 1.0 * (theta_i.tan() - theta_g.tan());
-    assert_wall_hit(px(&img, 0, 0).x / w, eye, d, shift);
+    assert_wall_hit(value / w, eye, d, shift);
+}
+
+#[test]
+fn a_camera_in_glass_inside_water_bends_into_the_water_then_the_air() {
+    // The eye inside a glass block (1.5, z from −0.5 to 8) inside a water
+    // block (1.33, z from −2.5 to 10): the view ray leaves the glass into
+    // the water at z = −0.5, the water into air at z = −2.5, and meets the
+    // wall at z = −3. It runs at θg for 5.5, θw for 2 and θa for 0.5.
+    let (n_glass, n_water) = (1.5f32, 1.33f32);
+    let glass_block = cuboid(Vec3::new(-40.0, -40.0, -0.5), Vec3::new(40.0, 40.0, 8.0));
+    let water = cuboid(Vec3::new(-50.0, -50.0, -2.5), Vec3::new(50.0, 50.0, 10.0));
+    // Depth 2: two surfaces, then the wall; the reflected parts end on
+    // the blocks' faces, black.
+    let (value, eye, d) = ramp_through(vec![(water, n_water), (glass_block, n_glass)], 2);
+    let sin_g = (1.0 - d.z * d.z).sqrt();
+    let (sin_w, sin_a) = (sin_g * n_glass / n_water, sin_g * n_glass);
+    let (cos_g, cos_w) = ((1.0 - sin_g * sin_g).sqrt(), (1.0 - sin_w * sin_w).sqrt());
+    let tan = |s: f32| s / (1.0 - s * s).sqrt();
+    let f = prism_shade::optics::fresnel;
+    let w = (1.0 - f(cos_g, n_glass, n_water)) * (1.0 - f(cos_w, n_water, 1.0));
+    let shift = 2.0 * (tan(sin_g) - tan(sin_w)) + 0.5 * (tan(sin_g) - tan(sin_a));
+    assert!(shift < -0.5, "{shift}");
+    assert_wall_hit(value / w, eye, d, shift);
 }
 
 #[test]
