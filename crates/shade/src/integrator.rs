@@ -424,10 +424,12 @@ impl<'a> Tracer<'a> {
     ) -> Vec3 {
         self.rays += 1;
         let scene = self.scene;
-        // An area light nearer than the surface (or than nothing) is seen.
+        // An area light nearer than the surface (or than nothing) is seen,
+        // through the medium the ray is in as the light it casts is.
         if let Some((t, l)) = self.light_hit(ray, hit.as_ref().map_or(ray.t_max, |h| h.hit.t)) {
-            let end = path + self.fog_length(ray, t * ray.dir.length());
-            return self.fog_blend(l, self.fog_t(path, end));
+            let seg = t * ray.dir.length();
+            let end = path + self.fog_length(ray, seg);
+            return self.fog_blend(l * absorbed(scene, media.innermost(), seg), self.fog_t(path, end));
         }
         let Some(h) = hit else {
             let sky = scene.environment.as_ref().map_or(scene.background, |e| e.radiance(ray.dir));

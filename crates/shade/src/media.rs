@@ -22,7 +22,9 @@
 //! Which solids hold a point is found by a ray from it ([`media_at`]), once
 //! per render for a pinhole's eye; for a thin lens or an orthographic view
 //! only the media whose boxes reach the rays' origins are tested, per ray,
-//! and a camera far from every medium costs nothing per ray.
+//! and a camera far from every medium costs nothing per ray. An area light
+//! seen from inside an absorbing medium is absorbed along the way as the
+//! light it casts is.
 
 use crate::{Projection, RenderSettings, Scene};
 use prism_bvh::Object;

@@ -233,6 +233,25 @@ fn camera_and_mirror_rays_see_area_lights() {
 }
 
 #[test]
+fn an_area_light_inside_absorbing_glass_is_seen_through_the_glass() {
+    // The quad light (y = 4) inside a ball of absorbing glass of index 1
+    // (radius 10): seen from the centre through 4 of glass, from below
+    // (y = −20) through 14, as the light it casts is absorbed.
+    let light = quad_over_floor(4, false);
+    let absorption = Vec3::new(0.05, 0.1, 0.0);
+    let ball = Sphere::new(Vec3::ZERO, 10.0).expect("ok").into();
+    let green = Material { absorption, ..glass(1.0) };
+    for (eye, inside) in [(Vec3::ZERO, 4.0), (Vec3::new(0.0, -20.0, 0.0), 14.0)] {
+        let cam = camera(eye, eye + Vec3::Y, Vec3::Z, 5.0, 1, 1);
+        let s = scene_lit(vec![(ball, I, green.clone())], vec![light], cam);
+        // To 1e-4: the ray into the glass starts its offset (~2e-4) past
+        // the surface.
+        let want = light.radiance() * (-absorption * inside).exp();
+        assert_close(px(&render(&s, 1, 2), 0, 0) / want, Vec3::ONE, 1e-4);
+    }
+}
+
+#[test]
 fn environment_is_seen_by_missing_camera_and_mirror_rays_but_lights_nothing() {
     let texels = vec![Vec3::new(0.2, 0.4, 0.8); 8];
     let image = Arc::new(ImageTexture::from_linear(4, 2, texels, Wrap::Repeat).expect("ok"));
