@@ -1,8 +1,8 @@
 //! The camera: a pinhole or thin lens, perspective or orthographic.
 
 use crate::ShadeError;
+use prism_geometry::Ray;
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Aabb, Ray};
 
 /// How the camera projects the scene onto the image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -226,24 +226,26 @@ impl Camera {
         self.position + offset * (self.look_at - self.position).length()
     }
 
-    /// A box that holds the origin of every ray [`Camera::ray`] gives for
-    /// image points up to `margin` pixels outside the image: the eye for a
-    /// pinhole, the view rectangle's box for an orthographic camera, each
-    /// grown by the lens's radius.
+    /// A rectangle that holds the origin of every ray [`Camera::ray`]
+    /// gives for image points up to `margin` pixels outside the image, as
+    /// its centre and its two half-sides `[centre, half_u, half_v]` (along
+    /// the camera's right and up): the eye for a pinhole (both half-sides
+    /// zero), the view rectangle for an orthographic camera, each grown by
+    /// the lens's radius (the lens disk lies in the same plane).
     #[must_use]
-    pub(crate) fn origin_bounds(&self, margin: f32) -> Aabb {
+    pub(crate) fn origin_rect(&self, margin: f32) -> [Vec3; 3] {
         let (w, h) = (self.size.0 as f32, self.size.1 as f32);
-        let mut b = Aabb::EMPTY.grow(self.position);
+        let (mut centre, mut half) = (self.position, [0.0f32; 2]);
         if self.projection == Projection::Orthographic {
-            for (x, y) in
-                [(-margin, -margin), (w + margin, -margin), (-margin, h + margin), (w + margin, h + margin)]
-            {
-                b = b.grow(self.ortho_origin(self.offset(x, y)));
-            }
+            let corner = |x: f32, y: f32| self.ortho_origin(self.offset(x, y));
+            let (c00, c10, c01) =
+                (corner(-margin, -margin), corner(w + margin, -margin), corner(-margin, h + margin));
+            let (u, v) = ((c10 - c00) * 0.5, (c01 - c00) * 0.5);
+            centre = c00 + u + v;
+            half = [u.dot(self.right).abs(), v.dot(self.true_up).abs()];
         }
-        // The lens disk lies in the plane of `right` and `true_up`, unit
-        // and perpendicular: no coordinate moves by more than its radius.
-        Aabb::new(b.min - Vec3::splat(self.aperture), b.max + Vec3::splat(self.aperture))
+        let grow = |h: f32| if self.aperture > 0.0 { h + self.aperture } else { h };
+        [centre, self.right * grow(half[0]), self.true_up * grow(half[1])]
     }
 
     /// The primary ray through image point `(x, y)` (continuous pixel
@@ -322,16 +324,27 @@ mod tests {
     }
 
     #[test]
-    fn origin_bounds_hold_every_rays_origin() {
+    fn the_origin_rectangle_holds_every_rays_origin() {
         let ortho = cam().with_projection(Projection::Orthographic);
         for c in [cam(), cam().with_lens(0.5, 3.0).unwrap(), ortho, ortho.with_lens(0.25, 2.0).unwrap()] {
-            let b = c.origin_bounds(2.0);
+            let [centre, hu, hv] = c.origin_rect(2.0);
+            let n = c.forward();
             for k in 0..200 {
                 let (x, y) = (-2.0 + (k % 20) as f32 * 3.4, -2.0 + (k / 20) as f32 * 3.6);
-                assert!(b.contains(c.ray(x, y).origin, 1e-5), "{c:?} at {x},{y}");
+                let d = c.ray(x, y).origin - centre;
+                let inside = d.dot(n).abs() < 1e-4
+                    && d.dot(hu.normalize_or_zero()).abs() <= hu.length() + 1e-4
+                    && d.dot(hv.normalize_or_zero()).abs() <= hv.length() + 1e-4;
+                assert!(inside, "{c:?} at {x},{y}");
             }
         }
-        let pin = cam().origin_bounds(2.0);
-        assert_eq!((pin.min, pin.max), (cam().position(), cam().position()));
+        // A pinhole's is its eye; a lens's the lens's square.
+        assert_eq!(cam().origin_rect(2.0), [cam().position(), Vec3::ZERO, Vec3::ZERO]);
+        let [_, hu, hv] = cam().with_lens(0.5, 3.0).unwrap().origin_rect(2.0);
+        assert!((hu.length() - 0.5).abs() < 1e-6 && (hv.length() - 0.5).abs() < 1e-6);
+        // The view rectangle: 10 · tan 30° high at the look-at distance 5, 2:1.
+        let [_, hu, hv] = ortho.origin_rect(0.0);
+        let height = 10.0 * (30f32).to_radians().tan();
+        assert!((hv.length() - height / 2.0).abs() < 1e-4 && (hu.length() - height).abs() < 1e-4);
     }
 }

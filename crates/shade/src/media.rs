@@ -21,8 +21,10 @@
 //! refraction at the glass's inner surface bends into what is around it.
 //! Which solids hold a point is found by a ray from it ([`media_at`]), once
 //! per render for a pinhole's eye; for a thin lens or an orthographic view
-//! only the media whose boxes reach the rays' origins are tested, per ray,
-//! and a camera far from every medium costs nothing per ray. An area light
+//! only the media whose boxes meet the rectangle of the rays' origins are
+//! tested, per ray, those of the origin's cell of a grid over it
+//! ([`OriginGrid`]); a camera whose origins meet no medium's box costs
+//! nothing per ray. An area light
 //! seen from inside an absorbing medium is absorbed along the way as the
 //! light it casts is.
 
@@ -136,25 +138,34 @@ fn started_in(crossings: &[MediumCrossing]) -> Media {
 const INSIDE_TEST: Vec3 = Vec3::new(0.381_966, 0.618_034, 0.687_122);
 
 /// The media that hold the point `p`, of those `candidate` accepts,
-/// outermost first ([`Media`]): along a ray from `p`, a solid whose
-/// nearest crossing is a back face (the ray leaves it there) holds `p`,
-/// and of several the one left first is the innermost. `crossings` is
-/// scratch space.
+/// outermost first ([`Media`]; the innermost [`Media::KEPT`] of them):
+/// along a ray from `p` (as far as `reach`, past every candidate), a
+/// solid whose nearest crossing is a back face (the ray leaves it there)
+/// holds `p`, and of several the one left first is the innermost. Each
+/// solid is judged by its own crossings, however many others the ray
+/// enters on the way. `crossings` is scratch space.
 pub(crate) fn media_at(
     scene: &Scene,
     p: Vec3,
+    reach: f32,
     candidate: impl Fn(u32) -> bool,
     crossings: &mut Vec<MediumCrossing>,
 ) -> Media {
     crossings.clear();
-    scene.accel.for_each_crossing(&Ray::new(p, INSIDE_TEST), |c| {
+    scene.accel.for_each_crossing(&Ray::with_interval(p, INSIDE_TEST, 0.0, reach), |c| {
         if candidate(c.object) && is_medium(scene, c.object) {
             crossings.push((c.t, c.object, c.front_face));
         }
         ControlFlow::Continue(())
     });
-    crossings.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    started_in(crossings)
+    // Each solid's crossings together, nearest first; those whose nearest
+    // is an exit hold `p`, ordered by that exit, the farthest (outermost)
+    // first, so that entering them in turn keeps the innermost.
+    crossings.sort_unstable_by(|a, b| a.1.cmp(&b.1).then(a.0.total_cmp(&b.0)));
+    crossings.dedup_by_key(|c| c.1);
+    crossings.retain(|c| !c.2);
+    crossings.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    crossings.iter().fold(Media::default(), |media, c| media.entered(c.1))
 }
 
 /// The media camera rays start in, found once per render: most cameras
@@ -163,10 +174,14 @@ pub(crate) enum CameraMedia {
     /// Every camera ray starts in these: a pinhole's eye is in them, or no
     /// medium comes near any ray's origin.
     Fixed(Media),
-    /// The origins vary (a thin lens, an orthographic view) and these
-    /// media's world boxes (padded) reach some of them: a ray's origin is
-    /// tested against those whose box holds it.
-    PerRay(Vec<(u32, Aabb)>),
+    /// The origins vary (a thin lens, an orthographic view) and some
+    /// media's world boxes (padded) meet the rectangle that holds them.
+    PerRay {
+        /// Those media's boxes, by object (`None` for every other object).
+        boxes: Vec<Option<Aabb>>,
+        /// The same media by where their boxes fall on the rectangle.
+        grid: OriginGrid,
+    },
 }
 
 impl CameraMedia {
@@ -174,20 +189,26 @@ impl CameraMedia {
     pub(crate) fn new(scene: &Scene, settings: &RenderSettings) -> Self {
         let cam = &settings.camera;
         // Filtered samples reach up to the filter's radius past a pixel.
-        let origins = cam.origin_bounds(settings.antialias.filter.radius() + 1.0);
-        let near: Vec<(u32, Aabb)> = (0..scene.accel.objects().len() as u32)
-            .filter(|&i| is_medium(scene, i))
-            .filter_map(|i| Some((i, padded(world_bounds(scene, i)?))))
-            .filter(|(_, b)| b.min.cmple(origins.max).all() && b.max.cmpge(origins.min).all())
-            .collect();
+        let origins = cam.origin_rect(settings.antialias.filter.radius() + 1.0);
+        let n = scene.accel.objects().len();
+        let mut boxes: Vec<Option<Aabb>> = Vec::new();
+        let mut near = Vec::new();
+        for i in (0..n as u32).filter(|&i| is_medium(scene, i)) {
+            let Some(b) = world_bounds(scene, i).map(padded) else { continue };
+            if rect_meets_box(&origins, &b) {
+                boxes.resize(n, None);
+                boxes[i as usize] = Some(b);
+                near.push((i, b));
+            }
+        }
         if near.is_empty() {
             return Self::Fixed(Media::default());
         }
+        let per_ray = Self::PerRay { boxes, grid: OriginGrid::new(&origins, &near) };
         if cam.projection() == Projection::Perspective && cam.aperture() == 0.0 {
-            let eye = cam.position();
-            return Self::Fixed(Self::PerRay(near).at(scene, eye, &mut Vec::new()));
+            return Self::Fixed(per_ray.at(scene, cam.position(), &mut Vec::new()));
         }
-        Self::PerRay(near)
+        per_ray
     }
 
     /// The media every camera ray starts in, where they all start in the
@@ -196,26 +217,155 @@ impl CameraMedia {
     pub(crate) fn fixed(&self) -> Option<&Media> {
         match self {
             Self::Fixed(media) => Some(media),
-            Self::PerRay(_) => None,
+            Self::PerRay { .. } => None,
         }
     }
 
     /// The media a camera ray from `origin` starts in; `scratch` is
     /// scratch space. Called per ray only for [`CameraMedia::PerRay`]
-    /// (rare, hence cold: [`CameraMedia::fixed`] serves the rest).
+    /// (rare, hence cold: [`CameraMedia::fixed`] serves the rest): the
+    /// boxes of the origin's grid cell are tested, and an origin in some
+    /// of them costs one walk of the acceleration structure as far as
+    /// those boxes reach.
     #[cold]
     pub(crate) fn at(&self, scene: &Scene, origin: Vec3, scratch: &mut Vec<MediumCrossing>) -> Media {
         match self {
             Self::Fixed(media) => *media,
-            Self::PerRay(near) => {
-                let holds = |b: &Aabb| b.contains(origin, 0.0);
-                if !near.iter().any(|(_, b)| holds(b)) {
-                    return Media::default();
-                }
-                media_at(scene, origin, |o| near.iter().any(|(i, b)| *i == o && holds(b)), scratch)
+            Self::PerRay { boxes, grid } => {
+                let test = Ray::new(origin, INSIDE_TEST);
+                let reach = grid
+                    .cell(origin)
+                    .iter()
+                    .filter_map(|&i| boxes.get(i as usize).copied().flatten())
+                    .filter(|b| b.contains(origin, 0.0))
+                    .filter_map(|b| b.intersect_ray(&test).map(|(_, out)| out))
+                    .fold(None, |far: Option<f32>, out| Some(far.map_or(out, |f| f.max(out))));
+                let Some(reach) = reach else { return Media::default() };
+                let holds = |o: u32| {
+                    boxes.get(o as usize).copied().flatten().is_some_and(|b| b.contains(origin, 0.0))
+                };
+                media_at(scene, origin, reach, holds, scratch)
             }
         }
     }
+}
+
+/// Media by where their boxes fall on the camera's origin rectangle: a
+/// grid of cells over the rectangle's two sides, each listing the media
+/// whose box, projected onto the rectangle, reaches the cell. An origin
+/// is tested against its cell's boxes only, a handful however many media
+/// the rectangle meets.
+pub(crate) struct OriginGrid {
+    centre: Vec3,
+    /// The rectangle's sides, unit (zero where it has no extent), and
+    /// their half-lengths.
+    axes: [Vec3; 2],
+    half: [f32; 2],
+    /// Cells along each side.
+    side: usize,
+    /// Cell `k` lists `ids[starts[k]..starts[k + 1]]`.
+    starts: Vec<u32>,
+    ids: Vec<u32>,
+}
+
+impl OriginGrid {
+    fn new(rect: &[Vec3; 3], near: &[(u32, Aabb)]) -> Self {
+        let [centre, hu, hv] = *rect;
+        let axes = [hu.normalize_or_zero(), hv.normalize_or_zero()];
+        let half = [hu.length(), hv.length()];
+        // About one box a cell, at most 256 × 256 cells; fewer where large
+        // boxes would be listed in so many cells that the lists outgrow a
+        // few entries a box.
+        let mut side = ((near.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
+        let (grid, spans) = loop {
+            let grid = Self { centre, axes, half, side, starts: Vec::new(), ids: Vec::new() };
+            // Each box's cells, from its corners' places on the rectangle.
+            let spans: Vec<[std::ops::RangeInclusive<usize>; 2]> = near
+                .iter()
+                .map(|(_, b)| {
+                    let corners = b.corners();
+                    let span = |a: usize| {
+                        let along = corners.iter().map(|&c| (c - centre).dot(grid.axes[a]));
+                        let (lo, hi) =
+                            along.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), x| (l.min(x), h.max(x)));
+                        grid.index(a, lo)..=grid.index(a, hi)
+                    };
+                    [span(0), span(1)]
+                })
+                .collect();
+            let listed: usize = spans.iter().map(|[u, v]| u.clone().count() * v.clone().count()).sum();
+            if side == 1 || listed <= 8 * near.len() + 4096 {
+                break (grid, spans);
+            }
+            side /= 2;
+        };
+        let side = grid.side;
+        let mut counts = vec![0u32; side * side + 1];
+        for [su, sv] in &spans {
+            for j in sv.clone() {
+                for i in su.clone() {
+                    counts[j * side + i + 1] += 1;
+                }
+            }
+        }
+        for k in 1..counts.len() {
+            counts[k] += counts[k - 1];
+        }
+        let mut ids = vec![0u32; counts[side * side] as usize];
+        let mut fill = counts.clone();
+        for ((object, _), [su, sv]) in near.iter().zip(&spans) {
+            for j in sv.clone() {
+                for i in su.clone() {
+                    let at = &mut fill[j * side + i];
+                    ids[*at as usize] = *object;
+                    *at += 1;
+                }
+            }
+        }
+        Self { starts: counts, ids, ..grid }
+    }
+
+    /// The cell index along side `a` of the point `x` along it from the
+    /// centre (clamped to the grid).
+    fn index(&self, a: usize, x: f32) -> usize {
+        if self.half[a] <= 0.0 || x.is_nan() {
+            return 0;
+        }
+        let f = (x / self.half[a] + 1.0) * 0.5 * self.side as f32;
+        (f.max(0.0) as usize).min(self.side - 1)
+    }
+
+    /// The media listed in the cell of origin `p`.
+    fn cell(&self, p: Vec3) -> &[u32] {
+        let d = p - self.centre;
+        let k = self.index(1, d.dot(self.axes[1])) * self.side + self.index(0, d.dot(self.axes[0]));
+        let (from, to) = (self.starts[k] as usize, self.starts[k + 1] as usize);
+        self.ids.get(from..to).unwrap_or_default()
+    }
+}
+
+/// Whether the rectangle `[centre, half_u, half_v]` (half-sides at right
+/// angles, [`crate::Camera::origin_rect`]) may meet box `b`: no separating
+/// axis among the world's three, the rectangle's normal and its sides
+/// (the edge-by-edge axes are not tried, so a few rectangles near a
+/// box's edge are taken to meet it: the caller then tests more, never
+/// less).
+fn rect_meets_box(rect: &[Vec3; 3], b: &Aabb) -> bool {
+    let [centre, hu, hv] = *rect;
+    let half = b.extent() * 0.5;
+    let d = b.center() - centre;
+    let apart =
+        |axis: Vec3| d.dot(axis).abs() > half.dot(axis.abs()) + hu.dot(axis).abs() + hv.dot(axis).abs();
+    ![
+        Vec3::X,
+        Vec3::Y,
+        Vec3::Z,
+        hu.cross(hv).normalize_or_zero(),
+        hu.normalize_or_zero(),
+        hv.normalize_or_zero(),
+    ]
+    .into_iter()
+    .any(|axis| axis != Vec3::ZERO && apart(axis))
 }
 
 /// The world box of object `object`, if it has one.
@@ -276,7 +426,7 @@ mod tests {
     use crate::{Camera, Material, Projection, RenderSettings, Scene};
     use prism_bvh::{Accel, Object};
     use prism_geometry::glam::Vec3;
-    use prism_geometry::{Cuboid, Instance, Shape, Sphere, Transform};
+    use prism_geometry::{Aabb, Cuboid, Instance, Shape, Sphere, Transform};
 
     #[test]
     fn media_nest_and_unnest() {
@@ -369,9 +519,19 @@ mod tests {
         let objects =
             shapes.into_iter().map(|s| Object::Shape(Instance::new(s, Transform::IDENTITY))).collect();
         Scene {
-            accel: Accel::build(Vec::new(), objects).expect("no meshes"),
             object_materials: vec![0, 0, 0, 1, 1],
             materials: vec![glass, Material::diffuse(Vec3::ONE)],
+            ..scene_of(objects)
+        }
+    }
+
+    /// A scene of `objects`, all of material 0 (white, diffuse), no lights.
+    fn scene_of(objects: Vec<Object>) -> Scene {
+        let n = objects.len();
+        Scene {
+            accel: Accel::build(Vec::new(), objects).expect("no meshes"),
+            object_materials: vec![0; n],
+            materials: vec![Material::diffuse(Vec3::ONE)],
             lights: Vec::new(),
             ambient: Vec3::ZERO,
             background: Vec3::ZERO,
@@ -387,7 +547,7 @@ mod tests {
     #[test]
     fn a_point_is_in_the_media_that_hold_it_outermost_first() {
         let scene = nested();
-        let at = |p: Vec3| media_at(&scene, p, |_| true, &mut Vec::new());
+        let at = |p: Vec3| media_at(&scene, p, f32::INFINITY, |_| true, &mut Vec::new());
         assert_eq!(at(Vec3::new(0.5, -0.3, 0.2)), media(&[0, 1]));
         assert_eq!(at(Vec3::new(0.0, 3.0, 0.0)), media(&[0]));
         assert_eq!(at(Vec3::new(6.2, 0.1, 0.0)), media(&[2]));
@@ -395,7 +555,35 @@ mod tests {
         assert_eq!(at(Vec3::new(-6.0, 0.0, 0.0)), Media::default());
         assert_eq!(at(Vec3::new(0.0, 0.0, 9.0)), Media::default());
         // Only the candidates count.
-        assert_eq!(media_at(&scene, Vec3::ZERO, |o| o != 0, &mut Vec::new()), media(&[1]));
+        assert_eq!(media_at(&scene, Vec3::ZERO, f32::INFINITY, |o| o != 0, &mut Vec::new()), media(&[1]));
+        // Not as far as the big ball's far side: only the small one is left.
+        assert_eq!(media_at(&scene, Vec3::ZERO, 3.0, |_| true, &mut Vec::new()), media(&[1]));
+    }
+
+    /// Ten glass balls about the origin, radii 1 to 10 (object k has
+    /// radius 10 − k).
+    fn onion() -> Scene {
+        let glass = Material { transmission: 1.0, ior: 1.5, ..Material::diffuse(Vec3::ONE) };
+        let objects = (0..10)
+            .map(|k| {
+                let ball = Sphere::new(Vec3::ZERO, 10.0 - k as f32).expect("valid sphere");
+                Object::Shape(Instance::new(Shape::from(ball), Transform::IDENTITY))
+            })
+            .collect();
+        Scene { object_materials: vec![0; 10], materials: vec![glass], ..scene_of(objects) }
+    }
+
+    #[test]
+    fn a_point_beside_many_nested_solids_is_in_none_and_one_inside_them_in_the_innermost() {
+        let scene = onion();
+        let at = |p: Vec3| media_at(&scene, p, f32::INFINITY, |_| true, &mut Vec::new());
+        // Outside all ten; the test ray enters all ten before it leaves any.
+        let outside = Vec3::new(-12.0, -12.0, -12.0) * super::INSIDE_TEST.normalize();
+        assert_eq!(at(outside), Media::default());
+        // Inside all ten: the innermost eight, outermost first.
+        assert_eq!(at(Vec3::splat(0.1)), media(&[2, 3, 4, 5, 6, 7, 8, 9]));
+        // Between the radii 5 and 6: the five outer balls.
+        assert_eq!(at(Vec3::new(5.5, 0.0, 0.0)), media(&[0, 1, 2, 3, 4]));
     }
 
     fn settings(camera: Camera) -> RenderSettings {
@@ -416,7 +604,7 @@ mod tests {
         let cam = |eye: Vec3| Camera::new(eye, eye + Vec3::Z, Vec3::Y, 40.0, 8, 6).expect("valid camera");
         let fixed = |eye: Vec3| match CameraMedia::new(&scene, &settings(cam(eye))) {
             CameraMedia::Fixed(m) => m,
-            CameraMedia::PerRay(_) => panic!("a pinhole's media are found once"),
+            CameraMedia::PerRay { .. } => panic!("a pinhole's media are found once"),
         };
         // A pinhole: once, whether in media or not.
         assert_eq!(fixed(Vec3::new(0.5, 0.0, 0.0)), media(&[0, 1]));
@@ -429,8 +617,7 @@ mod tests {
         // A lens by the small ball: only it is tested, per ray.
         let lens = cam(Vec3::new(6.0, 0.0, 0.0)).with_lens(0.5, 3.0).expect("valid lens");
         let per_ray = CameraMedia::new(&scene, &settings(lens));
-        let CameraMedia::PerRay(near) = &per_ray else { panic!("a lens's media are found per ray") };
-        assert_eq!(near.iter().map(|n| n.0).collect::<Vec<_>>(), [2]);
+        assert_eq!(tested(&per_ray), [2], "a lens's media are found per ray");
         let mut scratch = Vec::new();
         assert_eq!(per_ray.at(&scene, Vec3::new(6.3, 0.2, 0.0), &mut scratch), media(&[2]));
         assert_eq!(per_ray.at(&scene, Vec3::new(6.0, 0.0, 3.0), &mut scratch), Media::default());
@@ -439,10 +626,75 @@ mod tests {
             .expect("valid camera")
             .with_projection(Projection::Orthographic);
         let per_ray = CameraMedia::new(&scene, &settings(ortho));
-        let CameraMedia::PerRay(near) = &per_ray else {
-            panic!("an orthographic view's media are found per ray")
-        };
-        assert_eq!(near.iter().map(|n| n.0).collect::<Vec<_>>(), [0, 1, 2]);
+        assert_eq!(tested(&per_ray), [0, 1, 2], "an orthographic view's media are found per ray");
         assert_eq!(per_ray.at(&scene, Vec3::new(1.0, 0.5, 0.0), &mut scratch), media(&[0, 1]));
+        // A tilted orthographic view whose rectangle's box takes in the
+        // balls' boxes, but whose plane passes 14 units from them: none.
+        let tilted = Camera::new(Vec3::new(0.0, 10.0, 10.0), Vec3::ZERO, Vec3::Y, 90.0, 8, 6)
+            .expect("valid camera")
+            .with_projection(Projection::Orthographic);
+        assert!(
+            matches!(CameraMedia::new(&scene, &settings(tilted)), CameraMedia::Fixed(m) if m == Media::default())
+        );
+    }
+
+    #[test]
+    fn an_origins_grid_cell_lists_every_box_that_holds_it() {
+        // Boxes of many sizes over a tilted rectangle; points on it.
+        let mut seed = 7u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32
+        };
+        let rect = [Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 0.0, 4.0), Vec3::new(-2.0, 3.0, 2.0)];
+        let on = |a: f32, b: f32| rect[0] + rect[1] * (2.0 * a - 1.0) + rect[2] * (2.0 * b - 1.0);
+        for count in [1usize, 40, 3000] {
+            let near: Vec<(u32, Aabb)> = (0..count as u32)
+                .map(|i| {
+                    let c = on(next(), next()) + Vec3::splat(next() - 0.5);
+                    let r = Vec3::new(next(), next(), next()) * if i % 50 == 0 { 8.0 } else { 0.4 };
+                    (i, Aabb::new(c - r, c + r))
+                })
+                .collect();
+            let grid = super::OriginGrid::new(&rect, &near);
+            for _ in 0..2000 {
+                let p = on(next(), next());
+                let listed = grid.cell(p);
+                for (i, b) in &near {
+                    if b.contains(p, 0.0) {
+                        assert!(listed.contains(i), "{count} boxes: box {i} holds {p} but is not listed");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The objects a [`CameraMedia::PerRay`] tests (none for a fixed one).
+    fn tested(m: &CameraMedia) -> Vec<usize> {
+        match m {
+            CameraMedia::PerRay { boxes, .. } => (0..boxes.len()).filter(|&i| boxes[i].is_some()).collect(),
+            CameraMedia::Fixed(_) => Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_rectangle_meets_a_box_unless_an_axis_parts_them() {
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let rect = |c: Vec3, hu: Vec3, hv: Vec3| super::rect_meets_box(&[c, hu, hv], &b);
+        // A point, in and out.
+        assert!(rect(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO));
+        assert!(!rect(Vec3::splat(1.5), Vec3::ZERO, Vec3::ZERO));
+        // A square in z = 1.5 (above), and one in z = 0.5 far to the side, and reaching in.
+        assert!(!rect(Vec3::new(0.0, 0.0, 1.5), Vec3::X * 5.0, Vec3::Y * 5.0));
+        assert!(!rect(Vec3::new(7.0, 0.0, 0.5), Vec3::X * 5.0, Vec3::Y * 5.0));
+        assert!(rect(Vec3::new(5.5, 0.0, 0.5), Vec3::X * 5.0, Vec3::Y * 5.0));
+        // Tilted 45° about X, its plane through (0, 3, 3): its box takes in
+        // the cube's, its plane passes 3.54 from the centre (the cube
+        // reaches 1.41 along that normal).
+        let (u, v) = (Vec3::X * 10.0, Vec3::new(0.0, 1.0, -1.0).normalize() * 10.0);
+        assert!(!rect(Vec3::new(0.0, 3.0, 3.0), u, v));
+        assert!(rect(Vec3::new(0.0, 0.9, 0.9), u, v));
     }
 }
