@@ -158,6 +158,46 @@ impl TriangleMesh {
         sum / 6.0
     }
 
+    /// Whether the mesh is closed ([`TriangleMesh::is_closed`]) and each of
+    /// its shells (faces joined through shared edges, vertices taken by
+    /// position) encloses a negative volume ([`TriangleMesh::signed_volume`]
+    /// of its faces alone): a solid, or several apart, turned inside out,
+    /// which [`TriangleMesh::reverse_faces`] turns outward. A hollow
+    /// solid, whose inner shell rightly winds inward, and a mesh whose
+    /// shells disagree are not.
+    #[must_use]
+    pub fn winds_inward(&self) -> bool {
+        if !self.closed {
+            return false;
+        }
+        // Shells: faces joined through their corners' welded positions.
+        let id = weld_by_position(&self.positions);
+        let mut parent: Vec<u32> = (0..self.positions.len() as u32).collect();
+        fn root(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                let up = parent[parent[i as usize] as usize];
+                parent[i as usize] = up;
+                i = up;
+            }
+            i
+        }
+        for tri in &self.indices {
+            let [a, b, c] = tri.map(|i| id[i as usize]);
+            for (x, y) in [(a, b), (b, c)] {
+                let (rx, ry) = (root(&mut parent, x), root(&mut parent, y));
+                parent[rx.max(ry) as usize] = rx.min(ry);
+            }
+        }
+        let o = self.bounds.center().as_dvec3();
+        let mut volumes: std::collections::HashMap<u32, f64> = std::collections::HashMap::new();
+        for (f, tri) in self.indices.iter().enumerate() {
+            let shell = root(&mut parent, id[tri[0] as usize]);
+            let [a, b, c] = self.triangle(f).map(|p| p.as_dvec3() - o);
+            *volumes.entry(shell).or_default() += a.dot(b.cross(c));
+        }
+        !volumes.is_empty() && volumes.values().all(|&v| v < 0.0)
+    }
+
     /// Turns every face over (its second and third corners swapped), so
     /// that face normals point the other way; positions, normals and uvs
     /// stay, and a closed mesh stays closed.
@@ -417,9 +457,31 @@ mod tests {
         let mut inside_out = TriangleMesh::new(p, None, None, inward).unwrap();
         assert!(inside_out.is_closed());
         assert!((inside_out.signed_volume() + 8.0).abs() < 1e-9, "{}", inside_out.signed_volume());
+        assert!(inside_out.winds_inward() && !m.winds_inward());
         inside_out.reverse_faces();
         assert_eq!(inside_out, m);
-        assert!(inside_out.is_closed());
+        assert!(inside_out.is_closed() && !inside_out.winds_inward());
+        // Two shells: a big cube wound inward and a small one apart, wound
+        // outward, are not turned (that would turn the small one inside
+        // out); both inward, they are. A hollow cube (the small one inside,
+        // wound inward) is a solid as it is.
+        let (unit, idx) = split_cube();
+        let shells = |big: Vec3, big_in: bool, small: Vec3, small_in: bool| {
+            let mut p: Vec<Vec3> = unit.iter().map(|&v| v * 4.0 + big).collect();
+            p.extend(unit.iter().map(|&v| v + small));
+            let turn = |t: [u32; 3], inward: bool| if inward { [t[0], t[2], t[1]] } else { t };
+            let n = unit.len() as u32;
+            let mut faces: Vec<[u32; 3]> = idx.iter().map(|&t| turn(t, big_in)).collect();
+            faces.extend(idx.iter().map(|&t| turn(t.map(|i| i + n), small_in)));
+            let mesh = TriangleMesh::new(p, None, None, faces).unwrap();
+            assert!(mesh.is_closed());
+            mesh.winds_inward()
+        };
+        let (apart, within) = (Vec3::new(10.0, 0.0, 0.0), Vec3::splat(1.5));
+        assert!(!shells(Vec3::ZERO, true, apart, false));
+        assert!(shells(Vec3::ZERO, true, apart, true));
+        assert!(!shells(Vec3::ZERO, false, within, true));
+        assert!(!shells(Vec3::ZERO, false, apart, false));
         // No faces, no volume.
         assert_eq!(TriangleMesh::new(Vec::new(), None, None, Vec::new()).unwrap().signed_volume(), 0.0);
     }

@@ -328,7 +328,12 @@ impl<'a> Build<'a> {
             for m in &obj.mtl_files {
                 self.note_input(m);
             }
-            self.warnings.extend(obj.warnings.iter().cloned());
+            // Once, though the file is read again for each normals mode.
+            for w in &obj.warnings {
+                if !self.warnings.contains(w) {
+                    self.warnings.push(w.clone());
+                }
+            }
             let mut models = Vec::with_capacity(obj.models.len());
             let (mut triangles, mut degenerate) = (0, 0);
             for model in &obj.models {

@@ -167,14 +167,14 @@ pub fn load_obj(
         let err =
             |e: prism_geometry::GeometryError| (Location::file(path), format!("model `{}`: {e}", model.name));
         let mut mesh = TriangleMesh::new(positions, given, uvs, indices).map_err(err)?;
-        // A solid whose faces wind inward (an exporter's flipped normals)
-        // would be inside out: glass entered where it is left, its
+        // A solid whose faces all wind inward (an exporter's flipped
+        // normals) would be inside out: glass entered where it is left, its
         // absorption outside it. Turned outward before any normal is
         // computed from the winding.
-        if mesh.is_closed() && mesh.signed_volume() < 0.0 {
+        if mesh.winds_inward() {
             mesh.reverse_faces();
             warnings.push(format!(
-                "{}: model `{}` is a closed solid whose faces wind inward (clockwise seen from outside); prism turns them outward",
+                "{}: model `{}` is a closed solid whose faces all wind inward (clockwise seen from outside); prism turns them outward",
                 path.display(),
                 model.name
             ));

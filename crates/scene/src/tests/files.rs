@@ -266,13 +266,16 @@ fn a_solid_wound_inward_is_turned_outward() {
     assert_ne!(inward, cube);
     fs::write(dir.path().join("inward.obj"), &inward).unwrap();
     for (file, turned) in [("cube.obj", false), ("inward.obj", true)] {
-        let text = format!("{BASE}[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\n");
+        // The file twice, read with two normals modes: one warning.
+        let text = format!(
+            "{BASE}[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\n[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\nnormals = \"flat\"\n"
+        );
         let loaded = parse_scene_str(&text, dir.path(), Path::new("s.toml")).unwrap();
         let warned: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("wind inward")).collect();
         assert_eq!(warned.len(), usize::from(turned), "{file}: {:?}", loaded.warnings);
         if turned {
             assert!(
-                warned[0].contains("inward.obj: model `cube` is a closed solid whose faces wind inward"),
+                warned[0].contains("inward.obj: model `cube` is a closed solid whose faces all wind inward"),
                 "{warned:?}"
             );
         }
