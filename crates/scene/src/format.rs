@@ -188,7 +188,16 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
     let in_transform = || {
         innermost_open(text, span.start).is_some_and(|o| {
             text[..o].trim_end().strip_suffix('=').is_some_and(|k| k.trim_end().ends_with("transform"))
-        }) || at.starts_with("[[") && at.lines().next().is_some_and(|h| h.trim_end().ends_with("transform]]"))
+        }) || at.starts_with("[[")
+            && at.lines().next().is_some_and(|h| {
+                // `[[ objects . transform ]]` too.
+                h.split('#')
+                    .next()
+                    .unwrap_or(h)
+                    .split_whitespace()
+                    .collect::<String>()
+                    .ends_with(".transform]]")
+            })
     };
     // A step that is not a table at all: a number, a bare name, an array.
     if (message.starts_with("wanted string or table") || message.starts_with("expected newtype variant"))

@@ -263,9 +263,15 @@ impl Edited {
             let headers = crate::scan::header_lines(&self.text);
             if headers.binary_search(&line).is_ok() {
                 let end = headers.iter().copied().find(|&h| h > line).unwrap_or(usize::MAX);
+                // Each key's last set: an earlier one of the same key was
+                // replaced by it.
+                let key = |set: &str| set.split_once('=').map_or(set, |(k, _)| k).trim().to_owned();
+                let inside: Vec<&Edit> =
+                    self.edits.iter().filter(|e| e.line > line && e.line < end).collect();
                 let mut sets: Vec<&str> = Vec::new();
-                for edit in self.edits.iter().filter(|e| e.line > line && e.line < end) {
-                    if !sets.contains(&edit.set.as_str()) {
+                for (k, edit) in inside.iter().enumerate() {
+                    let replaced = inside[k + 1..].iter().any(|later| key(&later.set) == key(&edit.set));
+                    if !replaced && !sets.contains(&edit.set.as_str()) {
                         sets.push(&edit.set);
                     }
                 }

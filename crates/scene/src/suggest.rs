@@ -181,7 +181,7 @@ fn expected_words(e: &str) -> String {
     if let Some(n) = e.strip_prefix("an array of length ") {
         return format!("an array of {n} numbers");
     }
-    if e.starts_with("struct ") {
+    if e.starts_with("struct ") || e == "a map" {
         return "a table".into();
     }
     if e.starts_with("a sequence") {

@@ -298,9 +298,18 @@ fn a_step_that_is_not_a_table_is_named_in_scene_terms() {
             Some("[[objects.transform]]"),
         ),
         (
+            "[[objects]]\ntype = \"sphere\"\n[[ objects . transform ]] # a step\nscale = 2\ntranslate = [0, 1, 0]\n",
+            "a transform step takes one key; give each step its own table",
+            Some("[[ objects . transform ]]"),
+        ),
+        (
             "[materials.m]\ntexture = 1979-05-27T07:32:00Z\n",
             "expected a table, got the date 1979-05-27T07:32:00Z",
             Some("1979"),
         ),
     ]);
+    // Materials are a table of named tables, not an array of them.
+    let text = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[materials]]\ncolor = [1, 0, 0]\n";
+    let err = parse(text).err().map(|e| e.to_string()).unwrap_or_default();
+    assert_eq!(err, "test.toml:4:1: expected a table, got an array", "{err}");
 }

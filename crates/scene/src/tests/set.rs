@@ -198,6 +198,17 @@ fn a_tables_problem_names_the_sets_in_that_table() {
              (this table holds values given by --set objects.0.type=mesh and --set objects.0.normals=\"flat\")"
         )
     );
+    // A key set twice: the last set only.
+    let err = set_err(
+        &text,
+        &["camera.position=[0, 9, 9]", "camera.look_at=[0, 0, 1]", "camera.position=[0, 3, 1]"],
+    );
+    assert!(
+        err.ends_with(
+            " (this table holds values given by --set camera.look_at=[0, 0, 1] and --set camera.position=[0, 3, 1])"
+        ),
+        "{err}"
+    );
     // The same problem written in the file names no set.
     let bad = text
         .replace("position = [0, 2, 10]", "position = [0, 3, 1]")
