@@ -158,44 +158,121 @@ impl TriangleMesh {
         sum / 6.0
     }
 
-    /// Whether the mesh is closed ([`TriangleMesh::is_closed`]) and each of
-    /// its shells (faces joined through shared edges, vertices taken by
-    /// position) encloses a negative volume ([`TriangleMesh::signed_volume`]
-    /// of its faces alone): a solid, or several apart, turned inside out,
-    /// which [`TriangleMesh::reverse_faces`] turns outward. A hollow
-    /// solid, whose inner shell rightly winds inward, and a mesh whose
-    /// shells disagree are not.
-    #[must_use]
-    pub fn winds_inward(&self) -> bool {
+    /// The most shells [`TriangleMesh::orient_shells`] finds the nesting of.
+    pub const NESTED_SHELLS: usize = 4096;
+
+    /// Turns each shell of a closed mesh ([`TriangleMesh::is_closed`]) to
+    /// face the way its place says: a shell inside an even number of the
+    /// others (none: an outer surface) outward, one inside an odd number
+    /// (a hollow's cavity) inward. A shell is a set of faces joined
+    /// through shared edges (vertices taken by position); which way it
+    /// faces is the sign of the volume it encloses, and which shells hold
+    /// it is found by a ray from a point of its surface. Past
+    /// [`TriangleMesh::NESTED_SHELLS`] shells, which hold which is not
+    /// looked for (it takes time in the square of their number): the
+    /// shells are turned only if every one faces inward, as a solid, or
+    /// several apart, turned inside out. The number of shells turned (0
+    /// for an open mesh, and for one already right).
+    pub fn orient_shells(&mut self) -> usize {
         if !self.closed {
-            return false;
+            return 0;
         }
-        // Shells: faces joined through their corners' welded positions.
+        let shells = self.shells();
+        // Each shell's volume (its sign: outward or inward), box and a point
+        // of its surface (the centroid of its largest face).
+        let o = self.bounds.center().as_dvec3();
+        let facts: Vec<(f64, Aabb, Vec3)> = shells
+            .iter()
+            .map(|faces| {
+                let (mut volume, mut bounds, mut point, mut largest) = (0.0, Aabb::EMPTY, Vec3::ZERO, -1.0);
+                for &f in faces {
+                    let [a, b, c] = self.triangle(f);
+                    let [da, db, dc] = [a, b, c].map(|p| p.as_dvec3() - o);
+                    volume += da.dot(db.cross(dc));
+                    bounds = bounds.grow(a).grow(b).grow(c);
+                    let area = (b - a).cross(c - a).length_squared();
+                    if area > largest {
+                        (largest, point) = (area, (a + b + c) / 3.0);
+                    }
+                }
+                (volume, bounds, point)
+            })
+            .collect();
+        if shells.len() > Self::NESTED_SHELLS {
+            if facts.iter().all(|f| f.0 < 0.0) {
+                self.reverse_faces();
+                return shells.len();
+            }
+            return 0;
+        }
+        let mut turned = 0;
+        for (k, faces) in shells.iter().enumerate() {
+            let (volume, bounds, point) = facts[k];
+            let holders = (0..shells.len())
+                .filter(|&m| m != k)
+                .filter(|&m| facts[m].1.contains(bounds.min, 0.0) && facts[m].1.contains(bounds.max, 0.0))
+                .filter(|&m| self.holds(&shells[m], point))
+                .count();
+            let outward = volume > 0.0;
+            if outward != (holders % 2 == 0) {
+                for &f in faces {
+                    self.indices[f].swap(1, 2);
+                }
+                turned += 1;
+            }
+        }
+        turned
+    }
+
+    /// The faces of each shell: faces joined through shared edges, with
+    /// vertices taken by position; faces with two corners at one position
+    /// join nothing and belong to no shell.
+    fn shells(&self) -> Vec<Vec<usize>> {
         let id = weld_by_position(&self.positions);
-        let mut parent: Vec<u32> = (0..self.positions.len() as u32).collect();
-        fn root(parent: &mut [u32], mut i: u32) -> u32 {
-            while parent[i as usize] != i {
-                let up = parent[parent[i as usize] as usize];
-                parent[i as usize] = up;
-                i = up;
+        let mut parent: Vec<usize> = (0..self.len()).collect();
+        fn root(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
             }
             i
         }
-        for tri in &self.indices {
+        let mut first: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+        let mut kept = Vec::new();
+        for (f, tri) in self.indices.iter().enumerate() {
             let [a, b, c] = tri.map(|i| id[i as usize]);
-            for (x, y) in [(a, b), (b, c)] {
-                let (rx, ry) = (root(&mut parent, x), root(&mut parent, y));
-                parent[rx.max(ry) as usize] = rx.min(ry);
+            if a == b || b == c || a == c {
+                continue;
+            }
+            kept.push(f);
+            for (x, y) in [(a, b), (b, c), (c, a)] {
+                let edge = (x.min(y), x.max(y));
+                match first.get(&edge) {
+                    Some(&g) => {
+                        let (rf, rg) = (root(&mut parent, f), root(&mut parent, g));
+                        parent[rf.max(rg)] = rf.min(rg);
+                    }
+                    None => {
+                        first.insert(edge, f);
+                    }
+                }
             }
         }
-        let o = self.bounds.center().as_dvec3();
-        let mut volumes: std::collections::HashMap<u32, f64> = std::collections::HashMap::new();
-        for (f, tri) in self.indices.iter().enumerate() {
-            let shell = root(&mut parent, id[tri[0] as usize]);
-            let [a, b, c] = self.triangle(f).map(|p| p.as_dvec3() - o);
-            *volumes.entry(shell).or_default() += a.dot(b.cross(c));
+        let mut by_root: std::collections::BTreeMap<usize, Vec<usize>> = std::collections::BTreeMap::new();
+        for f in kept {
+            by_root.entry(root(&mut parent, f)).or_default().push(f);
         }
-        !volumes.is_empty() && volumes.values().all(|&v| v < 0.0)
+        by_root.into_values().collect()
+    }
+
+    /// Whether the closed shell of `faces` holds `p`: an odd number of its
+    /// faces crossed by a ray from `p` in a direction along no axis or
+    /// diagonal (the watertight triangle test counts a crossing at a
+    /// shared edge once).
+    fn holds(&self, faces: &[usize], p: Vec3) -> bool {
+        let ray = Ray::new(p, Vec3::new(0.381_966, 0.618_034, 0.687_122).normalize());
+        let tr = TriangleRay::new(&ray);
+        faces.iter().filter(|&&f| tr.intersect(&self.triangle(f)).is_some()).count() % 2 == 1
     }
 
     /// Turns every face over (its second and third corners swapped), so
@@ -457,31 +534,64 @@ mod tests {
         let mut inside_out = TriangleMesh::new(p, None, None, inward).unwrap();
         assert!(inside_out.is_closed());
         assert!((inside_out.signed_volume() + 8.0).abs() < 1e-9, "{}", inside_out.signed_volume());
-        assert!(inside_out.winds_inward() && !m.winds_inward());
+        assert_eq!(m.clone().orient_shells(), 0, "outward already");
+        assert_eq!(inside_out.clone().orient_shells(), 1);
         inside_out.reverse_faces();
         assert_eq!(inside_out, m);
-        assert!(inside_out.is_closed() && !inside_out.winds_inward());
-        // Two shells: a big cube wound inward and a small one apart, wound
-        // outward, are not turned (that would turn the small one inside
-        // out); both inward, they are. A hollow cube (the small one inside,
-        // wound inward) is a solid as it is.
+        assert!(inside_out.is_closed());
+        let mut turned = TriangleMesh::new(
+            m.positions().to_vec(),
+            None,
+            None,
+            idx.iter().map(|&[a, b, c]| [a, c, b]).collect(),
+        )
+        .unwrap();
+        turned.orient_shells();
+        assert_eq!(turned, m, "turned outward");
+        // Two shells, each wound either way: a big cube and a small one,
+        // apart, touching the big one at a corner, or inside it (a hollow:
+        // its cavity faces inward). Each ends as its place says, and only
+        // the shells that did not are turned.
         let (unit, idx) = split_cube();
-        let shells = |big: Vec3, big_in: bool, small: Vec3, small_in: bool| {
-            let mut p: Vec<Vec3> = unit.iter().map(|&v| v * 4.0 + big).collect();
+        let n = unit.len() as u32;
+        let two = |small: Vec3, big_in: bool, small_in: bool| {
+            let mut p: Vec<Vec3> = unit.iter().map(|&v| v * 4.0).collect();
             p.extend(unit.iter().map(|&v| v + small));
             let turn = |t: [u32; 3], inward: bool| if inward { [t[0], t[2], t[1]] } else { t };
-            let n = unit.len() as u32;
             let mut faces: Vec<[u32; 3]> = idx.iter().map(|&t| turn(t, big_in)).collect();
             faces.extend(idx.iter().map(|&t| turn(t.map(|i| i + n), small_in)));
-            let mesh = TriangleMesh::new(p, None, None, faces).unwrap();
-            assert!(mesh.is_closed());
-            mesh.winds_inward()
+            TriangleMesh::new(p, None, None, faces).unwrap()
         };
-        let (apart, within) = (Vec3::new(10.0, 0.0, 0.0), Vec3::splat(1.5));
-        assert!(!shells(Vec3::ZERO, true, apart, false));
-        assert!(shells(Vec3::ZERO, true, apart, true));
-        assert!(!shells(Vec3::ZERO, false, within, true));
-        assert!(!shells(Vec3::ZERO, false, apart, false));
+        // (where the small cube is, whether it is a cavity)
+        for (small, cavity) in
+            [(Vec3::new(10.0, 0.0, 0.0), false), (Vec3::splat(4.0), false), (Vec3::splat(1.5), true)]
+        {
+            let right = two(small, false, cavity);
+            assert!(right.is_closed(), "{small}");
+            for (big_in, small_in) in [(false, false), (true, false), (false, true), (true, true)] {
+                let mut mesh = two(small, big_in, small_in != cavity);
+                let wrong = usize::from(big_in) + usize::from(small_in);
+                assert_eq!(mesh.orient_shells(), wrong, "{small}, {big_in}, {small_in}");
+                assert_eq!(mesh, right, "{small}, {big_in}, {small_in}");
+            }
+        }
+        // Past NESTED_SHELLS shells: all turned if all face inward, else none.
+        let many = |inward: &dyn Fn(usize) -> bool| {
+            let (mut p, mut faces) = (Vec::new(), Vec::new());
+            for k in 0..=TriangleMesh::NESTED_SHELLS {
+                let base = p.len() as u32;
+                p.extend(unit.iter().map(|&v| v + Vec3::new(2.0 * k as f32, 0.0, 0.0)));
+                faces.extend(idx.iter().map(|&t| {
+                    let t = t.map(|i| i + base);
+                    if inward(k) { [t[0], t[2], t[1]] } else { t }
+                }));
+            }
+            TriangleMesh::new(p, None, None, faces).unwrap()
+        };
+        let mut all_in = many(&|_| true);
+        assert_eq!(all_in.orient_shells(), TriangleMesh::NESTED_SHELLS + 1);
+        assert!(all_in.signed_volume() > 0.0);
+        assert_eq!(many(&|k| k == 7).orient_shells(), 0);
         // No faces, no volume.
         assert_eq!(TriangleMesh::new(Vec::new(), None, None, Vec::new()).unwrap().signed_volume(), 0.0);
     }

@@ -167,14 +167,16 @@ pub fn load_obj(
         let err =
             |e: prism_geometry::GeometryError| (Location::file(path), format!("model `{}`: {e}", model.name));
         let mut mesh = TriangleMesh::new(positions, given, uvs, indices).map_err(err)?;
-        // A solid whose faces all wind inward (an exporter's flipped
-        // normals) would be inside out: glass entered where it is left, its
-        // absorption outside it. Turned outward before any normal is
+        // A solid wound inside out (an exporter's flipped normals) would be
+        // glass entered where it is left, absorbing outside itself: each
+        // shell is turned to face out (a cavity in), before any normal is
         // computed from the winding.
-        if mesh.winds_inward() {
-            mesh.reverse_faces();
+        let turned = mesh.orient_shells();
+        if turned > 0 {
+            let (shells, them) =
+                if turned == 1 { ("1 shell", "it") } else { (&*format!("{turned} shells"), "them") };
             warnings.push(format!(
-                "{}: model `{}` is a closed solid whose faces all wind inward (clockwise seen from outside); prism turns them outward",
+                "{}: model `{}` is a closed solid wound inside out ({shells} with face normals pointing into the solid); prism turns {them} the right way out",
                 path.display(),
                 model.name
             ));

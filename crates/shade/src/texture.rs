@@ -297,7 +297,7 @@ impl ImageTexture {
                     Ok((w, h)) => format!("{w}×{h} texels need more memory to decode than the 1 GiB allowed"),
                     // PNG allows sides up to 2³¹ − 1.
                     Err(_) => format!(
-                        "the size in its header is beyond what can be read, more than the {MAX_TEXTURE_EDGE} texels allowed per side ({e})"
+                        "its size cannot be read from its header ({e}); prism reads textures of up to {MAX_TEXTURE_EDGE} texels per side"
                     ),
                 },
                 _ => e.to_string(),
@@ -712,9 +712,8 @@ mod tests {
                             );
                         }
                         "beyond" => assert!(
-                            reason.starts_with(
-                                "the size in its header is beyond what can be read, more than the 16384"
-                            ),
+                            reason.starts_with("its size cannot be read from its header (")
+                                && reason.ends_with("prism reads textures of up to 16384 texels per side"),
                             "{reason}"
                         ),
                         _ => {}

@@ -271,11 +271,12 @@ fn a_solid_wound_inward_is_turned_outward() {
             "{BASE}[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\n[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\nnormals = \"flat\"\n"
         );
         let loaded = parse_scene_str(&text, dir.path(), Path::new("s.toml")).unwrap();
-        let warned: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("wind inward")).collect();
+        let warned: Vec<&String> =
+            loaded.warnings.iter().filter(|w| w.contains("wound inside out")).collect();
         assert_eq!(warned.len(), usize::from(turned), "{file}: {:?}", loaded.warnings);
         if turned {
             assert!(
-                warned[0].contains("inward.obj: model `cube` is a closed solid whose faces all wind inward"),
+                warned[0].contains("inward.obj: model `cube` is a closed solid wound inside out (1 shell with face normals pointing into the solid); prism turns it the right way out"),
                 "{warned:?}"
             );
         }
