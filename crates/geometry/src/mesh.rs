@@ -145,11 +145,17 @@ impl TriangleMesh {
     /// the origin loses no precision.
     #[must_use]
     pub fn signed_volume(&self) -> f64 {
+        self.volume_of(0..self.len())
+    }
+
+    /// [`TriangleMesh::signed_volume`] of the faces `faces` alone.
+    fn volume_of(&self, faces: impl IntoIterator<Item = usize>) -> f64 {
         if self.bounds.is_empty() {
             return 0.0;
         }
         let o = self.bounds.center().as_dvec3();
-        let sum: f64 = (0..self.len())
+        let sum: f64 = faces
+            .into_iter()
             .map(|f| {
                 let [a, b, c] = self.triangle(f).map(|p| p.as_dvec3() - o);
                 a.dot(b.cross(c))
@@ -180,15 +186,13 @@ impl TriangleMesh {
         let shells = self.shells();
         // Each shell's volume (its sign: outward or inward), box and a point
         // of its surface (the centroid of its largest face).
-        let o = self.bounds.center().as_dvec3();
         let facts: Vec<(f64, Aabb, Vec3)> = shells
             .iter()
             .map(|faces| {
-                let (mut volume, mut bounds, mut point, mut largest) = (0.0, Aabb::EMPTY, Vec3::ZERO, -1.0);
+                let volume = self.volume_of(faces.iter().copied());
+                let (mut bounds, mut point, mut largest) = (Aabb::EMPTY, Vec3::ZERO, -1.0);
                 for &f in faces {
                     let [a, b, c] = self.triangle(f);
-                    let [da, db, dc] = [a, b, c].map(|p| p.as_dvec3() - o);
-                    volume += da.dot(db.cross(dc));
                     bounds = bounds.grow(a).grow(b).grow(c);
                     let area = (b - a).cross(c - a).length_squared();
                     if area > largest {

@@ -232,19 +232,18 @@ impl CameraMedia {
         match self {
             Self::Fixed(media) => *media,
             Self::PerRay { boxes, grid } => {
+                // The box of medium `o`, where it holds the origin.
+                let holding =
+                    |o: u32| boxes.get(o as usize).copied().flatten().filter(|b| b.contains(origin, 0.0));
                 let test = Ray::new(origin, INSIDE_TEST);
                 let reach = grid
                     .cell(origin)
                     .iter()
-                    .filter_map(|&i| boxes.get(i as usize).copied().flatten())
-                    .filter(|b| b.contains(origin, 0.0))
+                    .filter_map(|&i| holding(i))
                     .filter_map(|b| b.intersect_ray(&test).map(|(_, out)| out))
                     .fold(None, |far: Option<f32>, out| Some(far.map_or(out, |f| f.max(out))));
                 let Some(reach) = reach else { return Media::default() };
-                let holds = |o: u32| {
-                    boxes.get(o as usize).copied().flatten().is_some_and(|b| b.contains(origin, 0.0))
-                };
-                media_at(scene, origin, reach, holds, scratch)
+                media_at(scene, origin, reach, |o| holding(o).is_some(), scratch)
             }
         }
     }
