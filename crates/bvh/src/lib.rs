@@ -1689,6 +1689,36 @@ impl Accel {
         );
     }
 
+    /// The nearest of object `object`'s crossings in the ray's interval,
+    /// without a walk of the hierarchy and without the other objects:
+    /// the nearest that [`Accel::for_each_crossing`] reports for it (for a
+    /// mesh, where two triangles meet at the same `t`, either). For
+    /// questions about a few known objects, such as which solids hold a
+    /// point (a closed solid whose nearest crossing from the point is a
+    /// back face holds it). `None` for an object that does not exist.
+    #[must_use]
+    pub fn first_crossing_of(&self, object: u32, ray: &Ray) -> Option<Crossing> {
+        if !usable(ray) {
+            return None;
+        }
+        let i = object as usize;
+        match self.objects.get(i)? {
+            Object::Shape(s) => {
+                let (t, front_face) =
+                    if self.identity[i] { s.shape.intersect_side(ray) } else { s.intersect_side(ray) }?;
+                let found = Found::Shape { t_min: ray.t_min };
+                Some(Crossing { object, triangle: SceneHit::NO_TRIANGLE, t, front_face, found })
+            }
+            Object::Mesh { mesh, transform } => {
+                let local = transform.ray_to_object(ray);
+                let (face, t, b1, b2) = self.blas[*mesh as usize].closest_by::<true>(Dispatch, &local)?;
+                let hit = self.meshes[*mesh as usize].hit(face as usize, t, b1, b2, local.dir);
+                let front_face = hit.front_face;
+                Some(Crossing { object, triangle: face, t, front_face, found: Found::Mesh(hit) })
+            }
+        }
+    }
+
     /// The full hit of a crossing that [`Accel::for_each_crossing`] of this
     /// structure reported for `ray` (the same ray): the [`SceneHit`] that
     /// [`Accel::for_each_hit`] reports for it, bit for bit. `None` for a

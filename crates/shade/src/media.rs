@@ -32,7 +32,6 @@ use crate::{Projection, RenderSettings, Scene};
 use prism_bvh::Object;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Intersect, Ray};
-use std::ops::ControlFlow;
 
 /// The media a ray is inside, in the order it entered them (the innermost
 /// last). Only the innermost [`Media::KEPT`] are kept.
@@ -137,35 +136,35 @@ fn started_in(crossings: &[MediumCrossing]) -> Media {
 /// the crossings along it counts, so it need not be of unit length.
 const INSIDE_TEST: Vec3 = Vec3::new(0.381_966, 0.618_034, 0.687_122);
 
-/// The media that hold the point `p`, of those `candidate` accepts,
-/// outermost first ([`Media`]; the innermost [`Media::KEPT`] of them):
-/// along a ray from `p` (as far as `reach`, past every candidate), a
-/// solid whose nearest crossing is a back face (the ray leaves it there)
-/// holds `p`, and of several the one left first is the innermost. Each
-/// solid is judged by its own crossings, however many others the ray
-/// enters on the way. `crossings` is scratch space.
+/// The media that hold the point `p`, of the `candidates` (each an
+/// object with how far along the test ray from `p` its box reaches),
+/// outermost first ([`Media`]; the innermost [`Media::KEPT`] of them): a
+/// solid whose nearest crossing along a ray from `p` is a back face (the
+/// ray leaves it there) holds `p`, and of several the one left first is
+/// the innermost. Each candidate is tested alone
+/// ([`prism_bvh::Accel::first_crossing_of`]), so that the cost is that of
+/// the candidates, not of every solid the test ray passes on the way.
+/// Candidates that are not media are skipped. `exits` is scratch space.
 pub(crate) fn media_at(
     scene: &Scene,
     p: Vec3,
-    reach: f32,
-    candidate: impl Fn(u32) -> bool,
-    crossings: &mut Vec<MediumCrossing>,
+    candidates: impl IntoIterator<Item = (u32, f32)>,
+    exits: &mut Vec<MediumCrossing>,
 ) -> Media {
-    crossings.clear();
-    scene.accel.for_each_crossing(&Ray::with_interval(p, INSIDE_TEST, 0.0, reach), |c| {
-        if candidate(c.object) && is_medium(scene, c.object) {
-            crossings.push((c.t, c.object, c.front_face));
+    exits.clear();
+    for (object, reach) in candidates {
+        if !is_medium(scene, object) {
+            continue;
         }
-        ControlFlow::Continue(())
-    });
-    // Each solid's crossings together, nearest first; those whose nearest
-    // is an exit hold `p`, ordered by that exit, the farthest (outermost)
-    // first, so that entering them in turn keeps the innermost.
-    crossings.sort_unstable_by(|a, b| a.1.cmp(&b.1).then(a.0.total_cmp(&b.0)));
-    crossings.dedup_by_key(|c| c.1);
-    crossings.retain(|c| !c.2);
-    crossings.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-    crossings.iter().fold(Media::default(), |media, c| media.entered(c.1))
+        let test = Ray::with_interval(p, INSIDE_TEST, 0.0, reach);
+        if let Some(c) = scene.accel.first_crossing_of(object, &test).filter(|c| !c.front_face) {
+            exits.push((c.t, object, false));
+        }
+    }
+    // The farthest exit (outermost) first, so that entering them in turn
+    // keeps the innermost.
+    exits.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    exits.iter().fold(Media::default(), |media, c| media.entered(c.1))
 }
 
 /// The media camera rays start in, found once per render: most cameras
@@ -224,26 +223,21 @@ impl CameraMedia {
     /// The media a camera ray from `origin` starts in; `scratch` is
     /// scratch space. Called per ray only for [`CameraMedia::PerRay`]
     /// (rare, hence cold: [`CameraMedia::fixed`] serves the rest): the
-    /// boxes of the origin's grid cell are tested, and an origin in some
-    /// of them costs one walk of the acceleration structure as far as
-    /// those boxes reach.
+    /// boxes of the origin's grid cell are tested, and the solid of each
+    /// box that holds the origin is tested alone ([`media_at`]).
     #[cold]
     pub(crate) fn at(&self, scene: &Scene, origin: Vec3, scratch: &mut Vec<MediumCrossing>) -> Media {
         match self {
             Self::Fixed(media) => *media,
             Self::PerRay { boxes, grid } => {
-                // The box of medium `o`, where it holds the origin.
-                let holding =
-                    |o: u32| boxes.get(o as usize).copied().flatten().filter(|b| b.contains(origin, 0.0));
+                // The media of the origin's cell whose boxes hold it, each
+                // with where the test ray leaves its box.
                 let test = Ray::new(origin, INSIDE_TEST);
-                let reach = grid
-                    .cell(origin)
-                    .iter()
-                    .filter_map(|&i| holding(i))
-                    .filter_map(|b| b.intersect_ray(&test).map(|(_, out)| out))
-                    .fold(None, |far: Option<f32>, out| Some(far.map_or(out, |f| f.max(out))));
-                let Some(reach) = reach else { return Media::default() };
-                media_at(scene, origin, reach, |o| holding(o).is_some(), scratch)
+                let holding = grid.cell(origin).iter().filter_map(|&o| {
+                    let b = boxes.get(o as usize).copied().flatten().filter(|b| b.contains(origin, 0.0))?;
+                    b.intersect_ray(&test).map(|(_, out)| (o, out))
+                });
+                media_at(scene, origin, holding, scratch)
             }
         }
     }
@@ -539,6 +533,12 @@ mod tests {
         }
     }
 
+    /// Every object of `scene` as a candidate of [`media_at`], its test
+    /// ray reaching as far as `reach`.
+    fn all(scene: &Scene, reach: f32) -> impl Iterator<Item = (u32, f32)> {
+        (0..scene.accel.objects().len() as u32).map(move |o| (o, reach))
+    }
+
     fn media(ids: &[u32]) -> Media {
         ids.iter().fold(Media::default(), |m, &i| m.entered(i))
     }
@@ -546,7 +546,7 @@ mod tests {
     #[test]
     fn a_point_is_in_the_media_that_hold_it_outermost_first() {
         let scene = nested();
-        let at = |p: Vec3| media_at(&scene, p, f32::INFINITY, |_| true, &mut Vec::new());
+        let at = |p: Vec3| media_at(&scene, p, all(&scene, f32::INFINITY), &mut Vec::new());
         assert_eq!(at(Vec3::new(0.5, -0.3, 0.2)), media(&[0, 1]));
         assert_eq!(at(Vec3::new(0.0, 3.0, 0.0)), media(&[0]));
         assert_eq!(at(Vec3::new(6.2, 0.1, 0.0)), media(&[2]));
@@ -554,9 +554,12 @@ mod tests {
         assert_eq!(at(Vec3::new(-6.0, 0.0, 0.0)), Media::default());
         assert_eq!(at(Vec3::new(0.0, 0.0, 9.0)), Media::default());
         // Only the candidates count.
-        assert_eq!(media_at(&scene, Vec3::ZERO, f32::INFINITY, |o| o != 0, &mut Vec::new()), media(&[1]));
+        assert_eq!(
+            media_at(&scene, Vec3::ZERO, all(&scene, f32::INFINITY).filter(|c| c.0 != 0), &mut Vec::new()),
+            media(&[1])
+        );
         // Not as far as the big ball's far side: only the small one is left.
-        assert_eq!(media_at(&scene, Vec3::ZERO, 3.0, |_| true, &mut Vec::new()), media(&[1]));
+        assert_eq!(media_at(&scene, Vec3::ZERO, all(&scene, 3.0), &mut Vec::new()), media(&[1]));
     }
 
     /// Ten glass balls about the origin, radii 1 to 10 (object k has
@@ -575,7 +578,7 @@ mod tests {
     #[test]
     fn a_point_beside_many_nested_solids_is_in_none_and_one_inside_them_in_the_innermost() {
         let scene = onion();
-        let at = |p: Vec3| media_at(&scene, p, f32::INFINITY, |_| true, &mut Vec::new());
+        let at = |p: Vec3| media_at(&scene, p, all(&scene, f32::INFINITY), &mut Vec::new());
         // Outside all ten; the test ray enters all ten before it leaves any.
         let outside = Vec3::new(-12.0, -12.0, -12.0) * super::INSIDE_TEST.normalize();
         assert_eq!(at(outside), Media::default());

@@ -196,6 +196,30 @@ pub fn compare_all(accel: &Accel, ray: &Ray) -> Result<usize, String> {
     if lazy != eager {
         return Err(format!("crossings and hits differ for {ray:?}:\nlazy  {lazy:?}\nhits  {eager:?}"));
     }
+    // Each object's first crossing, asked of it alone, is the nearest the
+    // walk reports for it (the same `t` and side; of a mesh's triangles
+    // meeting at that `t`, any), and its hit is that crossing's.
+    for object in 0..accel.objects().len() as u32 {
+        let nearest = lazy
+            .iter()
+            .filter(|c| c.0 == object)
+            .min_by(|a, b| f32::from_bits(a.2).total_cmp(&f32::from_bits(b.2)));
+        let first = accel.first_crossing_of(object, ray);
+        let same = match (first, nearest) {
+            (None, None) => true,
+            (Some(f), Some(n)) => {
+                f.t.to_bits() == n.2
+                    && f.front_face == n.3
+                    && (f.triangle != SceneHit::NO_TRIANGLE || accel.crossing_hit(ray, &f) == n.4)
+            }
+            _ => false,
+        };
+        if !same {
+            return Err(format!(
+                "object {object}'s first crossing {first:?}, its nearest in the walk {nearest:?}, for {ray:?}"
+            ));
+        }
+    }
     if let Some(h) = fast.iter().find(|h| !hit_finite(h)) {
         return Err(format!("non-finite crossing {h:?} for {ray:?}"));
     }
