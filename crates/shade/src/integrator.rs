@@ -495,13 +495,27 @@ impl<'a> Tracer<'a> {
         let n = hit.facing_normal();
         let mut out = mat.emission;
         let w_local = mat.local_weight();
+        let see_through = mat.is_see_through();
+        let albedo =
+            if w_local > 0.0 || see_through { self.albedo_over(ray, h, mat, cone.width) } else { Vec3::ZERO };
         if w_local > 0.0 {
-            let albedo = self.albedo_over(ray, h, mat, cone.width);
             out += w_local * self.local(mat, albedo, hit, n, -d);
         }
         if depth >= self.max_depth {
             return out;
         }
+        // What passes through is tinted by the surface's colour, as the
+        // light of a shadow ray through it is ([`Tracer::transmittance`]):
+        // at every crossing of an open surface, and once per closed solid,
+        // where the ray enters it (an unbent ray skips its exit), or where
+        // it leaves one its path started in (a camera inside glass).
+        let tint = if see_through
+            && (hit.front_face || !is_closed(self.scene, h.object) || media.started_in(h.object))
+        {
+            albedo.clamp(Vec3::ZERO, Vec3::ONE)
+        } else {
+            Vec3::ONE
+        };
         // Dielectric split: Fresnel reflectance F and the refracted direction,
         // between the material's index and that of the medium around it.
         let (fresnel, refracted, eta) = if mat.transmission > 0.0 {
@@ -543,15 +557,16 @@ impl<'a> Tracer<'a> {
             let m = media_along(dir);
             out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c, m);
         }
-        if mat.transparency > 0.0 && self.worth(weight * mat.transparency) {
+        let k_through = mat.transparency * tint;
+        if mat.transparency > 0.0 && self.worth(weight * k_through) {
             let r = Ray::spawn_scaled(hit.point, hit.geo_normal, d, self.offset);
             let skip = if hit.front_face { h.object } else { NO_OBJECT };
-            let w = weight * mat.transparency;
-            out += mat.transparency * self.trace(&r, depth + 1, w, path, skip, cone, media_along(d));
+            let w = weight * k_through;
+            out += k_through * self.trace(&r, depth + 1, w, path, skip, cone, media_along(d));
         }
         if let Some(t) = refracted {
-            let k = mat.transmission * (1.0 - fresnel);
-            if k > 0.0 && self.worth(weight * k) {
+            let k = mat.transmission * (1.0 - fresnel) * tint;
+            if self.worth(weight * k) {
                 let r = Ray::spawn_scaled(hit.point, hit.geo_normal, t, self.offset);
                 let c = cone.refract(cone.width, eta, curvature(self.scene, h));
                 out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c, media_along(t));

@@ -39,6 +39,10 @@ use prism_geometry::{Aabb, Intersect, Ray};
 pub(crate) struct Media {
     ids: [u32; Media::KEPT],
     len: usize,
+    /// Bit `k` set: slot `k`'s medium holds the path's start (a camera
+    /// inside glass), which entered it without crossing its surface
+    /// ([`Media::at_start`]).
+    at_start: u8,
 }
 
 impl Media {
@@ -65,15 +69,34 @@ impl Media {
         self.ids[..self.len].contains(&object)
     }
 
+    /// Whether the ray is inside `object` without having crossed its
+    /// surface: the path started in it ([`Media::at_start`]) and has not
+    /// left it since.
+    #[inline]
+    pub(crate) fn started_in(&self, object: u32) -> bool {
+        self.ids[..self.len].iter().rposition(|&i| i == object).is_some_and(|k| self.at_start >> k & 1 == 1)
+    }
+
+    /// These media, each marked as holding the path's start (entered
+    /// without crossing a surface): a camera ray's starting media.
+    #[inline]
+    #[must_use]
+    pub(crate) fn at_start(mut self) -> Self {
+        self.at_start = ((1u32 << self.len) - 1) as u8;
+        self
+    }
+
     /// These media and then `object`, entered through its surface.
     #[inline]
     #[must_use]
     pub(crate) fn entered(mut self, object: u32) -> Self {
         if self.len == Self::KEPT {
             self.ids.copy_within(1.., 0);
+            self.at_start >>= 1;
             self.len -= 1;
         }
         self.ids[self.len] = object;
+        self.at_start &= !(1 << self.len);
         self.len += 1;
         self
     }
@@ -86,6 +109,9 @@ impl Media {
     pub(crate) fn left(mut self, object: u32) -> Self {
         if let Some(k) = self.ids[..self.len].iter().rposition(|&i| i == object) {
             self.ids.copy_within(k + 1..self.len, k);
+            let below = (1u16 << k) - 1;
+            self.at_start =
+                ((u16::from(self.at_start) & below) | (u16::from(self.at_start) >> 1 & !below)) as u8;
             self.len -= 1;
         }
         self
@@ -93,7 +119,8 @@ impl Media {
 }
 
 impl PartialEq for Media {
-    /// The same media in the same order (slots past `len` are stale).
+    /// The same media in the same order (slots past `len` are stale),
+    /// whether or not the path started in them.
     fn eq(&self, other: &Self) -> bool {
         self.ids[..self.len] == other.ids[..other.len]
     }
@@ -237,7 +264,7 @@ impl CameraMedia {
                     let b = boxes.get(o as usize).copied().flatten().filter(|b| b.contains(origin, 0.0))?;
                     b.intersect_ray(&test).map(|(_, out)| (o, out))
                 });
-                media_at(scene, origin, holding, scratch)
+                media_at(scene, origin, holding, scratch).at_start()
             }
         }
     }
@@ -438,6 +465,27 @@ mod tests {
         assert_eq!(m.left(9), m);
         assert_eq!(Media::default().innermost(), None);
         assert_eq!(Media::default().around(1), None);
+    }
+
+    #[test]
+    fn media_the_path_started_in_stay_marked_until_left() {
+        let m = Media::default().entered(0).entered(1).entered(2).at_start().entered(3);
+        assert!(m.started_in(0) && m.started_in(1) && m.started_in(2) && !m.started_in(3));
+        // Leaving the middle one keeps the others' marks in their slots.
+        let m = m.left(1);
+        assert!(m.started_in(0) && !m.started_in(1) && m.started_in(2) && !m.started_in(3));
+        // Entered again through its surface: no longer started in.
+        let m = m.entered(1).entered(4);
+        assert!(!m.started_in(1) && m.started_in(2));
+        // Deep nesting forgets the outermost, and the marks move with the rest.
+        let mut deep = (0..Media::KEPT as u32).fold(Media::default(), Media::entered).at_start();
+        deep = deep.entered(99);
+        assert!(
+            !deep.started_in(0)
+                && (1..Media::KEPT as u32).all(|k| deep.started_in(k))
+                && !deep.started_in(99)
+        );
+        assert_eq!(deep, (1..Media::KEPT as u32).chain([99]).fold(Media::default(), Media::entered));
     }
 
     #[test]

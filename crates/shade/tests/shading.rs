@@ -183,8 +183,75 @@ fn transparent_sphere_passes_the_ray_straight_through() {
         cam,
     );
     let img = render(&s, 1, 1);
-    // 0.3 · own colour + 0.7 · the wall behind, the exit not shaded.
-    assert_close(px(&img, 4, 4), 0.3 * Vec3::new(1.0, 1.0, 0.0) + 0.7 * wall, 1e-6);
+    // 0.3 · own colour + 0.7 · the wall behind seen through the colour, as
+    // a shadow ray through the sphere is tinted: once, the exit not shaded.
+    let own = Vec3::new(1.0, 1.0, 0.0);
+    assert_close(px(&img, 4, 4), 0.3 * own + 0.7 * own * wall, 1e-6);
+}
+
+/// What a see-through surface lets through to the eye is tinted as what it
+/// lets through to a lit point (its shadow factor): a colour filter works
+/// the same both ways.
+#[test]
+fn the_view_through_a_coloured_sheet_is_tinted_as_its_shadow() {
+    let c = Vec3::new(0.5, 1.0, 0.25);
+    let sheet = Material { transparency: 0.6, ..flat(c) };
+    let disk = || prism_geometry::Shape::from(Disk::new(Vec3::ZERO, Vec3::Z, 2.0).expect("valid disk"));
+    let wall = Vec3::new(0.9, 0.8, 0.7);
+    let cam = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 20.0, 9, 9);
+    let s = scene(
+        vec![(disk(), I, sheet.clone()), (plane(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), I, flat(wall))],
+        vec![],
+        cam,
+    );
+    let seen = px(&render(&s, 1, 1), 4, 4);
+    // 0.4 · own colour + 0.6 · colour · the wall.
+    assert_close(seen, 0.4 * c + 0.6 * c * wall, 1e-6);
+    // The same sheet between a floor point and the light: 0.6 · colour.
+    let flat_disk =
+        prism_geometry::Shape::from(Disk::new(Vec3::new(2.0, 2.0, 0.0), Vec3::Y, 0.3).expect("valid disk"));
+    let (shadow, _) = floor_under(flat_disk, sheet);
+    assert_close(shadow, 0.6 * c, 1e-5);
+}
+
+/// Coloured glass tints what is seen through it once per solid, as its
+/// shadow is tinted once: where the ray enters, not again where it leaves.
+#[test]
+fn coloured_glass_tints_the_view_through_it_once() {
+    let (n, c) = (1.5f32, Vec3::new(0.2, 0.6, 1.0));
+    let slab = cuboid(Vec3::new(-50.0, -50.0, -0.5), Vec3::new(50.0, 50.0, 0.5));
+    let wall = Vec3::new(0.9, 0.8, 0.7);
+    let cam = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 1.0, 1, 1);
+    let tinted = Material { texture: Texture::Solid(c), ..glass(n) };
+    let s = scene(
+        vec![(slab, I, tinted), (plane(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), I, flat(wall))],
+        vec![],
+        cam,
+    );
+    // Depth 2: in, out, and the wall; head-on, F = ((n − 1)/(n + 1))² at
+    // each surface.
+    let f = ((n - 1.0) / (n + 1.0)).powi(2);
+    assert_close(px(&render(&s, 1, 2), 0, 0), (1.0 - f) * (1.0 - f) * c * wall, 2e-4);
+}
+
+/// A camera inside coloured glass sees out through it tinted once, where
+/// its rays leave the glass (they never entered it).
+#[test]
+fn a_camera_inside_coloured_glass_sees_out_tinted_once() {
+    let (n, c) = (1.5f32, Vec3::new(0.2, 0.6, 1.0));
+    let wall = Vec3::new(0.9, 0.8, 0.7);
+    let cam = camera(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 1.0, 1, 1);
+    let tinted = Material { texture: Texture::Solid(c), ..glass(n) };
+    let s = scene(
+        vec![
+            (sphere(Vec3::ZERO, 10.0), I, tinted),
+            (plane(Vec3::new(0.0, 0.0, -20.0), Vec3::Z), I, flat(wall)),
+        ],
+        vec![],
+        cam,
+    );
+    let f = ((n - 1.0) / (n + 1.0)).powi(2);
+    assert_close(px(&render(&s, 1, 1), 0, 0), (1.0 - f) * c * wall, 2e-4);
 }
 
 /// A 2×1 black-to-white ramp on the back wall z = −3: the wall's value
@@ -246,7 +313,7 @@ fn glass_slab_displaces_the_ray_by_the_analytic_amount() {
     assert!(shift > 0.2);
     assert_wall_hit(got.x, eye, d, shift);
     // And without the slab: straight.
-    s.materials[0] = Material { transparency: 1.0, ..flat(Vec3::ZERO) };
+    s.materials[0] = Material { transparency: 1.0, ..flat(Vec3::ONE) };
     let img = render(&s, 1, 2);
     assert_wall_hit(px(&img, 0, 0).x, eye, d, 0.0);
 }
