@@ -119,6 +119,17 @@ mod cli {
     use super::{CameraName, Overrides, parse_vec3};
     use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches, value_parser};
 
+    /// A flag's whole number (`--width`, `--spp`, …): a negative one is
+    /// refused as negative, not as outside `0..=4294967295`, which names
+    /// no real limit; the loader checks the limits, naming the flag.
+    fn whole_number(s: &str) -> Result<u32, String> {
+        match s.trim().parse::<i64>() {
+            Ok(v) if v < 0 => Err("cannot be negative".into()),
+            Ok(v) => u32::try_from(v).map_err(|_| format!("is over {}", u32::MAX)),
+            Err(_) => Err("expected a whole number".into()),
+        }
+    }
+
     /// `--fog` and `--no-fog` are two flags of the one field
     /// [`Overrides::fog`], so the flags are declared here rather than derived.
     impl Args for Overrides {
@@ -135,14 +146,14 @@ mod cli {
                 Arg::new("width")
                     .long("width")
                     .value_name("W")
-                    .value_parser(value_parser!(u32))
+                    .value_parser(whole_number)
                     .help("Image width in pixels (alone: the height keeps the scene's aspect ratio)"),
             )
             .arg(
                 Arg::new("height")
                     .long("height")
                     .value_name("H")
-                    .value_parser(value_parser!(u32))
+                    .value_parser(whole_number)
                     .help("Image height in pixels (alone: the width keeps the scene's aspect ratio)"),
             )
             .arg(
@@ -151,7 +162,7 @@ mod cli {
                     .short('s')
                     .visible_alias("samples")
                     .value_name("N")
-                    .value_parser(value_parser!(u32))
+                    .value_parser(whole_number)
                     .help("Samples per pixel"),
             )
             .arg(
@@ -175,7 +186,7 @@ mod cli {
                 Arg::new("max-depth")
                     .long("max-depth")
                     .value_name("N")
-                    .value_parser(value_parser!(u32))
+                    .value_parser(whole_number)
                     .help("Maximum recursion depth of reflection and refraction rays"),
             )
             .arg(vec3("camera-pos", "Camera position, replacing the scene's"))
@@ -252,7 +263,9 @@ mod cli {
         use super::*;
         use prism_geometry::glam::Vec3;
 
+        /// As prism's subcommands, which read `--spp -1` as a value.
         #[derive(clap::Parser)]
+        #[command(allow_negative_numbers = true)]
         struct Cli {
             #[command(flatten)]
             overrides: Overrides,
@@ -293,7 +306,12 @@ mod cli {
             assert!(parse(&["--fog", "--no-fog"]).is_err());
             assert!(parse(&["--threads", "0"]).is_err());
             assert!(parse(&["--up", "1,2"]).is_err());
-            assert!(parse(&["--width", "-3"]).is_err());
+            for flag in ["--width", "--height", "--spp", "--max-depth"] {
+                let e = parse(&[flag, "-3"]).unwrap_err().to_string();
+                assert!(e.contains("cannot be negative") && !e.contains("4294967295"), "{flag}: {e}");
+                assert!(parse(&[flag, "2.5"]).unwrap_err().to_string().contains("expected a whole number"));
+                assert!(parse(&[flag, "4294967296"]).unwrap_err().to_string().contains("is over 4294967295"));
+            }
             assert_eq!(
                 parse(&["--camera", "top"]).unwrap().camera.map(|c| c.to_string()),
                 Some("top".into())
