@@ -152,6 +152,19 @@ impl<'a> Ctx<'a> {
         Ok(v)
     }
 
+    /// A colour that scales light passing through (a filter): [`Ctx::color`],
+    /// each component at most 1.
+    pub fn unit_color(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
+        let v = self.color(c, what)?;
+        if v.max_element() > 1.0 {
+            return Err(self.invalid(
+                &c.span(),
+                format!("{what} {v} must be between 0 and 1 in each component: a filter passes at most all the light"),
+            ));
+        }
+        Ok(v)
+    }
+
     /// [`Ctx::surface_color`], or `default` when it is not given.
     pub fn opt_surface_color(&self, c: Option<&Spanned<Color>>, what: &str, default: Vec3) -> Result<Vec3> {
         c.map_or(Ok(default), |c| self.surface_color(c, what))

@@ -504,6 +504,7 @@ pub struct MaterialDef {
     pub transmission: Option<Num>,
     pub ior: Option<Num>,
     pub absorption: Option<Spanned<Color>>,
+    pub filter_color: Option<Spanned<Color>>,
 }
 
 impl Keyed for MaterialDef {

@@ -107,6 +107,9 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
         // A coefficient per unit length, not a colour: any size is meant.
         m.absorption = ctx.rgb(a, "absorption")?;
     }
+    if let Some(f) = &d.filter_color {
+        m.filter_color = Some(ctx.unit_color(f, "filter_color")?);
+    }
     let sum = m.reflectivity + m.transparency + m.transmission;
     if sum > 1.0 + 1e-6 {
         return Err(ctx.invalid(
@@ -198,6 +201,24 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
     }
 }
 
+/// The MTL material's `Tf r g b` (transmission filter; one number stands
+/// for all three), white where it is absent; `Err` names what is wrong.
+fn transmission_filter(raw: &tobj::Material) -> std::result::Result<Vec3, String> {
+    let Some(tf) = raw.unknown_param.get("Tf") else { return Ok(Vec3::ONE) };
+    let words: Vec<&str> = tf.split_whitespace().collect();
+    let numbers: Option<Vec<f32>> = words.iter().map(|w| w.parse::<f32>().ok()).collect();
+    let v = match numbers.as_deref() {
+        Some([x]) => Vec3::splat(*x),
+        Some([r, g, b]) => Vec3::new(*r, *g, *b),
+        _ => return Err(format!("`Tf {tf}` must be one or three numbers (the transmission filter)")),
+    };
+    if v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("`Tf {tf}` must be between 0 and 1 in each component (the transmission filter)"))
+    }
+}
+
 /// Prism's material for the MTL material `raw` of the OBJ file at
 /// `obj_file`, which the scene names at `named_at`; `image` gives its
 /// `map_Kd` texture (asked only if it has one).
@@ -247,6 +268,9 @@ pub(crate) fn from_mtl(
     if let Some(d) = raw.dissolve.or(tr) {
         let d = scalar(d, "d")?.min(1.0);
         if d < 1.0 {
+            // Dissolve fades the surface, and `Tf` filters what passes
+            // through it; `Kd` tints neither.
+            m.filter_color = Some(transmission_filter(raw).map_err(&asset)?);
             if matches!(illum, 4 | 6 | 7 | 9) {
                 m.transmission = 1.0 - d;
             } else {

@@ -512,7 +512,7 @@ impl<'a> Tracer<'a> {
         let tint = if see_through
             && (hit.front_face || !is_closed(self.scene, h.object) || media.started_in(h.object))
         {
-            albedo.clamp(Vec3::ZERO, Vec3::ONE)
+            mat.filter_color.unwrap_or(albedo).clamp(Vec3::ZERO, Vec3::ONE)
         } else {
             Vec3::ONE
         };
@@ -774,10 +774,11 @@ impl<'a> Tracer<'a> {
                 t = Vec3::ZERO;
                 return ControlFlow::Break(());
             }
-            let tint = || match &m.texture {
-                Texture::Solid(solid) => Some((through * *solid).clamp(Vec3::ZERO, Vec3::ONE)),
+            let tint = || match (m.filter_color, &m.texture) {
+                (Some(filter), _) => Some((through * filter).clamp(Vec3::ZERO, Vec3::ONE)),
+                (None, Texture::Solid(solid)) => Some((through * *solid).clamp(Vec3::ZERO, Vec3::ONE)),
                 // `None` is not reached: the crossing is this structure's own.
-                _ => scene
+                (None, _) => scene
                     .accel
                     .crossing_hit(&ray, c)
                     .map(|sh| (through * albedo(scene, m, &sh)).clamp(Vec3::ZERO, Vec3::ONE)),

@@ -22,11 +22,14 @@ use prism_geometry::glam::Vec3;
 ///
 /// `local = ambient · a · scene.ambient + Σ S · E · (diffuse · a · max(0, n·l) + specular · specular_color · max(0, r·v)^shininess)`
 ///
+/// Let `f` be the see-through filter: [`Material::filter_color`] where set, else
+/// the albedo `a`, clamped to `[0, 1]`.
+///
 /// with `r = 2 (n·l) n − l`; lights with `n·l <= 0` add nothing (and cost
 /// no shadow ray). `S` is the product over the objects on the segment to
-/// the light of `clamp((transparency + transmission) · a_occluder, 0, 1)`
+/// the light of `clamp((transparency + transmission) · f_occluder, 0, 1)`
 /// per channel: opaque objects block, transparent ones cast lighter shadows
-/// of their own colour. A closed solid (sphere, cuboid, cylinder, cone)
+/// of their filter's colour (their own, unless `filter_color` is set). A closed solid (sphere, cuboid, cylinder, cone)
 /// counts once, where the segment enters it (where it leaves it, for a
 /// point inside); open surfaces (planes, disks,
 /// triangles, mesh faces) count at every crossing. An absorbing
@@ -43,9 +46,12 @@ use prism_geometry::glam::Vec3;
 /// dielectric, unbent, refracted or reflected, whatever it ends on, is
 /// multiplied by `exp(−absorption · length)` of the innermost one there;
 /// open surfaces (planes, disks, triangles, open meshes) have no inside and
-/// absorb nothing. `L_straight` and
-/// `L_refracted` are not tinted by the albedo; use `absorption` for
-/// coloured glass.
+/// absorb nothing. `L_straight` and `L_refracted` are multiplied by `f`
+/// as a shadow ray's light is, the same both ways: at every crossing of
+/// an open surface, and once per closed solid (where the ray enters it, or
+/// leaves it for a camera inside it). `filter_color = [1, 1, 1]` makes clear
+/// glass of any colour (POV-Ray's `transmit` rather than `filter`);
+/// `absorption` darkens with thickness.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Surface colour (albedo), linear RGB.
@@ -72,6 +78,11 @@ pub struct Material {
     /// Beer–Lambert absorption coefficient per scene unit inside the
     /// object, per channel (zero: clear).
     pub absorption: Vec3,
+    /// The colour what passes through is multiplied by (the view through
+    /// the surface and the light of shadow rays through it), linear RGB in
+    /// `[0, 1]`; `None`: the surface colour at the point (the albedo). OBJ
+    /// `Tf`.
+    pub filter_color: Option<Vec3>,
     /// Light the surface gives off itself (OBJ `Ke`), linear RGB, added to
     /// its outgoing radiance: seen by camera rays and in reflections, but it
     /// lights no other surface.
@@ -94,6 +105,7 @@ impl Material {
             transmission: 0.0,
             ior: 1.5,
             absorption: Vec3::ZERO,
+            filter_color: None,
             emission: Vec3::ZERO,
         }
     }
@@ -143,6 +155,13 @@ impl Material {
         }
         if !(self.ior.is_finite() && self.ior > 0.0) {
             return Err(ShadeError::Material(format!("ior must be a finite number > 0, got {}", self.ior)));
+        }
+        if let Some(f) = self.filter_color
+            && !(f.is_finite() && f.min_element() >= 0.0 && f.max_element() <= 1.0)
+        {
+            return Err(ShadeError::Material(format!(
+                "filter_color must be in [0, 1] per component, got {f}"
+            )));
         }
         if !(self.absorption.is_finite() && self.absorption.min_element() >= 0.0) {
             return Err(ShadeError::Material("absorption must be finite and >= 0".into()));

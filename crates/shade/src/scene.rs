@@ -221,6 +221,7 @@ pub(crate) static MISSING_MATERIAL: Material = Material {
     transmission: 0.0,
     ior: 1.0,
     absorption: Vec3::ZERO,
+    filter_color: None,
     emission: Vec3::ZERO,
 };
 

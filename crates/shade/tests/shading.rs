@@ -210,8 +210,18 @@ fn the_view_through_a_coloured_sheet_is_tinted_as_its_shadow() {
     // The same sheet between a floor point and the light: 0.6 · colour.
     let flat_disk =
         prism_geometry::Shape::from(Disk::new(Vec3::new(2.0, 2.0, 0.0), Vec3::Y, 0.3).expect("valid disk"));
-    let (shadow, _) = floor_under(flat_disk, sheet);
+    let (shadow, _) = floor_under(flat_disk, sheet.clone());
     assert_close(shadow, 0.6 * c, 1e-5);
+    // A filter of its own replaces the colour both ways.
+    let f = Vec3::new(1.0, 0.5, 0.0);
+    let filtered = Material { filter_color: Some(f), ..sheet };
+    let s = scene(
+        vec![(disk(), I, filtered.clone()), (plane(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), I, flat(wall))],
+        vec![],
+        cam,
+    );
+    assert_close(px(&render(&s, 1, 1), 4, 4), 0.4 * c + 0.6 * f * wall, 1e-6);
+    assert_close(floor_under(flat_disk, filtered).0, 0.6 * f, 1e-5);
 }
 
 /// Coloured glass tints what is seen through it once per solid, as its
