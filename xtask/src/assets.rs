@@ -304,6 +304,7 @@ fn gem_mtl() -> String {
      Ns 400\n\
      Ni 1.7\n\
      d 0.15\n\
+     Tf 0.75 0.9 1.0\n\
      illum 7\n"
         .to_string()
 }
