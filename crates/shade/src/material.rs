@@ -49,7 +49,9 @@ use prism_geometry::glam::Vec3;
 /// absorb nothing. `L_straight` and `L_refracted` are multiplied by `f`
 /// as a shadow ray's light is, the same both ways: at every crossing of
 /// an open surface, and once per closed solid (where the ray enters it, or
-/// leaves it for a camera inside it). `filter_color = [1, 1, 1]` makes clear
+/// leaves it for a camera inside a dielectric one; a camera inside a
+/// closed solid with only `transparency` sees out untinted). `filter_color
+/// = [1, 1, 1]` makes clear
 /// glass of any colour (POV-Ray's `transmit` rather than `filter`);
 /// `absorption` darkens with thickness.
 #[derive(Clone, Debug, PartialEq)]
