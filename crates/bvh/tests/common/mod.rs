@@ -207,10 +207,17 @@ pub fn compare_all(accel: &Accel, ray: &Ray) -> Result<usize, String> {
         let first = accel.first_crossing_of(object, ray);
         let same = match (first, nearest) {
             (None, None) => true,
+            // A shape's is that crossing, hit and all; a mesh's is one of
+            // the walk's crossings at that `t` (coincident faces, as a
+            // wall modelled from both sides, tie with opposite sides).
+            (Some(f), Some(n)) if f.triangle == SceneHit::NO_TRIANGLE => {
+                f.t.to_bits() == n.2 && f.front_face == n.3 && accel.crossing_hit(ray, &f) == n.4
+            }
             (Some(f), Some(n)) => {
                 f.t.to_bits() == n.2
-                    && f.front_face == n.3
-                    && (f.triangle != SceneHit::NO_TRIANGLE || accel.crossing_hit(ray, &f) == n.4)
+                    && lazy
+                        .iter()
+                        .any(|c| c.0 == object && c.1 == f.triangle && c.2 == n.2 && c.3 == f.front_face)
             }
             _ => false,
         };
