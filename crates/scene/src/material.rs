@@ -109,6 +109,10 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
     }
     if let Some(f) = &d.filter_color {
         m.filter_color = Some(ctx.unit_color(f, "filter_color")?);
+    } else if d.color.is_none() && d.texture.is_none() {
+        // Glass or a sheet given no colour is clear, not filtered by the
+        // default grey.
+        m.filter_color = Some(Vec3::ONE);
     }
     let sum = m.reflectivity + m.transparency + m.transmission;
     if sum > 1.0 + 1e-6 {
@@ -202,10 +206,15 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
 }
 
 /// The MTL material's `Tf r g b` (transmission filter; one number stands
-/// for all three), white where it is absent; `Err` names what is wrong.
+/// for all three), white where it is absent or in the `xyz` or `spectral`
+/// form; `Err` names what is wrong.
 fn transmission_filter(raw: &tobj::Material) -> std::result::Result<Vec3, String> {
     let Some(tf) = raw.unknown_param.get("Tf") else { return Ok(Vec3::ONE) };
     let words: Vec<&str> = tf.split_whitespace().collect();
+    // The CIE XYZ and spectral forms are not read: clear, as without one.
+    if matches!(words.first(), Some(&("xyz" | "spectral"))) {
+        return Ok(Vec3::ONE);
+    }
     let numbers: Option<Vec<f32>> = words.iter().map(|w| w.parse::<f32>().ok()).collect();
     let v = match numbers.as_deref() {
         Some([x]) => Vec3::splat(*x),

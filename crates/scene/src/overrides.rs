@@ -123,10 +123,12 @@ mod cli {
     /// refused as negative, not as outside `0..=4294967295`, which names
     /// no real limit; the loader checks the limits, naming the flag.
     fn whole_number(s: &str) -> Result<u32, String> {
-        match s.trim().parse::<i64>() {
-            Ok(v) if v < 0 => Err("cannot be negative".into()),
-            Ok(v) => u32::try_from(v).map_err(|_| format!("is over {}", u32::MAX)),
-            Err(_) => Err("expected a whole number".into()),
+        let s = s.trim();
+        let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+        match s.strip_prefix('-') {
+            Some(t) if digits(t) => Err("cannot be negative".into()),
+            _ if digits(s) => s.parse::<u32>().map_err(|_| format!("is over {}", u32::MAX)),
+            _ => s.parse::<u32>().map_err(|_| "expected a whole number".into()),
         }
     }
 
@@ -311,6 +313,10 @@ mod cli {
                 assert!(e.contains("cannot be negative") && !e.contains("4294967295"), "{flag}: {e}");
                 assert!(parse(&[flag, "2.5"]).unwrap_err().to_string().contains("expected a whole number"));
                 assert!(parse(&[flag, "4294967296"]).unwrap_err().to_string().contains("is over 4294967295"));
+                let huge = "99999999999999999999999";
+                assert!(parse(&[flag, huge]).unwrap_err().to_string().contains("is over 4294967295"));
+                let e = parse(&[flag, &format!("-{huge}")]).unwrap_err().to_string();
+                assert!(e.contains("cannot be negative"), "{flag}: {e}");
             }
             assert_eq!(
                 parse(&["--camera", "top"]).unwrap().camera.map(|c| c.to_string()),

@@ -79,6 +79,20 @@ fn a_sheet_tints_the_view_through_it_by_its_filter() {
     assert_near(through_sheet("filter_color = [0.2, 0.4, 1]").unwrap(), 0.4 * own + 0.6 * f * wall);
 }
 
+/// Glass or a sheet given no colour is clear: the default grey colour
+/// does not filter.
+#[test]
+fn a_see_through_material_without_a_colour_is_clear() {
+    let text = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+                [materials.glass]\ntransmission = 1\nior = 1.5\n\
+                [materials.grey]\ntransmission = 1\ncolor = [0.8, 0.8, 0.8]\n\
+                [[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"glass\"\n\
+                [[objects]]\ntype = \"sphere\"\ncenter = [3, 0, 0]\nradius = 1\nmaterial = \"grey\"\n";
+    let loaded = parse_scene_str(text, Path::new("."), Path::new("g.toml")).expect("loads");
+    assert_eq!(loaded.scene.material_of(0).filter_color, Some(Vec3::ONE));
+    assert_eq!(loaded.scene.material_of(1).filter_color, None, "a colour given filters");
+}
+
 #[test]
 fn a_filter_over_one_is_refused_naming_it() {
     let e = through_sheet("filter_color = [1.5, 0, 0]").unwrap_err();
@@ -111,6 +125,13 @@ fn an_mtl_material_filters_by_its_tf_not_its_kd() {
     assert_eq!(mtl_material("Kd 1 0 0\nd 0.4\n").unwrap().filter_color, Some(Vec3::ONE));
     // Opaque: no filter to ask for.
     assert_eq!(mtl_material("Kd 1 0 0\nTf 0 1 0\n").unwrap().filter_color, None);
+    // The XYZ and spectral forms are not read.
+    for other in ["Tf xyz 0.2 0.3 0.4", "Tf spectral glass.rfl 1.0"] {
+        assert_eq!(
+            mtl_material(&format!("Kd 1 0 0\nd 0.4\n{other}\n")).unwrap().filter_color,
+            Some(Vec3::ONE)
+        );
+    }
     for bad in ["Tf 2 0 0", "Tf 0 1", "Tf x y z"] {
         let e = mtl_material(&format!("Kd 1 0 0\nd 0.4\n{bad}\n")).unwrap_err();
         assert!(e.contains("Tf") && e.contains("sheet.obj") && e.contains("MTL"), "{bad}: {e}");

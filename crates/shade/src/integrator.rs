@@ -495,27 +495,28 @@ impl<'a> Tracer<'a> {
         let n = hit.facing_normal();
         let mut out = mat.emission;
         let w_local = mat.local_weight();
-        let see_through = mat.is_see_through();
-        let albedo =
-            if w_local > 0.0 || see_through { self.albedo_over(ray, h, mat, cone.width) } else { Vec3::ZERO };
+        // Whether what passes through the surface here is multiplied by its
+        // filter (`filter_color`, else its colour), as the light of a shadow
+        // ray through it is ([`Tracer::transmittance`]): at every crossing
+        // of an open surface, and once per closed solid, where the ray
+        // enters it (an unbent ray skips its exit), or where it leaves one
+        // its path started in (a camera inside glass).
+        let tints = mat.is_see_through()
+            && depth < self.max_depth
+            && (hit.front_face || !is_closed(self.scene, h.object) || media.started_in(h.object));
+        let albedo = if w_local > 0.0 || (tints && mat.filter_color.is_none()) {
+            self.albedo_over(ray, h, mat, cone.width)
+        } else {
+            Vec3::ZERO
+        };
         if w_local > 0.0 {
             out += w_local * self.local(mat, albedo, hit, n, -d);
         }
         if depth >= self.max_depth {
             return out;
         }
-        // What passes through is tinted by the surface's colour, as the
-        // light of a shadow ray through it is ([`Tracer::transmittance`]):
-        // at every crossing of an open surface, and once per closed solid,
-        // where the ray enters it (an unbent ray skips its exit), or where
-        // it leaves one its path started in (a camera inside glass).
-        let tint = if see_through
-            && (hit.front_face || !is_closed(self.scene, h.object) || media.started_in(h.object))
-        {
-            mat.filter_color.unwrap_or(albedo).clamp(Vec3::ZERO, Vec3::ONE)
-        } else {
-            Vec3::ONE
-        };
+        let filter =
+            if tints { mat.filter_color.unwrap_or(albedo).clamp(Vec3::ZERO, Vec3::ONE) } else { Vec3::ONE };
         // Dielectric split: Fresnel reflectance F and the refracted direction,
         // between the material's index and that of the medium around it.
         let (fresnel, refracted, eta) = if mat.transmission > 0.0 {
@@ -547,17 +548,24 @@ impl<'a> Tracer<'a> {
             *media
         };
         let side = d.dot(hit.geo_normal);
-        let media_along = |dir: Vec3| if dir.dot(hit.geo_normal) * side > 0.0 { &beyond } else { media };
+        let crosses = |dir: Vec3| dir.dot(hit.geo_normal) * side > 0.0;
+        let media_along = |dir: Vec3| if crosses(dir) { &beyond } else { media };
+        // A new ray that goes through the surface carries its filter; one
+        // that stays on this side does not (a shading normal can send a
+        // refracted ray back, or a reflected one through).
+        let tint = |dir: Vec3| if crosses(dir) { filter } else { Vec3::ONE };
         // Mirror reflection and the dielectric's reflected part share one ray.
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
-        if k_mirror > 0.0 && self.worth(weight * k_mirror) {
+        if k_mirror > 0.0 {
             let dir = reflect(d, n);
-            let r = Ray::spawn_scaled(hit.point, hit.geo_normal, dir, self.offset);
-            let c = cone.reflect(cone.width, curvature(self.scene, h));
-            let m = media_along(dir);
-            out += k_mirror * self.trace(&r, depth + 1, weight * k_mirror, path, NO_OBJECT, c, m);
+            let k = k_mirror * tint(dir);
+            if self.worth(weight * k) {
+                let r = Ray::spawn_scaled(hit.point, hit.geo_normal, dir, self.offset);
+                let c = cone.reflect(cone.width, curvature(self.scene, h));
+                out += k * self.trace(&r, depth + 1, weight * k, path, NO_OBJECT, c, media_along(dir));
+            }
         }
-        let k_through = mat.transparency * tint;
+        let k_through = mat.transparency * tint(d);
         if mat.transparency > 0.0 && self.worth(weight * k_through) {
             let r = Ray::spawn_scaled(hit.point, hit.geo_normal, d, self.offset);
             let skip = if hit.front_face { h.object } else { NO_OBJECT };
@@ -565,7 +573,7 @@ impl<'a> Tracer<'a> {
             out += k_through * self.trace(&r, depth + 1, w, path, skip, cone, media_along(d));
         }
         if let Some(t) = refracted {
-            let k = mat.transmission * (1.0 - fresnel) * tint;
+            let k = mat.transmission * (1.0 - fresnel) * tint(t);
             if self.worth(weight * k) {
                 let r = Ray::spawn_scaled(hit.point, hit.geo_normal, t, self.offset);
                 let c = cone.refract(cone.width, eta, curvature(self.scene, h));
@@ -775,13 +783,13 @@ impl<'a> Tracer<'a> {
                 return ControlFlow::Break(());
             }
             let tint = || match (m.filter_color, &m.texture) {
-                (Some(filter), _) => Some((through * filter).clamp(Vec3::ZERO, Vec3::ONE)),
-                (None, Texture::Solid(solid)) => Some((through * *solid).clamp(Vec3::ZERO, Vec3::ONE)),
+                (Some(filter), _) => Some(through * filter.clamp(Vec3::ZERO, Vec3::ONE)),
+                (None, Texture::Solid(solid)) => Some(through * solid.clamp(Vec3::ZERO, Vec3::ONE)),
                 // `None` is not reached: the crossing is this structure's own.
                 (None, _) => scene
                     .accel
                     .crossing_hit(&ray, c)
-                    .map(|sh| (through * albedo(scene, m, &sh)).clamp(Vec3::ZERO, Vec3::ONE)),
+                    .map(|sh| through * albedo(scene, m, &sh).clamp(Vec3::ZERO, Vec3::ONE)),
             };
             // A see-through closed solid counts once, where the segment
             // enters it; its exits are counted below, for a segment that

@@ -5,7 +5,7 @@ use prism_geometry::glam::Vec3;
 
 /// A Whitted material. The outgoing radiance at a surface is
 ///
-/// `w_local · local + reflectivity · L_mirror + transparency · L_straight + transmission · (F · L_mirror + (1 − F) · L_refracted)`
+/// `w_local · local + reflectivity · L_mirror + transparency · f · L_straight + transmission · (F · L_mirror + (1 − F) · f · L_refracted)`
 ///
 /// where `w_local = 1 − reflectivity − transparency − transmission`,
 /// `local` is ambient + Lambert diffuse + Phong specular over all lights
@@ -22,12 +22,11 @@ use prism_geometry::glam::Vec3;
 ///
 /// `local = ambient · a · scene.ambient + Σ S · E · (diffuse · a · max(0, n·l) + specular · specular_color · max(0, r·v)^shininess)`
 ///
-/// Let `f` be the see-through filter: [`Material::filter_color`] where set, else
-/// the albedo `a`, clamped to `[0, 1]`.
-///
 /// with `r = 2 (n·l) n − l`; lights with `n·l <= 0` add nothing (and cost
-/// no shadow ray). `S` is the product over the objects on the segment to
-/// the light of `clamp((transparency + transmission) · f_occluder, 0, 1)`
+/// no shadow ray). Let `f` be the see-through filter:
+/// [`Material::filter_color`] where set, else the albedo `a`, clamped to
+/// `[0, 1]` per channel. `S` is the product over the objects on the
+/// segment to the light of `(transparency + transmission) · f_occluder`
 /// per channel: opaque objects block, transparent ones cast lighter shadows
 /// of their filter's colour (their own, unless `filter_color` is set). A closed solid (sphere, cuboid, cylinder, cone)
 /// counts once, where the segment enters it (where it leaves it, for a
@@ -48,7 +47,10 @@ use prism_geometry::glam::Vec3;
 /// open surfaces (planes, disks, triangles, open meshes) have no inside and
 /// absorb nothing. `L_straight` and `L_refracted` are multiplied by `f`
 /// as a shadow ray's light is, the same both ways: at every crossing of
-/// an open surface, and once per closed solid (where the ray enters it, or
+/// an open surface, and once per closed solid, by the ray that goes through
+/// its surface (a shading normal can keep a refracted ray on this side, or
+/// send a reflected one through: `L_mirror` then carries `f`), where the
+/// ray enters it, or
 /// leaves it for a camera inside a dielectric one; a camera inside a
 /// closed solid with only `transparency` sees out untinted). `filter_color
 /// = [1, 1, 1]` makes clear

@@ -114,6 +114,34 @@ fn an_orthographic_view_straddling_the_glass_absorbs_the_rays_that_start_in_it()
 }
 
 #[test]
+fn an_orthographic_view_starting_in_coloured_glass_sees_out_tinted_once() {
+    // Glass of colour c and index 1 filling x < 0, z > 0 (the camera's
+    // plane z = 5 is in it for x < 0), and a white wall at z = −3 outside
+    // it: rays from x < 0 leave the glass at z = 0, tinted there once
+    // (index 1: no Fresnel loss); those from x > 0 never meet it.
+    let c = Vec3::new(0.2, 0.6, 1.0);
+    let tinted = Material { texture: prism_shade::Texture::Solid(c), ..glass(1.0) };
+    let cam = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 4)
+        .with_projection(Projection::Orthographic);
+    let s = scene(
+        vec![
+            (cuboid(Vec3::new(-10.0, -10.0, 0.0), Vec3::new(0.0, 10.0, 10.0)), I, tinted),
+            (cuboid(Vec3::new(-20.0, -20.0, -4.0), Vec3::new(20.0, 20.0, -3.0)), I, flat(Vec3::ONE)),
+        ],
+        vec![],
+        cam,
+    );
+    let img = render(&s, 1, 4);
+    for j in 0..4 {
+        for i in 0..8 {
+            let o = cam.ray(i as f32 + 0.5, j as f32 + 0.5).origin;
+            let want = if o.x < 0.0 { c } else { Vec3::ONE };
+            assert_close(px(&img, i, j), want, 1e-5);
+        }
+    }
+}
+
+#[test]
 fn a_thin_lens_straddling_the_glass_absorbs_each_ray_over_its_stretch_inside() {
     // The lens (radius 1) centred on the glass's face x = 0, focused on
     // the wall: a ray is absorbed over the part of its way to the wall
