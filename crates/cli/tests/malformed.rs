@@ -408,7 +408,11 @@ fn cases() -> Vec<Case> {
         Case::new("flag: depth 10^9", GOOD, "--max-depth", "over the limit")
             .flags(&["--max-depth", "1000000000"]),
     );
-    v.push(Case::new("flag: not a number", GOOD, "--spp", "expected a whole number").flags(&["--spp", "many"]).code(2));
+    v.push(
+        Case::new("flag: not a number", GOOD, "--spp", "expected a whole number")
+            .flags(&["--spp", "many"])
+            .code(2),
+    );
     v.push(Case::new("flag: unknown output format", GOOD, "x.jpg", ".png or .exr").flags(&["-o", "x.jpg"]));
     v.push(
         Case::new("flag: --set zero samples", GOOD, "--set: render.spp=0", "at least 1")

@@ -553,7 +553,7 @@ impl<'a> Tracer<'a> {
         // A new ray that goes through the surface carries its filter; one
         // that stays on this side does not (a shading normal can send a
         // refracted ray back, or a reflected one through).
-        let tint = |dir: Vec3| if crosses(dir) { filter } else { Vec3::ONE };
+        let tint = |dir: Vec3| if tints && crosses(dir) { filter } else { Vec3::ONE };
         // Mirror reflection and the dielectric's reflected part share one ray.
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 {
