@@ -142,7 +142,7 @@ fn bad_options_and_files_fail_cleanly() {
         (&["render", "none.toml"], "none.toml: cannot read scene file"),
         (&["render", "."], "directory"),
         (&["render", "s.toml", "--max-depth", "1000"], "--max-depth:"),
-        (&["render", "s.toml", "--max-spp", "0"], "--max-spp <N>': 0 is not in 1.."),
+        (&["render", "s.toml", "--max-spp", "0"], "--max-spp <N>': must be at least 1"),
         // A negative value is the flag's, refused naming it.
         (&["render", "s.toml", "--spp", "-1"], "invalid value '-1' for '--spp <N>'"),
         (&["render", "s.toml", "--fov", "-5"], "--fov: the vertical field of view"),

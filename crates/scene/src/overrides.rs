@@ -114,22 +114,64 @@ pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::new(num(x)?, num(y)?, num(z)?))
 }
 
+/// A command-line flag's whole number of at least `min` (`u32`, `u64`, …):
+/// a negative one is refused as negative and a huge one as over the type's
+/// largest value, not as outside `0..=4294967295`, which names no real
+/// limit. For `--width`, `--spp` and the like (whose limits the loader
+/// checks, naming the flag) and `--max-spp` and the like.
+///
+/// # Errors
+/// The words for clap's message: "cannot be negative", "is over N", "must
+/// be at least N" or "expected a whole number".
+pub fn whole_number<T>(s: &str, min: T) -> Result<T, String>
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + num_max::Max,
+{
+    let s = s.trim();
+    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+    let v = match s.strip_prefix('-') {
+        Some(t) if digits(t) => return Err("cannot be negative".into()),
+        _ if digits(s) => s.parse::<T>().map_err(|_| format!("is over {}", T::MAX))?,
+        _ => s.parse::<T>().map_err(|_| "expected a whole number".to_string())?,
+    };
+    if v < min { Err(format!("must be at least {min}")) } else { Ok(v) }
+}
+
+/// The largest value of the unsigned types [`whole_number`] reads.
+pub mod num_max {
+    /// A type's largest value.
+    pub trait Max {
+        /// The largest value.
+        const MAX: Self;
+    }
+    impl Max for u32 {
+        const MAX: Self = u32::MAX;
+    }
+    impl Max for u64 {
+        const MAX: Self = u64::MAX;
+    }
+}
+
+#[cfg(test)]
+#[test]
+fn whole_numbers_name_what_is_wrong() {
+    assert_eq!(whole_number("7", 1u32), Ok(7));
+    assert_eq!(whole_number("0", 1u32), Err("must be at least 1".into()));
+    assert_eq!(whole_number("-2", 1u32), Err("cannot be negative".into()));
+    assert_eq!(whole_number("4294967296", 1u32), Err("is over 4294967295".into()));
+    assert_eq!(whole_number("4294967296", 1u64), Ok(4_294_967_296));
+    assert_eq!(whole_number("99999999999999999999", 0u64), Err("is over 18446744073709551615".into()));
+    assert_eq!(whole_number("1e3", 0u32), Err("expected a whole number".into()));
+}
+
 #[cfg(feature = "clap")]
 mod cli {
     use super::{CameraName, Overrides, parse_vec3};
     use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches, value_parser};
 
-    /// A flag's whole number (`--width`, `--spp`, …): a negative one is
-    /// refused as negative, not as outside `0..=4294967295`, which names
-    /// no real limit; the loader checks the limits, naming the flag.
+    /// A flag's whole number (`--width`, `--spp`, …; [`super::whole_number`]).
     fn whole_number(s: &str) -> Result<u32, String> {
-        let s = s.trim();
-        let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
-        match s.strip_prefix('-') {
-            Some(t) if digits(t) => Err("cannot be negative".into()),
-            _ if digits(s) => s.parse::<u32>().map_err(|_| format!("is over {}", u32::MAX)),
-            _ => s.parse::<u32>().map_err(|_| "expected a whole number".into()),
-        }
+        super::whole_number(s, 0)
     }
 
     /// `--fog` and `--no-fog` are two flags of the one field

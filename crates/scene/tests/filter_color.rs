@@ -94,6 +94,23 @@ fn a_see_through_material_without_a_colour_is_clear() {
 }
 
 #[test]
+fn a_filter_on_an_opaque_material_is_warned_about() {
+    let text = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+                [materials.paint]\ncolor = [1, 0, 0]\nfilter_color = [0, 1, 0]\n\
+                [[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"paint\"\n";
+    let loaded = parse_scene_str(text, Path::new("."), Path::new("p.toml")).expect("loads");
+    assert!(
+        loaded.warnings.iter().any(|w| w.contains("p.toml:6:") && w.contains("filter_color does nothing")),
+        "{:?}",
+        loaded.warnings
+    );
+    // Where something passes through, no warning.
+    let clear = text.replace("filter_color", "transparency = 0.5\nfilter_color");
+    let loaded = parse_scene_str(&clear, Path::new("."), Path::new("p.toml")).expect("loads");
+    assert!(loaded.warnings.iter().all(|w| !w.contains("filter_color")), "{:?}", loaded.warnings);
+}
+
+#[test]
 fn a_filter_over_one_is_refused_naming_it() {
     let e = through_sheet("filter_color = [1.5, 0, 0]").unwrap_err();
     assert!(e.contains("filter_color") && e.contains("between 0 and 1"), "{e}");
