@@ -252,13 +252,13 @@ impl ObjArgs {
 #[derive(Args)]
 struct LimitArgs {
     /// Largest image width or height accepted.
-    #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_side, value_parser = |s: &str| prism_scene::whole_number(s, 1u32))]
+    #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_side, value_parser = |s: &str| prism_scene::whole_u32(s, 1))]
     max_side: u32,
     /// Largest number of pixels accepted.
-    #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_pixels, value_parser = |s: &str| prism_scene::whole_number(s, 1u64))]
+    #[arg(long, value_name = "PIXELS", default_value_t = Limits::default().max_pixels, value_parser = |s: &str| prism_scene::whole_number(s, 1))]
     max_pixels: u64,
     /// Largest number of samples per pixel accepted.
-    #[arg(long, value_name = "N", default_value_t = Limits::default().max_spp, value_parser = |s: &str| prism_scene::whole_number(s, 1u32))]
+    #[arg(long, value_name = "N", default_value_t = Limits::default().max_spp, value_parser = |s: &str| prism_scene::whole_u32(s, 1))]
     max_spp: u32,
 }
 

@@ -35,14 +35,8 @@ impl<'a> Ctx<'a> {
         Self { notes: Some(notes), ..self }
     }
 
-    /// Adds the warning `message` about `span` (for callers outside this
-    /// module: a value that is valid but does nothing).
-    pub fn warn(&self, span: &Range<usize>, message: &str) {
-        self.note(span, message);
-    }
-
     /// Adds the warning `message` about `span`.
-    fn note(&self, span: &Range<usize>, message: &str) {
+    pub fn note(&self, span: &Range<usize>, message: &str) {
         if let Some(notes) = self.notes {
             notes.borrow_mut().push(format!("{}: {message}", self.loc(span)));
         }

@@ -70,7 +70,7 @@ mod wild;
 
 pub use error::{Location, SceneError, line_col};
 pub use obj_view::{ObjOptions, ObjView};
-pub use overrides::{CameraName, Overrides, parse_vec3, whole_number};
+pub use overrides::{CameraName, Overrides, parse_vec3, whole_number, whole_u32};
 pub use read::inputs_digest;
 pub use settings::fit_size;
 

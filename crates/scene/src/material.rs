@@ -110,12 +110,12 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
     if let Some(f) = &d.filter_color {
         m.filter_color = Some(ctx.unit_color(f, "filter_color")?);
         if !m.is_see_through() {
-            ctx.warn(
+            ctx.note(
                 &f.span(),
                 "filter_color does nothing here: the material lets nothing through (set transparency or transmission)",
             );
         }
-    } else if d.color.is_none() && d.texture.is_none() {
+    } else if d.color.is_none() && d.texture.is_none() && m.is_see_through() {
         // Glass or a sheet given no colour is clear, not filtered by the
         // default grey.
         m.filter_color = Some(Vec3::ONE);

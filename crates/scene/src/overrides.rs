@@ -114,54 +114,49 @@ pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::new(num(x)?, num(y)?, num(z)?))
 }
 
-/// A command-line flag's whole number of at least `min` (`u32`, `u64`, …):
-/// a negative one is refused as negative and a huge one as over the type's
-/// largest value, not as outside `0..=4294967295`, which names no real
-/// limit. For `--width`, `--spp` and the like (whose limits the loader
-/// checks, naming the flag) and `--max-spp` and the like.
+/// A command-line flag's whole number of at least `min`: a negative one is
+/// refused as negative and a huge one as over `u64::MAX`, not as outside
+/// `0..=4294967295`, which names no real limit. For `--max-pixels`; the
+/// `u32` flags take [`whole_u32`].
 ///
 /// # Errors
 /// The words for clap's message: "cannot be negative", "is over N", "must
 /// be at least N" or "expected a whole number".
-pub fn whole_number<T>(s: &str, min: T) -> Result<T, String>
-where
-    T: std::str::FromStr + PartialOrd + std::fmt::Display + num_max::Max,
-{
+pub fn whole_number(s: &str, min: u64) -> Result<u64, String> {
     let s = s.trim();
     let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
     let v = match s.strip_prefix('-') {
         Some(t) if digits(t) => return Err("cannot be negative".into()),
-        _ if digits(s) => s.parse::<T>().map_err(|_| format!("is over {}", T::MAX))?,
-        _ => s.parse::<T>().map_err(|_| "expected a whole number".to_string())?,
+        _ if digits(s) => s.parse::<u64>().map_err(|_| format!("is over {}", u64::MAX))?,
+        _ => s.parse::<u64>().map_err(|_| "expected a whole number".to_string())?,
     };
     if v < min { Err(format!("must be at least {min}")) } else { Ok(v) }
 }
 
-/// The largest value of the unsigned types [`whole_number`] reads.
-pub mod num_max {
-    /// A type's largest value.
-    pub trait Max {
-        /// The largest value.
-        const MAX: Self;
-    }
-    impl Max for u32 {
-        const MAX: Self = u32::MAX;
-    }
-    impl Max for u64 {
-        const MAX: Self = u64::MAX;
+/// [`whole_number`] for a `u32` flag (`--width`, `--spp`, `--max-spp`, …).
+///
+/// # Errors
+/// As [`whole_number`], "is over 4294967295" past `u32::MAX`.
+pub fn whole_u32(s: &str, min: u32) -> Result<u32, String> {
+    let over = || format!("is over {}", u32::MAX);
+    match whole_number(s, u64::from(min)) {
+        Ok(v) => u32::try_from(v).map_err(|_| over()),
+        Err(e) if e.starts_with("is over") => Err(over()),
+        Err(e) => Err(e),
     }
 }
 
 #[cfg(test)]
 #[test]
 fn whole_numbers_name_what_is_wrong() {
-    assert_eq!(whole_number("7", 1u32), Ok(7));
-    assert_eq!(whole_number("0", 1u32), Err("must be at least 1".into()));
-    assert_eq!(whole_number("-2", 1u32), Err("cannot be negative".into()));
-    assert_eq!(whole_number("4294967296", 1u32), Err("is over 4294967295".into()));
-    assert_eq!(whole_number("4294967296", 1u64), Ok(4_294_967_296));
-    assert_eq!(whole_number("99999999999999999999", 0u64), Err("is over 18446744073709551615".into()));
-    assert_eq!(whole_number("1e3", 0u32), Err("expected a whole number".into()));
+    assert_eq!(whole_u32("7", 1), Ok(7));
+    assert_eq!(whole_u32("0", 1), Err("must be at least 1".into()));
+    assert_eq!(whole_u32("-2", 1), Err("cannot be negative".into()));
+    assert_eq!(whole_u32("4294967296", 1), Err("is over 4294967295".into()));
+    assert_eq!(whole_number("4294967296", 1), Ok(4_294_967_296));
+    assert_eq!(whole_number("99999999999999999999", 0), Err("is over 18446744073709551615".into()));
+    assert_eq!(whole_u32("99999999999999999999", 0), Err("is over 4294967295".into()));
+    assert_eq!(whole_u32("1e3", 0), Err("expected a whole number".into()));
 }
 
 #[cfg(feature = "clap")]
@@ -169,9 +164,9 @@ mod cli {
     use super::{CameraName, Overrides, parse_vec3};
     use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches, value_parser};
 
-    /// A flag's whole number (`--width`, `--spp`, …; [`super::whole_number`]).
+    /// A flag's whole number (`--width`, `--spp`, …; [`super::whole_u32`]).
     fn whole_number(s: &str) -> Result<u32, String> {
-        super::whole_number(s, 0)
+        super::whole_u32(s, 0)
     }
 
     /// `--fog` and `--no-fog` are two flags of the one field
