@@ -47,6 +47,7 @@ mod error;
 mod hit;
 mod mesh;
 mod normals;
+mod polygon;
 mod ray;
 mod shape;
 pub mod shapes;
@@ -60,6 +61,7 @@ pub use glam;
 pub use hit::Hit;
 pub use mesh::{TriangleMesh, weld_by_position};
 pub use normals::{DEFAULT_CREASE_DEG, with_computed_normals};
+pub use polygon::triangulate;
 pub use ray::{Ray, offset_ray_origin, offset_ray_origin_scaled, offset_scale};
 pub use shape::{Instance, Intersect, Shape};
 pub use shapes::{

@@ -87,7 +87,8 @@ pub fn load_obj(
 
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_files: Vec<PathBuf> = mtllibs.iter().map(|m| dir.join(m)).collect();
-    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    // Polygons are cut here (`polygon_triangles`), not by tobj's fan.
+    let options = tobj::LoadOptions { triangulate: false, single_index: true, ..Default::default() };
     // A problem found in an MTL file before tobj sees it, with its place.
     let mtl_problem: std::cell::RefCell<Option<String>> = std::cell::RefCell::new(None);
     let loader = |p: &Path| {
@@ -130,7 +131,11 @@ pub fn load_obj(
 
     // Smoothing groups per triangle, if the file has `s` lines and tobj's
     // models hold its triangles in file order (else they are not used).
-    let total: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    let triangles = |m: &tobj::Mesh| match m.face_arities.as_slice() {
+        [] => m.indices.len() / 3,
+        arities => arities.iter().map(|&n| (n as usize).saturating_sub(2).max(1)).sum(),
+    };
+    let total: usize = models.iter().map(|m| triangles(&m.mesh)).sum();
     let groups = smoothing_groups(text).filter(|g| g.len() == total);
     let mut next_tri = 0;
     let mut out = Vec::with_capacity(models.len());
@@ -146,7 +151,7 @@ pub fn load_obj(
         // OBJ's v runs upward; prism's image rows run downward from v = 0.
         let uvs = (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
-        let indices: Vec<[u32; 3]> = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let indices = polygon_triangles(&m.indices, &m.face_arities, &positions);
         // The smoothing groups of this model's triangles, in file order.
         let tris = indices.len();
         let model_groups = groups.as_ref().and_then(|g| g.get(next_tri..next_tri + tris));
@@ -263,6 +268,39 @@ fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
         }
     }
     any.then_some(out)
+}
+
+/// A model's faces as triangles, in the file's order: `indices` holds
+/// each face's corners in turn, `arities` how many each face has (empty
+/// when every face is a triangle). A polygon of `n` corners gives `n - 2`
+/// triangles, cut by [`prism_geometry::triangulate`] (a fan would cover
+/// a polygon's notches), so that the smoothing groups' count per face
+/// holds; a point gives `a a a` and a line `a b b` (kept, never hit), as
+/// tobj's own triangulation gives them.
+fn polygon_triangles(indices: &[u32], arities: &[u32], positions: &[Vec3]) -> Vec<[u32; 3]> {
+    if arities.is_empty() {
+        return indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    }
+    let mut out = Vec::with_capacity(indices.len());
+    let mut rest = indices;
+    let mut corners = Vec::new();
+    for &arity in arities {
+        let Some((face, tail)) = rest.split_at_checked(arity as usize) else { break };
+        rest = tail;
+        match *face {
+            [a] => out.push([a, a, a]),
+            [a, b] => out.push([a, b, b]),
+            [a, b, c] => out.push([a, b, c]),
+            _ => {
+                corners.clear();
+                corners
+                    .extend(face.iter().map(|&i| positions.get(i as usize).copied().unwrap_or(Vec3::ZERO)));
+                let local = prism_geometry::triangulate(&corners);
+                out.extend(local.iter().map(|t| t.map(|k| face.get(k as usize).copied().unwrap_or(face[0]))));
+            }
+        }
+    }
+    out
 }
 
 /// Checks the MTL lines that tobj would panic on or that prism would
@@ -469,6 +507,41 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A U-shaped floor polygon (seen from above, its notch around
+    /// x = 1.5, z = 2) and a triangle, loaded from an OBJ.
+    #[test]
+    fn polygons_are_cut_by_ear_clipping_not_fanned() {
+        let obj = "v 0 0 0\nv 3 0 0\nv 3 0 3\nv 2 0 3\nv 2 0 1\nv 1 0 1\nv 1 0 3\nv 0 0 3\n\
+                   f 1 2 3 4 5 6 7 8\nf 1 2 3\n";
+        let file = load_obj(Path::new("/s/u.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap();
+        let mesh = &file.models[0].mesh;
+        // 6 from the polygon, then the triangle.
+        assert_eq!(mesh.len(), 7);
+        assert_eq!(file.models[0].degenerate, 0);
+        let idx = mesh.indices();
+        assert_eq!(idx[6], [0, 1, 2]);
+        // Straight down onto the notch, and onto the U's arms and base.
+        let down = |x: f32, z: f32| prism_geometry::Ray::new(Vec3::new(x, 1.0, z), Vec3::NEG_Y);
+        let polygon = TriangleMesh::new(mesh.positions().to_vec(), None, None, idx[..6].to_vec()).unwrap();
+        assert!(polygon.intersect_brute_force(&down(1.5, 2.0)).is_none(), "the notch is covered");
+        for (x, z) in [(0.5, 2.5), (2.5, 2.5), (1.5, 0.5), (0.1, 0.1), (2.9, 2.9)] {
+            assert!(polygon.intersect_brute_force(&down(x, z)).is_some(), "({x}, {z}) is not covered");
+        }
+    }
+
+    #[test]
+    fn faces_of_every_arity_keep_their_order() {
+        let positions: Vec<Vec3> = (0..5).map(|i| Vec3::new(i as f32, (i * i) as f32, 0.0)).collect();
+        // A triangle, a convex quad (cut as a fan would cut it), a point.
+        let idx = [0, 1, 2, 0, 1, 2, 3, 4];
+        let arities = [3, 4, 1];
+        assert_eq!(
+            polygon_triangles(&idx, &arities, &positions),
+            vec![[0, 1, 2], [0, 1, 2], [0, 2, 3], [4, 4, 4]]
+        );
+        assert_eq!(polygon_triangles(&[0, 1, 2, 2, 3, 4], &[], &positions), vec![[0, 1, 2], [2, 3, 4]]);
+    }
 
     #[test]
     fn precheck_reports_lines() {
