@@ -16,57 +16,80 @@ use glam::{DVec2, DVec3, Vec3};
 /// The polygon is seen in the plane across its largest-area axis (its
 /// Newell normal), and ears are clipped from that outline: a triangle of
 /// three consecutive corners that turns the polygon's way and holds no
-/// other corner. Corners are clipped every other one around the outline,
-/// so the triangles of a convex polygon of many corners stay near each
-/// other rather than fanning out from one corner. A convex quadrilateral
-/// is cut along the diagonal from its first corner, as a fan would cut
-/// it.
+/// other corner. The ears are kept in a list in outline order, and after
+/// each clip the next ear along is taken, skipping the clipped ear's
+/// successor, so the triangles of a convex polygon of many corners stay
+/// near each other rather than fanning out from one corner; only the two
+/// neighbours of a clipped ear are tested again, and only against the
+/// reflex corners near them, so a polygon of `n` corners takes about `n`
+/// ear tests. A quadrilateral is cut along the diagonal from its first
+/// corner, as a fan would cut it, unless that diagonal lies outside it.
 ///
-/// Where no ear is left (an outline that crosses itself, or corners all
-/// in one line), the rest is cut as a fan, so that the number of
-/// triangles is always `corners.len() - 2` (none for fewer than three
-/// corners); triangles of zero area may result, as they would from the
-/// input anyway.
+/// This is exact for simple polygons, and for a face with a hole reached
+/// through a keyhole cut (an outline that runs in and back out along the
+/// same edge). Where no ear is left (an outline that crosses or touches
+/// itself, or corners all in one line), the rest is cut as a fan, so that
+/// the number of triangles is always `corners.len() - 2` (none for fewer
+/// than three corners); triangles of zero area may result, as they would
+/// from the input anyway.
 #[must_use]
 pub fn triangulate(corners: &[Vec3]) -> Vec<[u32; 3]> {
     let n = corners.len();
     if n < 3 {
         return Vec::new();
     }
-    let mut out = Vec::with_capacity(n - 2);
     if n == 3 {
-        out.push([0, 1, 2]);
-        return out;
+        return vec![[0, 1, 2]];
     }
+    if let [a, b, c, d] = *corners
+        && let Some(cut) = quad(a, b, c, d)
+    {
+        return cut.to_vec();
+    }
+    let mut out = Vec::with_capacity(n - 2);
     let Some(flat) = outline(corners) else {
         fan(&(0..n).collect::<Vec<_>>(), &mut out);
         return out;
     };
     let mut ring = Ring::new(&flat);
-    let mut cur = 1;
-    // Corners tested since the last ear was clipped.
-    let mut tested = 0;
+    // The first ear from corner 1 on (a fan's first triangle where that
+    // is an ear).
+    let mut cur = ring.first_ear_from(1);
     while ring.len > 3 {
-        let (p, q) = (ring.prev[cur], ring.next[cur]);
-        if ring.is_ear(p, cur, q) {
-            out.push(index([p, cur, q]));
-            ring.remove(cur);
-            cur = ring.next[q];
-            tested = 0;
-        } else {
-            cur = q;
-            tested += 1;
-            if tested > ring.len {
-                break;
-            }
-        }
+        let Some(v) = cur else { break };
+        let (p, q) = (ring.prev[v], ring.next[v]);
+        out.push(index([p, v, q]));
+        cur = ring.clip(v);
     }
     // Three corners left, or no ear among more: the rest as a fan from
     // its first corner in the file's order (a convex quadrilateral's
     // second triangle is then the fan's `0 2 3`).
-    let first = ring.corners_from(cur).into_iter().min().unwrap_or(0);
+    let start = ring.any();
+    let first = ring.corners_from(start).into_iter().min().unwrap_or(start);
     fan(&ring.corners_from(first), &mut out);
     out
+}
+
+/// A quadrilateral's two triangles without the general machinery: the
+/// fan's `0 1 2, 0 2 3` where both turn the quadrilateral's way in its
+/// plane (the diagonal from corner 0 lies inside it), else `1 2 3, 1 3 0`
+/// where those do; `None` (the general path) otherwise.
+fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Option<[[u32; 3]; 2]> {
+    let [a, b, c, d] = [a, b, c, d].map(|p| p.as_dvec3());
+    // The Newell normal of a quadrilateral is the cross product of its
+    // diagonals; each triangle must turn its way.
+    let normal = (c - a).cross(d - b);
+    let turns = |x: DVec3, y: DVec3, z: DVec3| (y - x).cross(z - x).dot(normal) > 0.0;
+    if !(normal.length_squared() > 0.0 && normal.is_finite()) {
+        return None;
+    }
+    if turns(a, b, c) && turns(a, c, d) {
+        Some([[0, 1, 2], [0, 2, 3]])
+    } else if turns(b, c, d) && turns(b, d, a) {
+        Some([[1, 2, 3], [1, 3, 0]])
+    } else {
+        None
+    }
 }
 
 /// Index triples as `u32`: a polygon of more than `u32::MAX` corners is
@@ -113,18 +136,30 @@ fn turn(a: DVec2, b: DVec2, c: DVec2) -> f64 {
     (b - a).perp_dot(c - a)
 }
 
-/// A polygon's outline as a ring of the corners not yet clipped.
+/// A polygon's outline as a ring of the corners not yet clipped, with its
+/// ears in a second ring of their own, in outline order.
 struct Ring<'a> {
     at: &'a [DVec2],
     prev: Vec<usize>,
     next: Vec<usize>,
     /// Corners in the ring.
     len: usize,
+    /// Whether each corner is an ear now (kept for the corners in the
+    /// ring: clipping an ear changes only its two neighbours' ears).
+    ear: Vec<bool>,
+    /// The ears' own ring (meaningful where `ear` is set).
+    ear_prev: Vec<usize>,
+    ear_next: Vec<usize>,
+    /// One ear, if any is left.
+    an_ear: Option<usize>,
+    /// Corners passed over after their predecessor was clipped, and not
+    /// tested again since (see [`Ring::clip`]).
+    passed: Vec<bool>,
     /// The corners that were reflex at the start, by place: the only
     /// corners that can lie inside an ear (clipping an ear can only make
     /// its neighbours convex, never reflex), so the only ones an ear test
     /// looks at, those near the ear.
-    reflex: Grid,
+    reflex: Tree,
     gone: Vec<bool>,
 }
 
@@ -134,12 +169,33 @@ impl<'a> Ring<'a> {
         let prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
         let next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
         let reflex: Vec<usize> = (0..n).filter(|&i| turn(at[prev[i]], at[i], at[next[i]]) <= 0.0).collect();
-        Self { at, prev, next, len: n, reflex: Grid::new(at, &reflex), gone: vec![false; n] }
+        let mut ring = Self {
+            at,
+            prev,
+            next,
+            len: n,
+            ear: vec![false; n],
+            ear_prev: vec![0; n],
+            ear_next: vec![0; n],
+            an_ear: None,
+            passed: vec![false; n],
+            reflex: Tree::new(at, &reflex),
+            gone: vec![false; n],
+        };
+        let ears: Vec<usize> = (0..n).filter(|&v| ring.is_ear(v)).collect();
+        for (k, &v) in ears.iter().enumerate() {
+            ring.ear[v] = true;
+            ring.ear_next[v] = ears[(k + 1) % ears.len()];
+            ring.ear_prev[v] = ears[(k + ears.len() - 1) % ears.len()];
+        }
+        ring.an_ear = ears.first().copied();
+        ring
     }
 
-    /// Whether `p b q` (consecutive corners) turns the polygon's way and
-    /// holds no other corner of the ring, on its edges included.
-    fn is_ear(&self, p: usize, b: usize, q: usize) -> bool {
+    /// Whether corner `b` and its neighbours turn the polygon's way and
+    /// hold no other corner of the ring, on their edges included.
+    fn is_ear(&self, b: usize) -> bool {
+        let (p, q) = (self.prev[b], self.next[b]);
         let (a, m, c) = (self.at[p], self.at[b], self.at[q]);
         if turn(a, m, c) <= 0.0 {
             return false;
@@ -160,15 +216,91 @@ impl<'a> Ring<'a> {
                 // corner inside too).
                 && turn(self.at[self.prev[r]], x, self.at[self.next[r]]) <= 0.0
         };
-        !self.reflex.near(a.min(m).min(c), a.max(m).max(c)).any(inside)
+        !self.reflex.any([a, m, c], inside)
     }
 
-    fn remove(&mut self, b: usize) {
-        let (p, q) = (self.prev[b], self.next[b]);
+    /// The first ear at or after corner `v` in outline order.
+    fn first_ear_from(&self, v: usize) -> Option<usize> {
+        let mut i = v;
+        for _ in 0..self.len {
+            if self.ear[i] {
+                return Some(i);
+            }
+            i = self.next[i];
+        }
+        None
+    }
+
+    /// Clips the ear `v`: takes it out of the ring and of the ears, tests
+    /// its neighbours again, and returns the ear to clip next. That is the
+    /// next ear along after `v`'s successor `q`, which is passed over (so
+    /// that a convex run is clipped every other corner, not as a fan
+    /// around `v`'s predecessor), unless `q` was passed over before and
+    /// has kept its neighbours since: then `q` itself, so that a corner
+    /// the sweep keeps coming back to (the end of a strip with straight
+    /// sides) does not become the hub of a fan either.
+    fn clip(&mut self, v: usize) -> Option<usize> {
+        let (p, q) = (self.prev[v], self.next[v]);
+        let q_passed = self.passed[q];
         self.next[p] = q;
         self.prev[q] = p;
-        self.gone[b] = true;
+        self.gone[v] = true;
         self.len -= 1;
+        self.reflex.remove(v);
+        // A neighbour that turned convex stays so: no ear can hold it.
+        for u in [p, q] {
+            if turn(self.at[self.prev[u]], self.at[u], self.at[self.next[u]]) > 0.0 {
+                self.reflex.remove(u);
+            }
+        }
+        // The neighbours' ears, placed around `v` in the ears' ring (no
+        // corner lies between `p` and `v` or between `v` and `q`).
+        for (u, before) in [(p, true), (q, false)] {
+            self.passed[u] = false;
+            match (self.ear[u], self.is_ear(u)) {
+                (true, false) => self.unlink(u),
+                (false, true) => {
+                    let (l, r) = if before { (self.ear_prev[v], v) } else { (v, self.ear_next[v]) };
+                    self.ear[u] = true;
+                    self.ear_prev[u] = l;
+                    self.ear_next[u] = r;
+                    self.ear_next[l] = u;
+                    self.ear_prev[r] = u;
+                }
+                _ => {}
+            }
+        }
+        let after = self.ear_next[v];
+        self.unlink(v);
+        if !self.ear[after] {
+            return None;
+        }
+        if after != q || !self.ear[q] || self.ear_next[q] == q {
+            return Some(after);
+        }
+        if q_passed {
+            return Some(q);
+        }
+        self.passed[q] = true;
+        Some(self.ear_next[q])
+    }
+
+    /// Takes `u` out of the ears' ring.
+    fn unlink(&mut self, u: usize) {
+        let (l, r) = (self.ear_prev[u], self.ear_next[u]);
+        self.ear[u] = false;
+        if r == u {
+            self.an_ear = None;
+        } else {
+            self.ear_next[l] = r;
+            self.ear_prev[r] = l;
+            self.an_ear = Some(r);
+        }
+    }
+
+    /// A corner still in the ring.
+    fn any(&self) -> usize {
+        (0..self.gone.len()).find(|&i| !self.gone[i]).unwrap_or(0)
     }
 
     /// The ring's corners in order, from `start`.
@@ -183,75 +315,128 @@ impl<'a> Ring<'a> {
     }
 }
 
-/// Corners bucketed in a square grid over their bounding box, about two
-/// to a cell, so that an ear test visits the few near the ear: a polygon
-/// of many corners in a line (a circle's, within rounding) has as many
-/// reflex corners as convex ones.
-struct Grid {
-    min: DVec2,
-    /// Cells per unit along each axis.
-    scale: DVec2,
-    side: usize,
-    /// Cell `i`'s corners are `items[start[i]..start[i + 1]]`.
-    start: Vec<usize>,
+/// Corners in a k-d tree over their places (each node split at the median
+/// along its wider side and pruned by its box, leaves of at most [`Tree::LEAF`]), from which corners can be
+/// taken out: an ear test visits only the corners still in it near the
+/// ear, however they are spread. (A polygon of many corners in a line,
+/// such as a circle's within rounding or a strip's straight sides, has as
+/// many reflex corners as convex ones; one corner far from the rest must
+/// not crowd them together; and an ear that must be long, such as the
+/// fan a comb's base leaves, spans many corners already clipped.)
+struct Tree {
+    /// The corners, ordered so that each node's are one range of it.
     items: Vec<usize>,
+    /// Inner nodes at most (their children: `2k` and `2k + 1`, the root
+    /// is 1).
+    inner: usize,
+    /// Each node's bounding box (of all its corners, taken out or not).
+    boxes: Vec<(DVec2, DVec2)>,
+    /// Corners still in each node.
+    live: Vec<u32>,
+    /// Where each corner of the polygon is in `items`, `usize::MAX` for
+    /// those not (or no longer) in the tree.
+    slot: Vec<usize>,
+    at: Vec<DVec2>,
 }
 
-impl Grid {
+impl Tree {
+    const LEAF: usize = 8;
+    const OUT: usize = usize::MAX;
+
     fn new(at: &[DVec2], corners: &[usize]) -> Self {
-        let (mut min, mut max) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-        for &i in corners {
-            min = min.min(at[i]);
-            max = max.max(at[i]);
-        }
-        // At most 2^20 cells; `as` saturates, and the square root of a
-        // count is far below `usize::MAX`.
-        let side = ((corners.len() as f64 / 2.0).sqrt().ceil() as usize).clamp(1, 1024);
-        let size = max - min;
-        let per = |s: f64| if s > 0.0 { side as f64 / s } else { 0.0 };
-        let mut grid = Self {
-            min,
-            scale: DVec2::new(per(size.x), per(size.y)),
-            side,
-            start: vec![0; side * side + 1],
-            items: vec![],
+        let inner = corners.len().div_ceil(Self::LEAF).next_power_of_two().max(1);
+        let mut tree = Self {
+            items: corners.to_vec(),
+            inner: 2 * inner,
+            boxes: vec![(DVec2::ZERO, DVec2::ZERO); 4 * inner],
+            live: vec![0; 4 * inner],
+            slot: vec![Self::OUT; at.len()],
+            at: at.to_vec(),
         };
-        let cells: Vec<usize> = corners.iter().map(|&i| grid.cell(at[i])).collect();
-        for &c in &cells {
-            grid.start[c + 1] += 1;
+        tree.build(1, 0, corners.len());
+        for (k, &i) in tree.items.iter().enumerate() {
+            tree.slot[i] = k;
         }
-        for i in 1..grid.start.len() {
-            grid.start[i] += grid.start[i - 1];
-        }
-        let mut fill = grid.start.clone();
-        grid.items = vec![0; corners.len()];
-        for (&i, &c) in corners.iter().zip(&cells) {
-            grid.items[fill[c]] = i;
-            fill[c] += 1;
-        }
-        grid
+        tree
     }
 
-    /// Column and row of `p`, clamped to the grid.
-    fn column_row(&self, p: DVec2) -> (usize, usize) {
-        let last = (self.side - 1) as f64;
-        // `as` maps NaN to 0 and saturates; the clamp keeps it in range.
-        let f = ((p - self.min) * self.scale).clamp(DVec2::ZERO, DVec2::splat(last));
-        (f.x as usize, f.y as usize)
+    fn coord(p: DVec2, axis: usize) -> f64 {
+        if axis == 0 { p.x } else { p.y }
     }
 
-    fn cell(&self, p: DVec2) -> usize {
-        let (x, y) = self.column_row(p);
-        y * self.side + x
+    fn is_leaf(&self, node: usize, lo: usize, hi: usize) -> bool {
+        hi - lo <= Self::LEAF || node >= self.inner
     }
 
-    /// The corners in the cells that the box `lo..hi` meets.
-    fn near(&self, lo: DVec2, hi: DVec2) -> impl Iterator<Item = usize> + '_ {
-        let ((x0, y0), (x1, y1)) = (self.column_row(lo), self.column_row(hi));
-        (y0..=y1).flat_map(move |y| {
-            let row = y * self.side;
-            self.items[self.start[row + x0]..self.start[row + x1 + 1]].iter().copied()
-        })
+    fn build(&mut self, node: usize, lo: usize, hi: usize) {
+        self.live[node] = u32::try_from(hi - lo).unwrap_or(u32::MAX);
+        let at = &self.at;
+        let (min, max) = self.items[lo..hi]
+            .iter()
+            .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(a, b), &i| (a.min(at[i]), b.max(at[i])));
+        self.boxes[node] = (min, max);
+        if self.is_leaf(node, lo, hi) {
+            return;
+        }
+        let size = max - min;
+        // Along y only where it is wider: corners in a line split along it.
+        let axis = usize::from(size.y > size.x);
+        let mid = lo + (hi - lo) / 2;
+        self.items[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
+            Self::coord(at[a], axis).total_cmp(&Self::coord(at[b], axis))
+        });
+        self.build(2 * node, lo, mid);
+        self.build(2 * node + 1, mid, hi);
+    }
+
+    /// Takes corner `i` out of the tree (nothing if it is not in it).
+    fn remove(&mut self, i: usize) {
+        let Some(&k) = self.slot.get(i).filter(|&&k| k != Self::OUT) else { return };
+        self.slot[i] = Self::OUT;
+        let (mut node, mut lo, mut hi) = (1, 0, self.items.len());
+        loop {
+            self.live[node] = self.live[node].saturating_sub(1);
+            if self.is_leaf(node, lo, hi) {
+                return;
+            }
+            let mid = lo + (hi - lo) / 2;
+            (node, lo, hi) = if k < mid { (2 * node, lo, mid) } else { (2 * node + 1, mid, hi) };
+        }
+    }
+
+    /// Whether `f` holds for a corner in the tree that may lie in the
+    /// triangle `tri` (counter-clockwise): `f` is asked of the corners of
+    /// every node whose box the triangle may meet.
+    fn any(&self, tri: [DVec2; 3], mut f: impl FnMut(usize) -> bool) -> bool {
+        let [a, b, c] = tri;
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        // A box lies outside the triangle where all its corners lie
+        // strictly outside one of its edges (or outside its bounds).
+        let apart = |(min, max): (DVec2, DVec2)| {
+            let corners = [min, DVec2::new(max.x, min.y), max, DVec2::new(min.x, max.y)];
+            min.x > hi.x
+                || min.y > hi.y
+                || max.x < lo.x
+                || max.y < lo.y
+                || [(a, b), (b, c), (c, a)].iter().any(|&(u, w)| corners.iter().all(|&x| turn(u, w, x) < 0.0))
+        };
+        // (node, range); the depth is at most log2 of the nodes.
+        let mut stack = vec![(1usize, 0usize, self.items.len())];
+        while let Some((node, from, to)) = stack.pop() {
+            if self.live[node] == 0 || apart(self.boxes[node]) {
+                continue;
+            }
+            if self.is_leaf(node, from, to) {
+                if self.items[from..to].iter().any(|&i| self.slot[i] != Self::OUT && f(i)) {
+                    return true;
+                }
+                continue;
+            }
+            let mid = from + (to - from) / 2;
+            stack.push((2 * node, from, mid));
+            stack.push((2 * node + 1, mid, to));
+        }
+        false
     }
 }
 
@@ -345,6 +530,37 @@ mod tests {
         }
         let most = uses.iter().copied().max().unwrap_or(0);
         assert!(most <= 2 * 10 + 2, "a corner is in {most} triangles");
+    }
+
+    /// Outlines whose ears are few at a time, all covered exactly: a strip
+    /// with straight sides, a comb, a zig-zag and a thick spiral (each took
+    /// a quadratic number of ear tests in a first version).
+    #[test]
+    fn strips_combs_zigzags_and_spirals_are_covered() {
+        let flat = |p: Vec<(f32, f32)>| p.into_iter().map(|(x, y)| Vec3::new(x, y, 0.0)).collect::<Vec<_>>();
+        let m = 500;
+        let strip: Vec<(f32, f32)> =
+            (0..m).map(|i| (i as f32, 0.0)).chain((0..m).rev().map(|i| (i as f32, 1.0))).collect();
+        let mut comb = vec![(0.0, -1.0), (2.0 * m as f32, -1.0)];
+        for i in (0..m).rev() {
+            let x = 2.0 * i as f32;
+            comb.extend([(x + 2.0, 0.0), (x + 1.5, 1.0), (x + 1.0, 0.0), (x + 0.5, 1.0)]);
+        }
+        comb.push((0.0, 0.0));
+        let mut zigzag = vec![(0.0, 0.0), (m as f32, 0.0)];
+        zigzag.extend((0..m).rev().map(|i| (i as f32, if i % 2 == 0 { 1.0 } else { 2.0 })));
+        let turns = |k: usize, r0: f32| {
+            let t = 4.0 + 5.0 * std::f32::consts::TAU * k as f32 / m as f32;
+            ((t + r0) * t.cos(), (t + r0) * t.sin())
+        };
+        let spiral: Vec<(f32, f32)> =
+            (0..m).map(|k| turns(k, 1.0)).chain((0..m).rev().map(|k| turns(k, -2.0))).collect();
+        for (name, p) in [("strip", strip), ("comb", comb), ("zigzag", zigzag), ("spiral", spiral)] {
+            let c = flat(p);
+            let t = triangulate(&c);
+            assert_eq!(t.len(), c.len() - 2, "{name}");
+            check_cover(&c, &t, Vec3::Z);
+        }
     }
 
     #[test]
