@@ -150,8 +150,6 @@ struct Ring<'a> {
     /// The ears' own ring (meaningful where `ear` is set).
     ear_prev: Vec<usize>,
     ear_next: Vec<usize>,
-    /// One ear, if any is left.
-    an_ear: Option<usize>,
     /// Corners passed over after their predecessor was clipped, and not
     /// tested again since (see [`Ring::clip`]).
     passed: Vec<bool>,
@@ -159,7 +157,7 @@ struct Ring<'a> {
     /// corners that can lie inside an ear (clipping an ear can only make
     /// its neighbours convex, never reflex), so the only ones an ear test
     /// looks at, those near the ear.
-    reflex: Tree,
+    reflex: Tree<'a>,
     gone: Vec<bool>,
 }
 
@@ -177,7 +175,6 @@ impl<'a> Ring<'a> {
             ear: vec![false; n],
             ear_prev: vec![0; n],
             ear_next: vec![0; n],
-            an_ear: None,
             passed: vec![false; n],
             reflex: Tree::new(at, &reflex),
             gone: vec![false; n],
@@ -188,7 +185,6 @@ impl<'a> Ring<'a> {
             ring.ear_next[v] = ears[(k + 1) % ears.len()];
             ring.ear_prev[v] = ears[(k + ears.len() - 1) % ears.len()];
         }
-        ring.an_ear = ears.first().copied();
         ring
     }
 
@@ -289,13 +285,8 @@ impl<'a> Ring<'a> {
     fn unlink(&mut self, u: usize) {
         let (l, r) = (self.ear_prev[u], self.ear_next[u]);
         self.ear[u] = false;
-        if r == u {
-            self.an_ear = None;
-        } else {
-            self.ear_next[l] = r;
-            self.ear_prev[r] = l;
-            self.an_ear = Some(r);
-        }
+        self.ear_next[l] = r;
+        self.ear_prev[r] = l;
     }
 
     /// A corner still in the ring.
@@ -323,7 +314,7 @@ impl<'a> Ring<'a> {
 /// many reflex corners as convex ones; one corner far from the rest must
 /// not crowd them together; and an ear that must be long, such as the
 /// fan a comb's base leaves, spans many corners already clipped.)
-struct Tree {
+struct Tree<'a> {
     /// The corners, ordered so that each node's are one range of it.
     items: Vec<usize>,
     /// Inner nodes at most (their children: `2k` and `2k + 1`, the root
@@ -336,14 +327,14 @@ struct Tree {
     /// Where each corner of the polygon is in `items`, `usize::MAX` for
     /// those not (or no longer) in the tree.
     slot: Vec<usize>,
-    at: Vec<DVec2>,
+    at: &'a [DVec2],
 }
 
-impl Tree {
+impl<'a> Tree<'a> {
     const LEAF: usize = 8;
     const OUT: usize = usize::MAX;
 
-    fn new(at: &[DVec2], corners: &[usize]) -> Self {
+    fn new(at: &'a [DVec2], corners: &[usize]) -> Self {
         let inner = corners.len().div_ceil(Self::LEAF).next_power_of_two().max(1);
         let mut tree = Self {
             items: corners.to_vec(),
@@ -351,7 +342,7 @@ impl Tree {
             boxes: vec![(DVec2::ZERO, DVec2::ZERO); 4 * inner],
             live: vec![0; 4 * inner],
             slot: vec![Self::OUT; at.len()],
-            at: at.to_vec(),
+            at,
         };
         tree.build(1, 0, corners.len());
         for (k, &i) in tree.items.iter().enumerate() {
@@ -370,7 +361,7 @@ impl Tree {
 
     fn build(&mut self, node: usize, lo: usize, hi: usize) {
         self.live[node] = u32::try_from(hi - lo).unwrap_or(u32::MAX);
-        let at = &self.at;
+        let at = self.at;
         let (min, max) = self.items[lo..hi]
             .iter()
             .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(a, b), &i| (a.min(at[i]), b.max(at[i])));

@@ -129,29 +129,34 @@ pub fn load_obj(
         }
     };
 
+    // Each model's positions and triangles, its faces cut in file order.
+    let cut: Vec<(tobj::Model, Vec<Vec3>, Vec<[u32; 3]>)> = models
+        .into_iter()
+        .map(|model| {
+            let m = &model.mesh;
+            let positions: Vec<Vec3> =
+                m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+            let indices = polygon_triangles(&m.indices, &m.face_arities, &positions);
+            (model, positions, indices)
+        })
+        .collect();
     // Smoothing groups per triangle, if the file has `s` lines and tobj's
     // models hold its triangles in file order (else they are not used).
-    let triangles = |m: &tobj::Mesh| match m.face_arities.as_slice() {
-        [] => m.indices.len() / 3,
-        arities => arities.iter().map(|&n| (n as usize).saturating_sub(2).max(1)).sum(),
-    };
-    let total: usize = models.iter().map(|m| triangles(&m.mesh)).sum();
+    let total: usize = cut.iter().map(|(_, _, t)| t.len()).sum();
     let groups = smoothing_groups(text).filter(|g| g.len() == total);
     let mut next_tri = 0;
-    let mut out = Vec::with_capacity(models.len());
-    for model in models {
+    let mut out = Vec::with_capacity(cut.len());
+    for (model, positions, indices) in cut {
         let m = model.mesh;
         if m.indices.is_empty() {
             continue;
         }
         let n = m.positions.len() / 3;
-        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
         let file_normals = (m.normals.len() == 3 * n)
             .then(|| m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>());
         // OBJ's v runs upward; prism's image rows run downward from v = 0.
         let uvs = (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
-        let indices = polygon_triangles(&m.indices, &m.face_arities, &positions);
         // The smoothing groups of this model's triangles, in file order.
         let tris = indices.len();
         let model_groups = groups.as_ref().and_then(|g| g.get(next_tri..next_tri + tris));
