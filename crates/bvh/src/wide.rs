@@ -400,38 +400,54 @@ fn lay(bvh: &Bvh2, plan: &[Choice], k: usize, mut lanes: usize, out: &mut Lanes)
     }
 }
 
-/// Appends the wide node for binary node `src` (and its subtree), laid
-/// out as `plan` says; returns its index.
+/// Appends the wide nodes for binary node `src` and its subtree, laid out
+/// as `plan` says, each node before its subtrees and those in lane order
+/// (depth first), with each leaf's slots appended where the walk reaches
+/// it. The walk keeps its own list of lanes to fill rather than recurse,
+/// so that a tree as deep as the fan of slivers of a long comb-shaped
+/// polygon (thousands of wide levels) cannot overflow a thread's stack.
 fn convert(
     bvh: &Bvh2,
     plan: &[Choice],
     src: usize,
     nodes: &mut Vec<Node>,
     slots: &mut Vec<u32>,
-) -> Option<u32> {
-    let at = nodes.len();
-    nodes.push(Node::EMPTY);
-    let root = bvh.nodes.get(src)?;
-    let mut lanes: Lanes = ([0; WIDTH], 0);
-    if root.is_leaf() {
-        lay(bvh, plan, src, 1, &mut lanes)?;
-    } else {
-        let kl = usize::from(plan.get(src)?.split[0]);
-        lay(bvh, plan, root.first_index as usize, kl, &mut lanes)?;
-        lay(bvh, plan, root.first_index as usize + 1, WIDTH - kl, &mut lanes)?;
-    }
-    let mut node = Node::EMPTY;
-    for (lane, &k) in lanes.0[..lanes.1].iter().enumerate() {
-        let b = bvh.nodes.get(k)?.aabb();
-        for axis in 0..3 {
-            node.planes[axis][lane] = b.min[axis];
-            node.planes[axis + 3][lane] = b.max[axis];
+) -> Option<()> {
+    // Each entry: a binary node to lay into one lane, and the lane
+    // (wide node, lane) whose child reference it fills (`None`: the root).
+    let mut todo: Vec<(usize, Option<(usize, usize)>)> = vec![(src, None)];
+    while let Some((k, into)) = todo.pop() {
+        let reference = if into.is_some() && plan.get(k)?.leaf {
+            leaf(bvh, k, slots)?
+        } else {
+            let at = nodes.len();
+            let root = bvh.nodes.get(k)?;
+            let mut lanes: Lanes = ([0; WIDTH], 0);
+            if root.is_leaf() {
+                lay(bvh, plan, k, 1, &mut lanes)?;
+            } else {
+                let kl = usize::from(plan.get(k)?.split[0]);
+                lay(bvh, plan, root.first_index as usize, kl, &mut lanes)?;
+                lay(bvh, plan, root.first_index as usize + 1, WIDTH - kl, &mut lanes)?;
+            }
+            let mut node = Node::EMPTY;
+            for (lane, &c) in lanes.0[..lanes.1].iter().enumerate() {
+                let b = bvh.nodes.get(c)?.aabb();
+                for axis in 0..3 {
+                    node.planes[axis][lane] = b.min[axis];
+                    node.planes[axis + 3][lane] = b.max[axis];
+                }
+            }
+            nodes.push(node);
+            // Last lane pushed first, so the first lane's subtree is laid next.
+            todo.extend(lanes.0[..lanes.1].iter().enumerate().rev().map(|(lane, &c)| (c, Some((at, lane)))));
+            u32::try_from(at).ok()?
+        };
+        if let Some((parent, lane)) = into {
+            *nodes.get_mut(parent)?.child.get_mut(lane)? = reference;
         }
-        node.child[lane] =
-            if plan.get(k)?.leaf { leaf(bvh, k, slots)? } else { convert(bvh, plan, k, nodes, slots)? };
     }
-    nodes[at] = node;
-    u32::try_from(at).ok()
+    Some(())
 }
 
 /// Appends one leaf's block of slots for the primitives of the subtree of
@@ -1173,6 +1189,37 @@ mod tests {
             assert!((got - want).abs() <= 1e-4 * want, "case {case}: {got} against the cheapest {want}");
         }
         assert!(leaves_merged > 0, "some plan merged binary leaves into one");
+    }
+
+    /// A binary tree that is one long chain (each inner node a leaf and
+    /// the rest, as a polygon's fan of slivers builds) converts into a
+    /// wide tree thousands of nodes deep on a thread of a 256 KiB stack:
+    /// the conversion does not recurse per level.
+    #[test]
+    fn a_chain_thousands_deep_converts_on_a_small_stack() {
+        const N: usize = 50_000;
+        let x_box = |lo: usize, hi: usize| {
+            obvhs::aabb::Aabb::new(Vec3A::new(lo as f32, 0.0, 0.0), Vec3A::new(hi as f32, 1.0, 1.0))
+        };
+        // Node 2j (j < N - 1): the inner node over leaves j..N, children at
+        // 2j + 1 (leaf j) and 2j + 2; node 2(N - 1): leaf N - 1.
+        let mut nodes = Vec::with_capacity(2 * N - 1);
+        for j in 0..N - 1 {
+            nodes.push(obvhs::bvh2::node::Bvh2Node::new(x_box(j, N), 0, 2 * j as u32 + 1));
+            nodes.push(obvhs::bvh2::node::Bvh2Node::new(x_box(j, j + 1), 1, j as u32));
+        }
+        nodes.push(obvhs::bvh2::node::Bvh2Node::new(x_box(N - 1, N), 1, N as u32 - 1));
+        let bvh = Bvh2 { nodes, primitive_indices: (0..N as u32).collect(), ..Bvh2::default() };
+        let converted = std::thread::Builder::new()
+            .stack_size(256 * 1024)
+            .spawn(move || WideBvh::from_bvh2(&bvh, 1, Kernel::Portable))
+            .map(|t| t.join());
+        let Ok(Ok(Some(w))) = converted else { panic!("not converted: {converted:?}") };
+        let depth = crate::traverse::depth(&w);
+        assert!(depth > N / WIDTH, "a chain {depth} deep");
+        w.validate(|s| w.slots.get(s).map(|&p| ([p as f32, 0.0, 0.0], [p as f32 + 1.0, 1.0, 1.0])));
+        let held: Vec<u32> = w.slots.iter().copied().filter(|&s| s != PAD).collect();
+        assert_eq!(held, (0..N as u32).collect::<Vec<_>>(), "every primitive once, in order");
     }
 
     #[test]
