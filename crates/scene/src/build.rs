@@ -416,6 +416,18 @@ impl<'a> Build<'a> {
             )
         };
         let m = material::from_mtl(raw, &Location::file(&obj.path), named_at, image)?;
+        if let Some(value) = &raw.diffuse_texture {
+            for option in crate::mtl_map::parse(value).ignored {
+                let w = format!(
+                    "{}: material `{}`: map_Kd option {option} is not applied",
+                    obj.path.display(),
+                    raw.name
+                );
+                if !self.warnings.contains(&w) {
+                    self.warnings.push(w);
+                }
+            }
+        }
         let i = self.materials.add(format!("{obj_name}/{}", raw.name), m);
         if let Some(slot) = self.slots.get_mut(key).and_then(|s| s.mtl_materials.get_mut(k)) {
             *slot = Some(i);

@@ -556,6 +556,7 @@ pub struct TextureDef {
     pub mapping: Option<Spanned<MappingDef>>,
     pub wrap: Option<Spanned<WrapDef>>,
     pub scale: Option<Spanned<Scale2>>,
+    pub offset: Option<Spanned<Scale2>>,
     pub tint: Option<Spanned<Color>>,
 }
 

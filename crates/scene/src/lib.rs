@@ -56,6 +56,7 @@ mod error;
 mod format;
 mod light;
 mod material;
+mod mtl_map;
 mod obj;
 mod obj_view;
 mod object;

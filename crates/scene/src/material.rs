@@ -135,7 +135,7 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
 pub(crate) const CHECKER_KEYS: [&str; 4] = ["a", "b", "size", "space"];
 
 /// The keys of an image texture besides `type`.
-pub(crate) const IMAGE_KEYS: [&str; 5] = ["path", "mapping", "wrap", "scale", "tint"];
+pub(crate) const IMAGE_KEYS: [&str; 6] = ["path", "mapping", "wrap", "scale", "offset", "tint"];
 
 /// The texture of a `texture = { ... }` table.
 fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Texture> {
@@ -150,6 +150,7 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
         ("mapping", span_of(&d.mapping)),
         ("wrap", span_of(&d.wrap)),
         ("scale", span_of(&d.scale)),
+        ("offset", span_of(&d.offset)),
         ("tint", span_of(&d.tint)),
     ];
     let (kname, allowed): (_, &[&str]) = match kind {
@@ -205,8 +206,19 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
                 }
                 None => Vec2::ONE,
             };
+            let offset = match &d.offset {
+                Some(o) => {
+                    let [u, v] = o.get_ref().0;
+                    let off = Vec2::new(u as f32, v as f32);
+                    if !off.is_finite() {
+                        return Err(ctx.invalid(&o.span(), "texture offset must be finite"));
+                    }
+                    off
+                }
+                None => Vec2::ZERO,
+            };
             let tint = ctx.opt_color(d.tint.as_ref(), "texture tint", Vec3::ONE)?;
-            Ok(Texture::Image { image, mapping, scale, tint })
+            Ok(Texture::Image { image, mapping, scale, offset, tint })
         }
     }
 }
@@ -303,11 +315,13 @@ pub(crate) fn from_mtl(
         m.transparency /= sum;
         m.transmission /= sum;
     }
-    if raw.diffuse_texture.is_some() {
+    if let Some(value) = &raw.diffuse_texture {
+        let map = crate::mtl_map::parse(value);
         m.texture = Texture::Image {
             image: image()?,
             mapping: Mapping::Uv,
-            scale: Vec2::ONE,
+            scale: map.scale,
+            offset: map.offset,
             tint: kd.unwrap_or(Vec3::ONE),
         };
     }

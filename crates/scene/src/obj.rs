@@ -330,6 +330,10 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
                 if words.next().is_none() {
                     return Err((i + 1, format!("`{key}` needs a file name")));
                 }
+                let value = line.trim_start().get(key.len()..).unwrap_or("");
+                if crate::mtl_map::parse(value).name.is_empty() {
+                    return Err((i + 1, format!("`{key}` needs a file name after its options")));
+                }
                 continue;
             }
             Some("illum") => {
@@ -614,6 +618,10 @@ mod tests {
             ),
             ("newmtl a\nKd 1 0 0\nmap_Kd\n", "/s/m.mtl:3: `map_Kd` needs a file name"),
             ("newmtl a\nmap_Kd   # no file\n", "/s/m.mtl:2: `map_Kd` needs a file name"),
+            (
+                "newmtl a\nmap_Kd -s 2 2 1 -clamp on\n",
+                "/s/m.mtl:2: `map_Kd` needs a file name after its options",
+            ),
         ] {
             let e = error(mtl);
             assert_eq!(e, format!("cannot use material library {words}"), "{mtl}");
@@ -625,6 +633,7 @@ mod tests {
         }
         // What tobj reads stays readable.
         assert_eq!(error("newmtl a\nillum 2\nmap_Kd tex.png\nbump -bm 1 n.png\n"), "");
+        assert_eq!(error("newmtl a\nmap_Kd -s 2 2 1 -o 0.5 0 0 -mm 0 1 t.png # tiles\n"), "");
     }
 
     #[test]

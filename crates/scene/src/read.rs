@@ -11,6 +11,7 @@
 
 use crate::error::{Location, SceneError};
 use crate::format::{ObjectKind, SceneFile, TextureKind};
+use crate::mtl_map;
 use crate::obj::{self, NormalMode, ObjFile};
 use crate::{MAX_SCENE_BYTES, MemoryRoom};
 use prism_shade::{ImageTexture, TextureCost, Wrap};
@@ -211,9 +212,9 @@ impl<'a> Reader<'a> {
                 // it is found), else to the OBJ file.
                 let dirs = obj.mtl_files.iter().filter_map(|m| m.parent());
                 let found = dirs.map(|m| mtl_texture_path(m, tex)).find(Result::is_ok);
-                let t = found
-                    .unwrap_or_else(|| mtl_texture_path(&dir, tex))
-                    .and_then(|p| self.image(p, Wrap::Repeat));
+                let wrap = if mtl_map::parse(tex).clamp { Wrap::Clamp } else { Wrap::Repeat };
+                let t =
+                    found.unwrap_or_else(|| mtl_texture_path(&dir, tex)).and_then(|p| self.image(p, wrap));
                 self.res.mtl_textures.insert(key, t);
             }
         }
@@ -274,14 +275,10 @@ fn fits(room: Option<MemoryRoom>, kept: u64, c: &TextureCost) -> Result<(), Stri
     ))
 }
 
-/// The file an MTL material's `map_Kd` value names in `dir`: the value as
-/// a file name if there is such a file, else its last word (options such
-/// as `-s 1 1 1` come before the name); checked to be a regular file.
+/// The file an MTL material's `map_Kd` value names in `dir` (the name
+/// after its options, [`mtl_map::parse`]), checked to be a regular file.
 fn mtl_texture_path(dir: &Path, value: &str) -> Result<PathBuf, Failure> {
-    let direct = dir.join(value.trim());
-    let path =
-        if direct.is_file() { direct } else { dir.join(value.split_whitespace().last().unwrap_or("")) };
-    checked(path, "texture named in a material library")
+    checked(dir.join(mtl_map::parse(value).name), "texture named in a material library")
 }
 
 /// `raw` resolved against `base`, checked to be a regular file; its

@@ -81,6 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     image: planet,
                     mapping: Mapping::Spherical,
                     scale: Vec2::ONE,
+                    offset: Vec2::ZERO,
                     tint: Vec3::ONE,
                 },
                 ..Material::diffuse(Vec3::ONE)

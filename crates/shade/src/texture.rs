@@ -72,6 +72,10 @@ pub enum Texture {
         mapping: Mapping,
         /// uv multiplier (repeat count).
         scale: Vec2,
+        /// Added after the scale: the image is read at `uv * scale +
+        /// offset` (an MTL map's `-s` and `-o`; a texture's `scale` and
+        /// `offset` in the scene file).
+        offset: Vec2,
         /// Tint multiplied in.
         tint: Vec3,
     },
@@ -133,7 +137,7 @@ impl Texture {
                     *a * (1.0 - t) + *b * t
                 }
             }
-            Texture::Image { image, mapping, scale, tint } => {
+            Texture::Image { image, mapping, scale, offset, tint } => {
                 let (uv, duv) = match mapping {
                     Mapping::Uv => (uv, fp.duv),
                     _ => {
@@ -149,7 +153,7 @@ impl Texture {
                         (at, duv)
                     }
                 };
-                image.sample_over(uv * *scale, duv.map(|d| d * *scale)) * *tint
+                image.sample_over(uv * *scale + *offset, duv.map(|d| d * *scale)) * *tint
             }
         }
     }
@@ -182,10 +186,13 @@ impl Texture {
                 }
                 Ok(())
             }
-            Texture::Image { scale, tint, .. } => {
+            Texture::Image { scale, offset, tint, .. } => {
                 check_color(*tint)?;
                 if !scale.is_finite() {
                     return Err(ShadeError::Material("texture scale must be finite".into()));
+                }
+                if !offset.is_finite() {
+                    return Err(ShadeError::Material("texture offset must be finite".into()));
                 }
                 Ok(())
             }
@@ -585,6 +592,7 @@ mod tests {
             image: img,
             mapping: Mapping::Planar,
             scale: Vec2::ONE,
+            offset: Vec2::ZERO,
             tint: Vec3::new(1.0, 0.5, 0.0),
         };
         // The object sits at x = 10: world x = 10.75 is object x = 0.75.

@@ -273,6 +273,7 @@ fn image_textures_use_coarser_mip_levels_far_away() {
             image: Arc::new(image.clone()),
             mapping: Mapping::Planar,
             scale: Vec2::splat(0.125),
+            offset: Vec2::ZERO,
             tint: Vec3::ONE,
         };
         let plane = Plane::new(Vec3::ZERO, Vec3::Y).expect("valid").into();
@@ -315,8 +316,13 @@ fn mesh_uv_footprint_selects_the_mip_level() {
     )
     .expect("valid mesh");
     let render_at = |z: f32, point_textures: bool| {
-        let t =
-            Texture::Image { image: image.clone(), mapping: Mapping::Uv, scale: Vec2::ONE, tint: Vec3::ONE };
+        let t = Texture::Image {
+            image: image.clone(),
+            mapping: Mapping::Uv,
+            scale: Vec2::ONE,
+            offset: Vec2::ZERO,
+            tint: Vec3::ONE,
+        };
         let scene = Scene {
             accel: Accel::build(
                 vec![Arc::new(quad.clone())],

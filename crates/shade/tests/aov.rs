@@ -220,8 +220,13 @@ fn sheared_box_faces_report_inverse_transpose_normals() {
 fn textured_sphere_albedo_is_the_texture_lookup() {
     let image = distinct_texture();
     let tint = Vec3::new(1.0, 0.5, 0.25);
-    let tex =
-        Texture::Image { image: image.clone(), mapping: prism_shade::Mapping::Uv, scale: Vec2::ONE, tint };
+    let tex = Texture::Image {
+        image: image.clone(),
+        mapping: prism_shade::Mapping::Uv,
+        scale: Vec2::ONE,
+        offset: Vec2::ZERO,
+        tint,
+    };
     let (w, h) = (41u32, 41u32);
     let cam = camera(Vec3::new(1.0, 2.0, 5.0), Vec3::ZERO, Vec3::Y, 30.0, w, h);
     // Lit from nowhere and dark: albedo is the texture, not the radiance.

@@ -58,6 +58,7 @@ fn busy_scene(w: u32, h: u32) -> Shot {
                     image: Arc::new(planet),
                     mapping: Mapping::Spherical,
                     scale: Vec2::ONE,
+                    offset: Vec2::ZERO,
                     tint: Vec3::ONE,
                 }),
             ),
@@ -184,6 +185,7 @@ fn degenerate_inputs_never_make_nan() {
         image: Arc::new(ImageTexture::from_linear(1, 1, vec![Vec3::ONE], Wrap::Clamp).expect("valid")),
         mapping: Mapping::Cylindrical,
         scale: Vec2::ZERO,
+        offset: Vec2::ZERO,
         tint: Vec3::ONE,
     });
     for mode in [

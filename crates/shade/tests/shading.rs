@@ -274,6 +274,7 @@ fn ramp_wall() -> (prism_geometry::Shape, Material) {
         image: std::sync::Arc::new(ramp),
         mapping: prism_shade::Mapping::Uv,
         scale: prism_geometry::glam::Vec2::new(0.125, 0.125),
+        offset: prism_geometry::glam::Vec2::ZERO,
         tint: Vec3::ONE,
     };
     (plane(Vec3::new(-2.0, 0.0, -3.0), Vec3::Z), flat_texture(t))
@@ -556,6 +557,7 @@ fn sphere_texture_follows_the_documented_formula() {
         image: image.clone(),
         mapping,
         scale: prism_geometry::glam::Vec2::ONE,
+        offset: prism_geometry::glam::Vec2::ZERO,
         tint: Vec3::ONE,
     };
     let cam = camera(Vec3::new(1.0, 2.0, 5.0), Vec3::ZERO, Vec3::Y, 30.0, 31, 31);
@@ -610,6 +612,7 @@ fn cylindrical_mapping_is_about_the_shapes_own_axis() {
         image: distinct_texture(),
         mapping: prism_shade::Mapping::Cylindrical,
         scale: prism_geometry::glam::Vec2::ONE,
+        offset: prism_geometry::glam::Vec2::ZERO,
         tint: Vec3::ONE,
     });
     let cam = camera(Vec3::new(4.0, 1.0, 6.0), Vec3::new(3.0, 0.0, 0.0), Vec3::Y, 40.0, 31, 31);

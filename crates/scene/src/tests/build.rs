@@ -9,7 +9,7 @@ use crate::format::SceneFile;
 use crate::obj::{NormalMode, ObjFile, ObjModel};
 use crate::read::{Failure, Resources, TextureFile};
 use prism_geometry::TriangleMesh;
-use prism_geometry::glam::Vec3;
+use prism_geometry::glam::{Vec2, Vec3};
 use prism_shade::{ImageTexture, Texture, Wrap};
 use std::sync::Arc;
 
@@ -152,6 +152,29 @@ fn errors_point_at_the_value_in_the_string() {
         err,
         format!("{}: internal error: `mem/other.png` was not read", place_of(&text, "\"mem/other.png\""))
     );
+}
+
+#[test]
+fn an_image_texture_offset_is_read_and_a_non_finite_one_refused_at_its_place() {
+    let res = resources();
+    let text = format!(
+        "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", offset = [0.5, -0.25] }}\n"
+    );
+    let loaded = build(&text, &res).unwrap();
+    let image = loaded.scene.materials.iter().find_map(|m| match &m.texture {
+        Texture::Image { offset, scale, .. } => Some((*offset, *scale)),
+        _ => None,
+    });
+    assert_eq!(image, Some((Vec2::new(0.5, -0.25), Vec2::ONE)));
+    for offset in ["inf", "[0, nan]"] {
+        let text = format!(
+            "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", offset = {offset} }}\n"
+        );
+        let (line, column) =
+            line_col(&text, text.find(&format!("offset = {offset}")).unwrap() + "offset = ".len());
+        let err = build(&text, &res).err().map(|e| e.to_string()).unwrap_or_default();
+        assert_eq!(err, format!("mem.toml:{line}:{column}: texture offset must be finite"));
+    }
 }
 
 #[test]

@@ -58,7 +58,7 @@ fn a_misspelt_key_gets_a_suggestion_and_the_keys_of_its_shape() {
     expect_err(
         "[materials.m]\ntexture = { type = \"checker\", sise = 2 }\n",
         "unknown key `sise`; did you mean `size`? (a checker texture takes: type, a, b, size, space; \
-         an image texture: type, path, mapping, wrap, scale, tint)",
+         an image texture: type, path, mapping, wrap, scale, offset, tint)",
     );
     // Pass and filter names.
     let with =
