@@ -387,12 +387,15 @@ impl<'a> Build<'a> {
         let without_texture;
         let raw = match found {
             Some(Err(Failure::Read { what, path, reason })) => {
-                self.warnings.push(format!(
+                let w = format!(
                     "{}: material `{}`: cannot read {what} {}: {reason}; using its colour (Kd) instead",
                     obj.path.display(),
                     raw.name,
                     path.display()
-                ));
+                );
+                if !self.warnings.contains(&w) {
+                    self.warnings.push(w);
+                }
                 without_texture = tobj::Material { diffuse_texture: None, ..raw.clone() };
                 &without_texture
             }

@@ -316,12 +316,22 @@ pub(crate) fn from_mtl(
         m.transmission /= sum;
     }
     if let Some(value) = &raw.diffuse_texture {
+        // `-s` and `-o` act on the file's own `v`, up from the image's
+        // bottom; the mesh holds `1 − v` (down from the top, as images
+        // are read), so `v_file × s + o` is `v × s + (1 − s − o)` here.
         let map = crate::mtl_map::parse(value);
+        let offset = Vec2::new(map.offset.x, 1.0 - map.scale.y - map.offset.y);
+        if !offset.is_finite() {
+            return Err(asset(format!(
+                "the map_Kd of material `{}` has a scale and offset too large to add up: `{value}`",
+                raw.name
+            )));
+        }
         m.texture = Texture::Image {
             image: image()?,
             mapping: Mapping::Uv,
             scale: map.scale,
-            offset: map.offset,
+            offset,
             tint: kd.unwrap_or(Vec3::ONE),
         };
     }

@@ -330,10 +330,6 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
                 if words.next().is_none() {
                     return Err((i + 1, format!("`{key}` needs a file name")));
                 }
-                let value = line.trim_start().get(key.len()..).unwrap_or("");
-                if crate::mtl_map::parse(value).name.is_empty() {
-                    return Err((i + 1, format!("`{key}` needs a file name after its options")));
-                }
                 continue;
             }
             Some("illum") => {
@@ -618,10 +614,6 @@ mod tests {
             ),
             ("newmtl a\nKd 1 0 0\nmap_Kd\n", "/s/m.mtl:3: `map_Kd` needs a file name"),
             ("newmtl a\nmap_Kd   # no file\n", "/s/m.mtl:2: `map_Kd` needs a file name"),
-            (
-                "newmtl a\nmap_Kd -s 2 2 1 -clamp on\n",
-                "/s/m.mtl:2: `map_Kd` needs a file name after its options",
-            ),
         ] {
             let e = error(mtl);
             assert_eq!(e, format!("cannot use material library {words}"), "{mtl}");

@@ -1,6 +1,9 @@
 //! An MTL material's `map_Kd` options, rendered: `-s` scales an OBJ
 //! quad's texture coordinates, `-o` offsets them, `-clamp on` clamps them,
-//! and options prism does not apply are named in a warning.
+//! and options prism does not apply are named in a warning. The expected
+//! pictures are those of three.js's MTL loader and Blender's OBJ
+//! importer: `uv × s + o` in the file's own coordinates, `v` up from the
+//! image's bottom.
 //!
 //! The texture is a labelled image (top-left red, top-right green,
 //! bottom-left blue, bottom-right yellow) on a unit quad whose corners
@@ -70,7 +73,7 @@ fn cells(loaded: &LoadedScene) -> [String; 4] {
 fn map_kd_scale_offset_and_clamp_move_the_texture() {
     let dir = tempfile::tempdir().expect("temp dir");
     let d = dir.path();
-    let cases: [(&str, [&str; 4]); 7] = [
+    let cases: [(&str, [&str; 4]); 11] = [
         // The image as an image viewer shows it.
         ("labels.png", ["RRGG", "RRGG", "BBYY", "BBYY"]),
         // Half a repeat along u: the left and right halves swap.
@@ -85,6 +88,15 @@ fn map_kd_scale_offset_and_clamp_move_the_texture() {
         ("-s -1 1 1 labels.png", ["GGRR", "GGRR", "YYBB", "YYBB"]),
         // Scale, then offset: u' = 2u + 0.5.
         ("-s 2 1 -o 0.5 0 labels.png", ["GRGR", "GRGR", "YBYB", "YBYB"]),
+        // A quarter along u: the image moves a quarter to the left.
+        ("-o 0.25 0 labels.png", ["RGGR", "RGGR", "BYYB", "BYYB"]),
+        // A quarter along v, which runs up from the image's bottom as the
+        // file's own `vt` do: the image moves a quarter down.
+        ("-o 0 0.25 labels.png", ["BBYY", "RRGG", "RRGG", "BBYY"]),
+        // Half across v: the quad shows the image's bottom half.
+        ("-s 1 0.5 labels.png", ["BBYY", "BBYY", "BBYY", "BBYY"]),
+        // Twice across v, clamped: the top three quarters hold the top row.
+        ("-s 1 2 -clamp on labels.png", ["RRGG", "RRGG", "RRGG", "BBYY"]),
     ];
     for (map_kd, want) in cases {
         let loaded = load(d, map_kd);
