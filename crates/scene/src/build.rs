@@ -205,6 +205,14 @@ impl<'a> Build<'a> {
         Ok(())
     }
 
+    /// A warning, unless the same one was given already (a file used by
+    /// several objects, or read once per normals mode).
+    fn warn_once(&mut self, w: String) {
+        if !self.warnings.contains(&w) {
+            self.warnings.push(w);
+        }
+    }
+
     /// A warning about the scene file.
     fn warn(&mut self, message: &str) {
         self.warnings.push(format!("{}: {message}", self.ctx.file.display()));
@@ -294,9 +302,7 @@ impl<'a> Build<'a> {
         }
         if material.is_none() {
             for w in &obj.unknown_materials {
-                if !self.warnings.contains(w) {
-                    self.warnings.push(w.clone());
-                }
+                self.warn_once(w.clone());
             }
         }
         let Some(slot) = self.slots.get_mut(&key) else {
@@ -330,9 +336,7 @@ impl<'a> Build<'a> {
             }
             // Once, though the file is read again for each normals mode.
             for w in &obj.warnings {
-                if !self.warnings.contains(w) {
-                    self.warnings.push(w.clone());
-                }
+                self.warn_once(w.clone());
             }
             let mut models = Vec::with_capacity(obj.models.len());
             let (mut triangles, mut degenerate) = (0, 0);
@@ -393,9 +397,7 @@ impl<'a> Build<'a> {
                     raw.name,
                     path.display()
                 );
-                if !self.warnings.contains(&w) {
-                    self.warnings.push(w);
-                }
+                self.warn_once(w);
                 without_texture = tobj::Material { diffuse_texture: None, ..raw.clone() };
                 &without_texture
             }
@@ -426,9 +428,7 @@ impl<'a> Build<'a> {
                     obj.path.display(),
                     raw.name
                 );
-                if !self.warnings.contains(&w) {
-                    self.warnings.push(w);
-                }
+                self.warn_once(w);
             }
         }
         let i = self.materials.add(format!("{obj_name}/{}", raw.name), m);
