@@ -11,7 +11,7 @@ use glam::{DVec2, DVec3, Vec3};
 
 /// Cuts the polygon whose corners are `corners`, in order, into
 /// `corners.len() - 2` triangles of indices into `corners`, each wound as
-/// the polygon is.
+/// the polygon is (fewer where the outline is cut at a pinch, below).
 ///
 /// The polygon is seen in the plane across its largest-area axis (its
 /// Newell normal), and ears are clipped from that outline: a triangle of
@@ -28,15 +28,15 @@ use glam::{DVec2, DVec3, Vec3};
 /// An outline that passes a place exactly twice (two parts meeting at a
 /// point, a hole meeting the outer edge at a corner, a spike out and
 /// straight back) is first cut there into its parts, each clipped on its
-/// own; triangles of zero area at a pinch stand in for
-/// those the cuts save (two a part, one a corner of a spike).
+/// own: a part cut off takes two triangles fewer than its corners would in
+/// the whole, and a spike none.
 ///
 /// This is exact for simple polygons, for a face with a hole reached
 /// through a keyhole cut (an outline that runs in and back out along the
 /// same edge), and for such pinches. Where no ear is left (an outline that
 /// crosses itself, or passes a place three or more times, or corners all
 /// in one line), the rest is cut as a fan, so that the number of triangles
-/// is always `corners.len() - 2` (none for fewer than three corners);
+/// is still `corners.len() - 2` (none for fewer than three corners);
 /// triangles of zero area may result, as they would from the input
 /// anyway.
 #[must_use]
@@ -58,7 +58,7 @@ pub fn triangulate(corners: &[Vec3]) -> Vec<[u32; 3]> {
         fan(&(0..n).collect::<Vec<_>>(), &mut |t| out.push(index(t)));
         return out;
     };
-    let Some(Pinched { pieces, seam }) = Pinched::cut(&flat) else {
+    let Some(pieces) = Pinched::cut(&flat) else {
         clip(&flat, &mut |t| out.push(index(t)));
         return out;
     };
@@ -68,10 +68,6 @@ pub fn triangulate(corners: &[Vec3]) -> Vec<[u32; 3]> {
         at.extend(piece.iter().map(|&i| flat[i]));
         clip(&at, &mut |t| out.push(index(t.map(|k| piece[k]))));
     }
-    // A part cut off at a pinch takes two triangles fewer than its
-    // corners would in the whole, a dropped spike one per corner: triangles
-    // of no area at a pinch keep the count.
-    out.resize(n - 2, index([seam.0, seam.1, seam.1]));
     out
 }
 
@@ -181,20 +177,26 @@ const NONE: usize = usize::MAX;
 /// Without these cuts an ear at a pinch could reach over into the other
 /// part, or no ear be found and the rest be cut as a fan, covering what is
 /// not the polygon's. A place passed three or more times is left as it is.
-struct Pinched {
-    /// The pieces' corners (indices into the outline), each an outline of
-    /// its own that turns the polygon's way.
-    pieces: Vec<Vec<usize>>,
-    /// The two visits of a pinch that was cut, for the triangles of no
-    /// area that stand in for what the cuts leave out.
-    seam: (usize, usize),
+struct Pinched<'a> {
+    at: &'a [DVec2],
+    /// The other visit of each corner's place, where it has exactly two.
+    twin: Vec<usize>,
 }
 
-impl Pinched {
-    /// The outline `at` (counter-clockwise) cut at its pinches; `None`
-    /// where it has none to cut, or where the cut does not leave a
-    /// counter-clockwise remainder (then the outline is clipped whole).
-    fn cut(at: &[DVec2]) -> Option<Self> {
+impl<'a> Pinched<'a> {
+    /// A stretch whose area is at most this fraction of its perimeter's
+    /// square has none: what the rounding of f32 corners in a tilted plane
+    /// leaves of a spike out and back along a line through corners of its
+    /// own. (A part or hole that thin, a thousand times longer than wide,
+    /// covers less than a pixel's width wherever it is seen whole.)
+    const FLAT: f64 = 1e-6;
+
+    /// The outline `at` (counter-clockwise) cut at its pinches into
+    /// pieces that each turn the polygon's way, their corners as indices
+    /// into `at`, each from its first corner in the file's order; `None`
+    /// where it has none to cut, or where the cut does not leave the rest
+    /// counter-clockwise (then the outline is clipped whole).
+    fn cut(at: &'a [DVec2]) -> Option<Vec<Vec<usize>>> {
         let n = at.len();
         // `+ 0.0` makes -0.0 and 0.0 one place.
         let place = |i: usize| ((at[i].x + 0.0).to_bits(), (at[i].y + 0.0).to_bits());
@@ -210,42 +212,61 @@ impl Pinched {
         if twin.iter().all(|&t| t == NONE) {
             return None;
         }
+        let this = Self { at, twin };
         // The lowest of the leftmost corners is on the outer boundary, so a
-        // walk from it meets each piece between its pinch's two visits. If
-        // it is a pinch itself, the stretch from one of its visits to the
-        // other may be the outer boundary rather than a piece: then the
-        // walk from the other visit is the one to take.
-        let lowest = (0..n).min_by(|&a, &b| at[a].x.total_cmp(&at[b].x).then(at[a].y.total_cmp(&at[b].y)))?;
-        let first = Self::walk(at, &twin, lowest);
-        if first.is_none() && twin[lowest] != NONE {
-            return Self::walk(at, &twin, twin[lowest]);
+        // walk from it meets each piece between its pinch's two visits,
+        // unless it is itself a pinch (then the stretch from one of its
+        // visits to the other may be the outer boundary, and the walk from
+        // the other visit is the one to take) or on a spike (whose zero
+        // area is then what the walk leaves, and is dropped).
+        let key = |i: usize| (at[i].x + 0.0, at[i].y + 0.0);
+        let lowest = (0..n).min_by(|&a, &b| {
+            let (p, q) = (key(a), key(b));
+            p.0.total_cmp(&q.0).then(p.1.total_cmp(&q.1))
+        })?;
+        let mut pieces = this.walk(lowest);
+        if pieces.is_none() && this.twin[lowest] != NONE {
+            pieces = this.walk(this.twin[lowest]);
         }
-        first
+        let mut pieces = pieces?;
+        for piece in &mut pieces {
+            let first = piece.iter().enumerate().min_by_key(|&(_, &c)| c).map_or(0, |(k, _)| k);
+            piece.rotate_left(first);
+        }
+        Some(pieces)
     }
 
     /// One walk along the outline from corner `start`, keeping the corners
     /// on a stack and cutting off the stretch since a pinch's first visit
     /// at its second.
-    fn walk(at: &[DVec2], twin: &[usize], start: usize) -> Option<Self> {
-        let n = at.len();
+    fn walk(&self, start: usize) -> Option<Vec<Vec<usize>>> {
+        let (at, n) = (self.at, self.at.len());
         let o = at[start];
         let cross = |i: usize, j: usize| (at[i] - o).perp_dot(at[j] - o);
         let mut stack: Vec<usize> = Vec::with_capacity(n);
         // Twice the area swept from `o` along the stack up to each corner,
-        // so that a stretch's area takes no walk over it.
-        let mut swept: Vec<f64> = Vec::with_capacity(n);
+        // and the length walked, so that a stretch's area and perimeter
+        // take no walk over it.
+        let mut swept: Vec<(f64, f64)> = Vec::with_capacity(n);
+        // (twice the area, perimeter) of the stack from position `s` on,
+        // closed back to its start.
+        let stretch = |stack: &[usize], swept: &[(f64, f64)], s: usize| {
+            let top = stack.len() - 1;
+            let close = (cross(stack[top], stack[s]), at[stack[top]].distance(at[stack[s]]));
+            (swept[top].0 - swept[s].0 + close.0, swept[top].1 - swept[s].1 + close.1)
+        };
+        let flat = |(area, perimeter): (f64, f64)| area.abs() <= Self::FLAT * perimeter * perimeter;
         let mut slot = vec![NONE; n];
         let mut pieces = Vec::new();
-        let mut seam = None;
+        let mut cut = false;
         for i in (start..n).chain(0..start) {
-            let t = twin[i];
+            let t = self.twin[i];
             if t != NONE && slot[t] != NONE {
                 let s = slot[t];
-                let top = stack.len() - 1;
-                let area = swept[top] - swept[s] + cross(stack[top], t);
+                let (area, perimeter) = stretch(&stack, &swept, s);
                 let corners = stack.len() - s;
-                if corners <= 2 || area >= 0.0 {
-                    if corners > 2 && area > 0.0 {
+                if corners <= 2 || area >= 0.0 || flat((area, perimeter)) {
+                    if corners > 2 && !flat((area, perimeter)) {
                         pieces.push(stack[s..].to_vec());
                     }
                     for &c in &stack[s + 1..] {
@@ -253,26 +274,34 @@ impl Pinched {
                     }
                     stack.truncate(s + 1);
                     swept.truncate(s + 1);
-                    seam.get_or_insert((t, i));
+                    cut = true;
                     continue;
                 }
             }
             let sum = match stack.last() {
-                Some(&last) => swept[swept.len() - 1] + cross(last, i),
-                None => 0.0,
+                Some(&last) => {
+                    let (a, length) = swept[swept.len() - 1];
+                    (a + cross(last, i), length + at[last].distance(at[i]))
+                }
+                None => (0.0, 0.0),
             };
             slot[i] = stack.len();
             stack.push(i);
             swept.push(sum);
         }
-        let seam = seam?;
-        let last = *stack.last()?;
-        let rest = swept[swept.len() - 1] + cross(last, stack[0]);
-        if !(rest > 0.0) {
+        if !cut {
             return None;
         }
-        pieces.push(stack);
-        Some(Self { pieces, seam })
+        // What is left: a part, nothing (a spike the walk started on), or
+        // a hole (the walk started inside it: the cut does not hold).
+        let rest = stretch(&stack, &swept, 0);
+        if stack.len() > 2 && !flat(rest) {
+            if rest.0 < 0.0 {
+                return None;
+            }
+            pieces.push(stack);
+        }
+        Some(pieces)
     }
 }
 
@@ -872,8 +901,7 @@ mod tests {
             }
             let c: Vec<Vec3> = lp.iter().map(|&(x, y)| Vec3::new(x as f32, y as f32, 0.0)).collect();
             let t = triangulate(&c);
-            assert_eq!(t.len(), c.len() - 2);
-            if !covers_as_wound(&c, &t) {
+            if t.len() > c.len() - 2 || !covers_as_wound(&c, &t) {
                 failed.push(lp);
             }
         }
@@ -886,12 +914,53 @@ mod tests {
         );
     }
 
-    /// Outlines a review found cut wrongly by a first attempt at pinches:
-    /// a spike out of a notch, two holes touching the boundary, and a
-    /// pinch at the origin written as -0.
+    /// Whether the outline `xy` is cut right from every corner, either
+    /// way round, and placed four ways (as it is, moved 1e5 along x,
+    /// tilted out of every axis' plane, and tilted and shrunk by 1e4), each
+    /// checked against the plane's own `xy`; the first placement and
+    /// start that is not.
+    fn cut_right_everywhere(xy: &[(f32, f32)]) -> Result<(), String> {
+        const U: Vec3 = Vec3::new(0.36, 0.48, 0.8);
+        const V: Vec3 = Vec3::new(0.8, -0.6, 0.0);
+        type Place = fn(f32, f32) -> Vec3;
+        let places: [(&str, Place); 4] = [
+            ("as given", |x, y| Vec3::new(x, y, 0.0)),
+            ("moved", |x, y| Vec3::new(x + 1e5, y, 0.0)),
+            ("tilted", |x, y| x * U + y * V),
+            ("tilted and shrunk", |x, y| (x * U + y * V) * 1e-4),
+        ];
+        let n = xy.len();
+        for k in 0..2 * n {
+            let mut lp = xy.to_vec();
+            lp.rotate_left(k % n);
+            if k >= n {
+                lp.reverse();
+            }
+            let flat: Vec<Vec3> = lp.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
+            for (name, place) in places {
+                let c: Vec<Vec3> = lp.iter().map(|&(x, y)| place(x, y)).collect();
+                let t = triangulate(&c);
+                if t.len() > n - 2 || !covers_as_wound(&flat, &t) {
+                    return Err(format!(
+                        "{name}, from corner {} {}: {t:?}",
+                        k % n,
+                        if k >= n { "reversed" } else { "" }
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Outlines two reviews found cut wrongly: a spike out of a notch, two
+    /// holes touching the boundary, pinches at the origin written as -0, a
+    /// hole touching a corner that a lobe touches too, spikes from the
+    /// leftmost corner (where the walk starts), and spikes along a line
+    /// through corners of their own (whose area rounding makes not quite
+    /// zero once tilted).
     #[test]
     fn spikes_and_touching_holes_are_covered() {
-        let cases: [&[(f32, f32)]; 6] = [
+        let cases: [&[(f32, f32)]; 11] = [
             &[(3., 4.), (4., 4.), (0., 1.), (0., 4.), (1., 4.), (2., 3.), (1., 2.), (2., 3.)],
             &[
                 (4., 4.),
@@ -925,12 +994,40 @@ mod tests {
                 (1., 2.),
                 (2., 1.),
             ],
+            &[(0., 0.), (4., 0.), (0., 4.), (-2., 4.), (0., 4.)],
+            &[(0., 4.), (4., 4.), (4., 0.), (2., 0.), (2., -2.), (2., 0.), (0., 0.)],
+            &[
+                (0., 0.),
+                (4., 0.),
+                (4., 4.),
+                (6., 4.),
+                (6., 6.),
+                (4., 4.),
+                (0., 4.),
+                (0., 2.),
+                (-2., 2.),
+                (0., 2.),
+            ],
+            &[(4., 4.), (8., 4.), (12., 0.), (10., 2.), (8., 4.), (8., 8.), (7., 6.), (8., 8.), (4., 8.)],
+            &[
+                (0., 0.),
+                (2., 0.),
+                (2., 1.),
+                (4., 1.),
+                (3., 1.),
+                (2., 1.),
+                (2., 2.),
+                (0., 2.),
+                (0., 1.),
+                (-2., 1.),
+                (-1., 1.),
+                (0., 1.),
+            ],
         ];
         for (k, xy) in cases.iter().enumerate() {
-            let c: Vec<Vec3> = xy.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
-            let t = triangulate(&c);
-            assert_eq!(t.len(), c.len() - 2, "case {k}");
-            assert!(covers_as_wound(&c, &t), "case {k}: {t:?}");
+            if let Err(e) = cut_right_everywhere(xy) {
+                panic!("case {k}: {e}");
+            }
         }
     }
 

@@ -384,6 +384,10 @@ impl<'a> Build<'a> {
             });
         };
         let obj_name = obj.path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        // Messages name the MTL file and line where the material is known
+        // to be defined, else the OBJ file.
+        let place = obj.material_places.get(k);
+        let at = |key: &str| place.map_or_else(|| obj.path.display().to_string(), |p| p.at(key));
         let res = self.res;
         let found = res.mtl_texture(&obj.path, k);
         // A texture file that is missing (or not a file): the material's
@@ -393,7 +397,7 @@ impl<'a> Build<'a> {
             Some(Err(Failure::Read { what, path, reason })) => {
                 let w = format!(
                     "{}: material `{}`: cannot read {what} {}: {reason}; using its colour (Kd) instead",
-                    obj.path.display(),
+                    at("map_Kd"),
                     raw.name,
                     path.display()
                 );
@@ -403,17 +407,17 @@ impl<'a> Build<'a> {
             }
             _ => raw,
         };
-        // A texture that cannot be decoded: which material of which OBJ
-        // file names it (tobj keeps no MTL line).
+        // A texture that cannot be decoded: which material names it, where.
+        let named_by = match place {
+            Some(p) => format!("the map_Kd of material `{}` at {}", raw.name, p.at("map_Kd")),
+            None => format!("the map_Kd of material `{}` in {obj_name}'s MTL", raw.name),
+        };
         let image = || {
             self.image_at(found, named_at.clone(), raw.diffuse_texture.as_deref().unwrap_or("")).map_err(
                 |e| match e {
                     SceneError::Asset { location, message, referenced_at } => SceneError::Asset {
                         location,
-                        message: format!(
-                            "{message} (the map_Kd of material `{}` in {obj_name}'s MTL)",
-                            raw.name
-                        ),
+                        message: format!("{message} ({named_by})"),
                         referenced_at,
                     },
                     other => other,
@@ -425,8 +429,20 @@ impl<'a> Build<'a> {
             for option in crate::mtl_map::parse(value).ignored {
                 let w = format!(
                     "{}: material `{}`: map_Kd option {option} is not applied",
-                    obj.path.display(),
+                    at("map_Kd"),
                     raw.name
+                );
+                self.warn_once(w);
+            }
+        }
+        // The other maps, which prism does not use, once each.
+        for (key, _) in place.map_or(&[][..], |p| &p.maps) {
+            if key != "map_Kd" {
+                let w = format!(
+                    "{}: material `{}`: `{key}` is not used by prism (of the texture maps it reads only map_Kd); {}",
+                    at(key),
+                    raw.name,
+                    unused_map(key)
                 );
                 self.warn_once(w);
             }
@@ -570,4 +586,17 @@ fn mtl_unusable(obj: &ObjFile, e: &str, named_at: &Location) -> SceneError {
 /// error of the loader, or resources given by hand that lack it).
 fn not_read(named_at: Location, raw: &str) -> SceneError {
     SceneError::Invalid { location: named_at, message: format!("internal error: `{raw}` was not read") }
+}
+
+/// What a material looks like without its MTL map `key`, which prism
+/// does not use.
+fn unused_map(key: &str) -> &'static str {
+    match key.to_ascii_lowercase().as_str() {
+        "map_d" => "its d applies all over, so nothing is cut out",
+        "bump" | "map_bump" | "norm" | "map_norm" | "disp" | "map_disp" => "the surface is shaded without it",
+        "map_ks" => "its Ks applies all over",
+        "map_ns" => "its Ns applies all over",
+        "map_ke" => "its Ke applies all over",
+        _ => "the material is rendered without it",
+    }
 }

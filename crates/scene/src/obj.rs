@@ -45,6 +45,60 @@ pub struct ObjFile {
     /// `usemtl` lines naming no material of its libraries (`FILE:LINE:
     /// ...`), a warning wherever its MTL materials are used.
     pub unknown_materials: Vec<String>,
+    /// Where each of `materials` is defined, in the same order (empty
+    /// where the libraries could not be read).
+    pub material_places: Vec<MtlPlace>,
+}
+
+/// Where an MTL material is defined: its `newmtl` line, and the lines of
+/// its texture maps, for messages that name the MTL file rather than the
+/// OBJ file.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MtlPlace {
+    /// The MTL file: the OBJ file's folder joined with the name its
+    /// `mtllib` gives.
+    pub file: PathBuf,
+    /// The `newmtl` line (1-based).
+    pub line: usize,
+    /// Each map statement (`map_Kd`, `map_d`, `bump`, ...) with its line,
+    /// in the file's order.
+    pub maps: Vec<(String, usize)>,
+}
+
+impl MtlPlace {
+    /// `FILE:LINE` of the material's `newmtl`, or of its last statement
+    /// `key` where it has one (the one that counts, as tobj reads it).
+    #[must_use]
+    pub fn at(&self, key: &str) -> String {
+        let line = self.maps.iter().rev().find(|(k, _)| k == key).map_or(self.line, |&(_, l)| l);
+        format!("{}:{line}", self.file.display())
+    }
+}
+
+/// The MTL keys of texture maps (tobj reads some, the rest are other
+/// keys to it): `map_` and any suffix, and the bare names some exporters
+/// write.
+fn is_map_key(key: &str) -> bool {
+    key.starts_with("map_") || matches!(key, "bump" | "disp" | "decal" | "refl" | "norm")
+}
+
+/// The materials the MTL text `text` (as tobj reads it) defines, in order,
+/// placed in `file`.
+fn mtl_places(file: &Path, text: &str) -> Vec<MtlPlace> {
+    let mut out: Vec<MtlPlace> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("");
+        match line.split_whitespace().next() {
+            Some("newmtl") => out.push(MtlPlace { file: file.to_path_buf(), line: i + 1, maps: Vec::new() }),
+            Some(key) if is_map_key(key) => {
+                if let Some(m) = out.last_mut() {
+                    m.maps.push((key.to_owned(), i + 1));
+                }
+            }
+            _ => {}
+        }
+    }
+    out
 }
 
 /// How vertex normals are chosen.
@@ -91,6 +145,7 @@ pub fn load_obj(
     let options = tobj::LoadOptions { triangulate: false, single_index: true, ..Default::default() };
     // A problem found in an MTL file before tobj sees it, with its place.
     let mtl_problem: std::cell::RefCell<Option<String>> = std::cell::RefCell::new(None);
+    let places: std::cell::RefCell<Vec<MtlPlace>> = std::cell::RefCell::new(Vec::new());
     let loader = |p: &Path| {
         let path = dir.join(p);
         let Some(bytes) = read_mtl(&path) else {
@@ -116,10 +171,14 @@ pub fn load_obj(
             *mtl_problem.borrow_mut() = Some(format!("{}:{line}: {m}", path.display()));
             return Err(tobj::LoadError::MaterialParseError);
         }
+        places.borrow_mut().extend(mtl_places(&path, text));
         tobj::load_mtl_buf(&mut BufReader::new(text.as_bytes()))
     };
     let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
         .map_err(|e| (Location::file(path), format!("malformed OBJ: {e}")))?;
+    // tobj lists the libraries' materials in the order of their `newmtl`
+    // lines, library after library.
+    let mut material_places = places.into_inner();
     let (materials, material_error) = match (materials, mtl_problem.into_inner()) {
         (Ok(m), _) => (m, None),
         (Err(_), Some(problem)) => (Vec::new(), Some(format!("cannot use material library {problem}"))),
@@ -130,23 +189,23 @@ pub fn load_obj(
     };
 
     // Each model's positions and triangles, its faces cut in file order.
-    let cut: Vec<(tobj::Model, Vec<Vec3>, Vec<[u32; 3]>)> = models
+    let cut: Vec<(tobj::Model, Vec<Vec3>, Cut)> = models
         .into_iter()
         .map(|model| {
             let m = &model.mesh;
             let positions: Vec<Vec3> =
                 m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-            let indices = polygon_triangles(&m.indices, &m.face_arities, &positions);
-            (model, positions, indices)
+            let cut = polygon_triangles(&m.indices, &m.face_arities, &positions);
+            (model, positions, cut)
         })
         .collect();
-    // Smoothing groups per triangle, if the file has `s` lines and tobj's
-    // models hold its triangles in file order (else they are not used).
-    let total: usize = cut.iter().map(|(_, _, t)| t.len()).sum();
+    // Smoothing groups per face, if the file has `s` lines and tobj's
+    // models hold its faces in file order (else they are not used).
+    let total: usize = cut.iter().map(|(_, _, c)| c.faces()).sum();
     let groups = smoothing_groups(text).filter(|g| g.len() == total);
-    let mut next_tri = 0;
+    let mut next_face = 0;
     let mut out = Vec::with_capacity(cut.len());
-    for (model, positions, indices) in cut {
+    for (model, positions, Cut { triangles: indices, per_face }) in cut {
         let m = model.mesh;
         if m.indices.is_empty() {
             continue;
@@ -157,10 +216,22 @@ pub fn load_obj(
         // OBJ's v runs upward; prism's image rows run downward from v = 0.
         let uvs = (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
-        // The smoothing groups of this model's triangles, in file order.
-        let tris = indices.len();
-        let model_groups = groups.as_ref().and_then(|g| g.get(next_tri..next_tri + tris));
-        next_tri += tris;
+        // The smoothing groups of this model's triangles, in file order:
+        // each face's for each of its triangles.
+        let faces = if per_face.is_empty() { indices.len() } else { per_face.len() };
+        let model_groups: Option<Vec<u32>> =
+            groups.as_ref().and_then(|g| g.get(next_face..next_face + faces)).map(|g| {
+                if per_face.is_empty() {
+                    g.to_vec()
+                } else {
+                    g.iter()
+                        .zip(&per_face)
+                        .flat_map(|(&group, &n)| std::iter::repeat_n(group, n as usize))
+                        .collect()
+                }
+            });
+        let model_groups = model_groups.as_deref();
+        next_face += faces;
         // (file normals, computed with (groups, crease angle)).
         let (given, computed) = match normals {
             NormalMode::Auto | NormalMode::AutoCrease(_) => {
@@ -216,6 +287,9 @@ pub fn load_obj(
             ));
         }
     }
+    if material_places.len() != materials.len() {
+        material_places.clear();
+    }
     Ok(ObjFile {
         path: path.to_path_buf(),
         models: out,
@@ -224,6 +298,7 @@ pub fn load_obj(
         mtl_files,
         warnings,
         unknown_materials,
+        material_places,
     })
 }
 
@@ -245,9 +320,8 @@ fn unknown_usemtl<'t>(text: &'t str, names: &[&str]) -> Vec<(usize, &'t str)> {
     out
 }
 
-/// The smoothing group of every triangle the file's faces make (a face of
-/// `n` corners makes `n − 2`), in file order, or `None` when the file has
-/// no `s` lines. `s off` and `s 0` are group 0 (flat), `s N` group `N`,
+/// The smoothing group of every face, in file order, or `None` when the
+/// file has no `s` lines. `s off` and `s 0` are group 0 (flat), `s N` group `N`,
 /// any other `s` value group 1; faces before the first `s` line are flat,
 /// as the OBJ format's default is.
 fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
@@ -265,33 +339,49 @@ fn smoothing_groups(text: &str) -> Option<Vec<u32>> {
                     Some(w) => w.parse().unwrap_or(1),
                 };
             }
-            Some("f") => {
-                let corners = words.count();
-                out.extend(std::iter::repeat_n(current, corners.saturating_sub(2)));
-            }
+            Some("f") => out.push(current),
             _ => {}
         }
     }
     any.then_some(out)
 }
 
+/// A model's faces cut into triangles.
+struct Cut {
+    /// The triangles, face after face in the file's order.
+    triangles: Vec<[u32; 3]>,
+    /// How many triangles each face gave (empty where every face is a
+    /// triangle).
+    per_face: Vec<u32>,
+}
+
+impl Cut {
+    /// The number of faces.
+    fn faces(&self) -> usize {
+        if self.per_face.is_empty() { self.triangles.len() } else { self.per_face.len() }
+    }
+}
+
 /// A model's faces as triangles, in the file's order: `indices` holds
 /// each face's corners in turn, `arities` how many each face has (empty
 /// when every face is a triangle). A polygon of `n` corners gives `n - 2`
 /// triangles, cut by [`prism_geometry::triangulate`] (a fan would cover
-/// a polygon's notches), so that the smoothing groups' count per face
-/// holds; a point gives `a a a` and a line `a b b` (kept, never hit), as
+/// a polygon's notches; an outline cut where it touches itself gives
+/// fewer); a point gives `a a a` and a line `a b b` (kept, never hit), as
 /// tobj's own triangulation gives them.
-fn polygon_triangles(indices: &[u32], arities: &[u32], positions: &[Vec3]) -> Vec<[u32; 3]> {
+fn polygon_triangles(indices: &[u32], arities: &[u32], positions: &[Vec3]) -> Cut {
     if arities.is_empty() {
-        return indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let triangles = indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        return Cut { triangles, per_face: Vec::new() };
     }
     let mut out = Vec::with_capacity(indices.len());
+    let mut per_face = Vec::with_capacity(arities.len());
     let mut rest = indices;
     let mut corners = Vec::new();
     for &arity in arities {
         let Some((face, tail)) = rest.split_at_checked(arity as usize) else { break };
         rest = tail;
+        let before = out.len();
         match *face {
             [a] => out.push([a, a, a]),
             [a, b] => out.push([a, b, b]),
@@ -304,8 +394,9 @@ fn polygon_triangles(indices: &[u32], arities: &[u32], positions: &[Vec3]) -> Ve
                 out.extend(local.iter().map(|t| t.map(|k| face.get(k as usize).copied().unwrap_or(face[0]))));
             }
         }
+        per_face.push(u32::try_from(out.len() - before).unwrap_or(u32::MAX));
     }
-    out
+    Cut { triangles: out, per_face }
 }
 
 /// Checks the MTL lines that tobj would panic on or that prism would
@@ -513,6 +604,37 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
 mod tests {
     use super::*;
 
+    /// Each material's place, in tobj's order across two libraries, a name
+    /// defined in both included (tobj lists both; the OBJ file uses the
+    /// second).
+    #[test]
+    fn materials_are_placed_in_their_mtl_files() {
+        let obj = "mtllib a.mtl\nmtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wood\nf 1 2 3\n";
+        let a = "# first\nnewmtl wood\nKd 1 0 0\nmap_Kd w.png\n\nnewmtl stone\nbump s.png\n";
+        let b = "newmtl leaf\nmap_d  leaf.png # cut-out\nmap_Kd leaf.png\nnewmtl wood\nmap_Ks k.png\n";
+        let read = |p: &Path| Some(if p.ends_with("a.mtl") { a } else { b }.as_bytes().to_vec());
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
+        let names: Vec<&str> = file.materials.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(names, ["wood", "stone", "leaf", "wood"]);
+        let place = |file: &str, line, maps: &[(&str, usize)]| MtlPlace {
+            file: PathBuf::from(file),
+            line,
+            maps: maps.iter().map(|&(k, l)| (k.to_owned(), l)).collect(),
+        };
+        assert_eq!(
+            file.material_places,
+            [
+                place("/s/a.mtl", 2, &[("map_Kd", 4)]),
+                place("/s/a.mtl", 6, &[("bump", 7)]),
+                place("/s/b.mtl", 1, &[("map_d", 2), ("map_Kd", 3)]),
+                place("/s/b.mtl", 4, &[("map_Ks", 5)]),
+            ]
+        );
+        assert_eq!(file.models[0].material, Some(3));
+        assert_eq!(file.material_places[2].at("map_Kd"), "/s/b.mtl:3");
+        assert_eq!(file.material_places[3].at("map_Kd"), "/s/b.mtl:4");
+    }
+
     /// A U-shaped floor polygon (seen from above, its notch around
     /// x = 1.5, z = 2) and a triangle, loaded from an OBJ.
     #[test]
@@ -541,11 +663,13 @@ mod tests {
         // A triangle, a convex quad (cut as a fan would cut it), a point.
         let idx = [0, 1, 2, 0, 1, 2, 3, 4];
         let arities = [3, 4, 1];
-        assert_eq!(
-            polygon_triangles(&idx, &arities, &positions),
-            vec![[0, 1, 2], [0, 1, 2], [0, 2, 3], [4, 4, 4]]
-        );
-        assert_eq!(polygon_triangles(&[0, 1, 2, 2, 3, 4], &[], &positions), vec![[0, 1, 2], [2, 3, 4]]);
+        let cut = polygon_triangles(&idx, &arities, &positions);
+        assert_eq!(cut.triangles, vec![[0, 1, 2], [0, 1, 2], [0, 2, 3], [4, 4, 4]]);
+        assert_eq!(cut.per_face, [1, 2, 1]);
+        let cut = polygon_triangles(&[0, 1, 2, 2, 3, 4], &[], &positions);
+        assert_eq!(cut.triangles, vec![[0, 1, 2], [2, 3, 4]]);
+        assert!(cut.per_face.is_empty());
+        assert_eq!(cut.faces(), 2);
     }
 
     #[test]
@@ -637,9 +761,34 @@ mod tests {
     }
 
     #[test]
-    fn smoothing_groups_per_triangle() {
+    fn smoothing_groups_per_face() {
         assert_eq!(smoothing_groups("v 0 0 0\nf 1 2 3\n"), None);
         let text = "f 1 2 3\ns 1\nf 1 2 3 4\ns off\nf 1 2 3\ns 7 # comment\nf 1 2 3\ns 0\nf 3 2 1\n";
-        assert_eq!(smoothing_groups(text), Some(vec![0, 1, 1, 0, 7, 0]));
+        assert_eq!(smoothing_groups(text), Some(vec![0, 1, 0, 7, 0]));
+    }
+
+    /// A face cut at a pinch gives fewer than `n - 2` triangles; the
+    /// smoothing groups of the faces after it still reach their own
+    /// triangles: two triangles folded by 30° (under the crease angle) in
+    /// `s off` stay flat.
+    #[test]
+    fn smoothing_groups_hold_after_a_face_cut_at_a_pinch() {
+        // A triangle with a spike (corner 3 passed twice), then the fold.
+        let obj = "v -2 -2 0\nv 2 -2 0\nv 0 0 0\nv 0 2 0\nv -2 2 0\n\
+                   v 5 0 0\nv 6 0 0\nv 5 1 0\nv 6 1 0.57735\n\
+                   s 1\nf 1 2 3 4 3 5\ns off\nf 6 7 8\nf 8 7 9\n";
+        let file = load_obj(Path::new("/s/p.obj"), obj.as_bytes(), NormalMode::Auto, &|_| None).unwrap();
+        let mesh = &file.models[0].mesh;
+        // The spiked triangle: 2 triangles (not 4), then the two.
+        assert_eq!(mesh.len(), 4);
+        let normals = mesh.normals().unwrap();
+        for f in 2..4 {
+            let [a, b, c] = mesh.triangle(f);
+            let face = (b - a).cross(c - a).normalize();
+            for &i in &mesh.indices()[f] {
+                let n = normals[i as usize];
+                assert!(n.dot(face) > 0.9999, "face {f}: vertex normal {n} against the face's {face}");
+            }
+        }
     }
 }

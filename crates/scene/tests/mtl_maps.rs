@@ -24,7 +24,7 @@ const LABELS: [(char, Vec3); 4] = [
 ];
 const SIZE: u32 = 64;
 
-fn write_files(dir: &Path, map_kd: &str) {
+fn write_files(dir: &Path, map_kd: &str, more: &str) {
     let img = image::RgbImage::from_fn(32, 32, |x, y| {
         let c = LABELS[usize::from(x >= 16) + 2 * usize::from(y >= 16)].1;
         image::Rgb(c.to_array().map(|v| (v * 255.0) as u8))
@@ -33,13 +33,18 @@ fn write_files(dir: &Path, map_kd: &str) {
     let obj = "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
                usemtl labels\nf 1/1 2/2 3/3 4/4\n";
     std::fs::write(dir.join("quad.obj"), obj).expect("can write the OBJ");
-    let mtl = format!("newmtl labels\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nmap_Kd {map_kd}\n");
+    let mtl = format!("newmtl labels\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nmap_Kd {map_kd}\n{more}");
     std::fs::write(dir.join("quad.mtl"), mtl).expect("can write the MTL");
 }
 
 /// The scene, loaded with the quad's material's `map_Kd` value `map_kd`.
 fn load(dir: &Path, map_kd: &str) -> LoadedScene {
-    write_files(dir, map_kd);
+    load_with(dir, map_kd, "")
+}
+
+/// [`load`] with the lines `more` at the end of the material.
+fn load_with(dir: &Path, map_kd: &str, more: &str) -> LoadedScene {
+    write_files(dir, map_kd, more);
     let text = format!(
         "[render]\nwidth = {SIZE}\nheight = {SIZE}\nspp = 1\nambient = [1, 1, 1]\n\
          [camera]\nposition = [0, 0, 6]\nlook_at = [0, 0, 0]\nfov = 30\n\
@@ -116,8 +121,32 @@ fn map_kd_options_not_applied_are_named_in_a_warning() {
     assert_eq!(cells(&loaded), ["RRGG", "RRGG", "BBYY", "BBYY"].map(String::from));
     let about: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("map_Kd option")).collect();
     assert_eq!(about.len(), 2, "{:?}", loaded.warnings);
+    // The MTL file's map_Kd line, not the OBJ file.
     assert!(
-        about[0].contains("quad.obj") && about[0].contains("`labels`") && about[0].contains("`-mm 0.2 1`")
+        about[0].contains("quad.mtl:5: material `labels`") && about[0].contains("`-mm 0.2 1`"),
+        "{}",
+        about[0]
     );
     assert!(about[1].contains("`-s 0 1`") && about[1].contains("not 0"), "{}", about[1]);
+}
+
+/// Maps prism does not use are named with their MTL line, once each, and
+/// change nothing.
+#[test]
+fn maps_prism_does_not_use_are_named_in_a_warning() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let more = "map_d alpha.png\nbump -bm 0.5 normal.png\nmap_Ks spec.png\nmap_d alpha2.png # again\n";
+    let loaded = load_with(dir.path(), "labels.png", more);
+    assert_eq!(cells(&loaded), ["RRGG", "RRGG", "BBYY", "BBYY"].map(String::from));
+    let about: Vec<&String> = loaded.warnings.iter().filter(|w| w.contains("is not used by prism")).collect();
+    assert_eq!(about.len(), 3, "{:?}", loaded.warnings);
+    for (at, key, then) in [
+        ("quad.mtl:9", "map_d", "nothing is cut out"),
+        ("quad.mtl:7", "bump", "shaded without it"),
+        ("quad.mtl:8", "map_Ks", "Ks applies all over"),
+    ] {
+        let w = format!("{at}: material `labels`: `{key}` is not used by prism");
+        assert!(about.iter().any(|a| a.contains(&w) && a.contains(then)), "no {w:?} in {about:#?}");
+    }
+    assert!(!loaded.warnings.iter().any(|w| w.contains("map_Kd option")), "{:?}", loaded.warnings);
 }

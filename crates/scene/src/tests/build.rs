@@ -46,6 +46,7 @@ fn triangle_obj(material_error: Option<&str>) -> Arc<ObjFile> {
         mtl_files: Vec::new(),
         warnings: Vec::new(),
         unknown_materials: Vec::new(),
+        material_places: Vec::new(),
     })
 }
 

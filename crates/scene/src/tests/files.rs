@@ -298,7 +298,7 @@ fn corrupt_textures_are_reported() {
     assert!(err.contains("bad.png") && err.contains("cannot use this texture"), "{err}");
     assert!(err.contains("cannot use this texture: the PNG data is corrupt or cut short ("), "{err}");
     assert!(err.contains(&format!("used at test.toml:{}:", line_of(extra, "bad.png"))), "{err}");
-    // Named by an MTL file: which material of which OBJ file.
+    // Named by an MTL file: which material, on which line of which file.
     fs::write(dir.path().join("t.mtl"), "newmtl shiny\nKd 1 1 1\nmap_Kd bad.png\n").unwrap();
     fs::write(dir.path().join("t.obj"), "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl shiny\nf 1 2 3\n")
         .unwrap();
@@ -306,7 +306,8 @@ fn corrupt_textures_are_reported() {
     let err = parse_scene_str(&text, dir.path(), Path::new("test.toml")).unwrap_err().to_string();
     assert!(
         err.contains("the PNG data is corrupt")
-            && err.contains("(the map_Kd of material `shiny` in t.obj's MTL)"),
+            && err.contains("(the map_Kd of material `shiny` at ")
+            && err.contains("t.mtl:3)"),
         "{err}"
     );
 }
