@@ -448,8 +448,18 @@ impl<'de> Deserialize<'de> for BackgroundDef {
                 Color::deserialize(de::value::StrDeserializer::new(s)).map(BackgroundDef::Color)
             }
             fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<BackgroundDef, A::Error> {
+                // toml hands a date over as a table with one private key: a
+                // value of the wrong kind, not an environment with a bad key
+                // (the message then names the date, `with_the_text`).
                 EnvironmentDef::deserialize(de::value::MapAccessDeserializer::new(map))
                     .map(BackgroundDef::Image)
+                    .map_err(|e| {
+                        if e.to_string().contains("$__toml_private_datetime") {
+                            de::Error::invalid_type(de::Unexpected::Map, &V)
+                        } else {
+                            e
+                        }
+                    })
             }
         }
         d.deserialize_any(V)

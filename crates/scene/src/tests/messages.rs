@@ -313,3 +313,21 @@ fn a_step_that_is_not_a_table_is_named_in_scene_terms() {
     let err = parse(text).err().map(|e| e.to_string()).unwrap_or_default();
     assert_eq!(err, "test.toml:4:1: expected a table, got an array", "{err}");
 }
+
+/// A background is a colour or a table: a date (which toml hands over as a
+/// table with one private key) is named as neither, not as an environment
+/// image with an odd key.
+#[test]
+fn a_date_as_background_is_a_value_of_the_wrong_kind() {
+    let expected = "expected a colour ([r, g, b] or \"#rrggbb\") or an environment image { image = \"file\", rotation = degrees }";
+    for date in ["1979-05-27", "07:32:00", "1979-05-27T07:32:00Z"] {
+        let text =
+            format!("[render]\nbackground = {date}\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n");
+        let err = parse(&text).err().map(|e| e.to_string()).unwrap_or_default();
+        assert_eq!(err, format!("test.toml:2:14: {expected}, got the date {date}"));
+    }
+    // An environment table with a misspelt key still says so.
+    let text = "[render]\nbackground = { image = \"sky.hdr\", rotaton = 3 }\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    let err = parse(text).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("unknown key `rotaton`; did you mean `rotation`?"), "{err}");
+}
