@@ -46,7 +46,7 @@ pub struct ObjFile {
     /// ...`), a warning wherever its MTL materials are used.
     pub unknown_materials: Vec<String>,
     /// Where each of `materials` is defined, in the same order (empty
-    /// where the libraries could not be read).
+    /// where they cannot be matched: a library that could not be read).
     pub material_places: Vec<MtlPlace>,
 }
 
@@ -76,18 +76,18 @@ impl MtlPlace {
 }
 
 /// The MTL keys of texture maps (tobj reads some, the rest are other
-/// keys to it): `map_` and any suffix, and the bare names some exporters
-/// write.
+/// keys to it): `map_` and any suffix but `map_aat` (an on/off switch),
+/// and the bare names some exporters write.
 fn is_map_key(key: &str) -> bool {
-    key.starts_with("map_") || matches!(key, "bump" | "disp" | "decal" | "refl" | "norm")
+    key.starts_with("map_") && key != "map_aat" || matches!(key, "bump" | "disp" | "decal" | "refl" | "norm")
 }
 
-/// The materials the MTL text `text` (as tobj reads it) defines, in order,
-/// placed in `file`.
+/// The materials the MTL text `text` defines, in order, placed in
+/// `file`: each line's key is its first word, as tobj reads it (a `#`
+/// stuck to a word is part of it).
 fn mtl_places(file: &Path, text: &str) -> Vec<MtlPlace> {
     let mut out: Vec<MtlPlace> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("");
+    for (i, line) in text.lines().enumerate() {
         match line.split_whitespace().next() {
             Some("newmtl") => out.push(MtlPlace { file: file.to_path_buf(), line: i + 1, maps: Vec::new() }),
             Some(key) if is_map_key(key) => {
@@ -171,8 +171,12 @@ pub fn load_obj(
             *mtl_problem.borrow_mut() = Some(format!("{}:{line}: {m}", path.display()));
             return Err(tobj::LoadError::MaterialParseError);
         }
-        places.borrow_mut().extend(mtl_places(&path, text));
-        tobj::load_mtl_buf(&mut BufReader::new(text.as_bytes()))
+        let loaded = tobj::load_mtl_buf(&mut BufReader::new(text.as_bytes()));
+        // The places of a library tobj refused would be of no material.
+        if loaded.is_ok() {
+            places.borrow_mut().extend(mtl_places(&path, text));
+        }
+        loaded
     };
     let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
         .map_err(|e| (Location::file(path), format!("malformed OBJ: {e}")))?;
@@ -610,7 +614,8 @@ mod tests {
     #[test]
     fn materials_are_placed_in_their_mtl_files() {
         let obj = "mtllib a.mtl\nmtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wood\nf 1 2 3\n";
-        let a = "# first\nnewmtl wood\nKd 1 0 0\nmap_Kd w.png\n\nnewmtl stone\nbump s.png\n";
+        let a =
+            "# first\nnewmtl wood\nKd 1 0 0\nmap_Kd w.png\nmap_aat on\nnewmtl stone\nbump s.png\n#newmtl x\n";
         let b = "newmtl leaf\nmap_d  leaf.png # cut-out\nmap_Kd leaf.png\nnewmtl wood\nmap_Ks k.png\n";
         let read = |p: &Path| Some(if p.ends_with("a.mtl") { a } else { b }.as_bytes().to_vec());
         let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
@@ -633,6 +638,22 @@ mod tests {
         assert_eq!(file.models[0].material, Some(3));
         assert_eq!(file.material_places[2].at("map_Kd"), "/s/b.mtl:3");
         assert_eq!(file.material_places[3].at("map_Kd"), "/s/b.mtl:4");
+    }
+
+    /// A library tobj refuses (a comment stuck to a value, which the line
+    /// checks read past) gives no materials and no places: the other
+    /// library's places still match its materials.
+    #[test]
+    fn a_refused_library_leaves_the_others_placed() {
+        let obj = "mtllib a.mtl\nmtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl leaf\nf 1 2 3\n";
+        let a = "newmtl wood\nKd 1 0 0#red\n";
+        let b = "newmtl leaf\nKd 0 1 0\nmap_d cut.png\n";
+        let read = |p: &Path| Some(if p.ends_with("a.mtl") { a } else { b }.as_bytes().to_vec());
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
+        let names: Vec<&str> = file.materials.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(names, ["leaf"]);
+        assert_eq!(file.material_places.len(), 1);
+        assert_eq!(file.material_places[0].at("map_d"), "/s/b.mtl:3");
     }
 
     /// A U-shaped floor polygon (seen from above, its notch around
