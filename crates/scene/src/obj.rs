@@ -640,20 +640,23 @@ mod tests {
         assert_eq!(file.material_places[3].at("map_Kd"), "/s/b.mtl:4");
     }
 
-    /// A library tobj refuses (a comment stuck to a value, which the line
-    /// checks read past) gives no materials and no places: the other
-    /// library's places still match its materials.
+    /// A comment stuck to a value (`Kd 1 0 0#red`), which tobj would read
+    /// as part of the number and so refuse the whole library, silently
+    /// (its materials then missing, the other library's places cleared):
+    /// the comment is cut, both libraries are read, and every material is
+    /// placed.
     #[test]
-    fn a_refused_library_leaves_the_others_placed() {
+    fn a_comment_stuck_to_a_value_keeps_its_library() {
         let obj = "mtllib a.mtl\nmtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl leaf\nf 1 2 3\n";
         let a = "newmtl wood\nKd 1 0 0#red\n";
         let b = "newmtl leaf\nKd 0 1 0\nmap_d cut.png\n";
         let read = |p: &Path| Some(if p.ends_with("a.mtl") { a } else { b }.as_bytes().to_vec());
         let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
         let names: Vec<&str> = file.materials.iter().map(|m| m.name.as_str()).collect();
-        assert_eq!(names, ["leaf"]);
-        assert_eq!(file.material_places.len(), 1);
-        assert_eq!(file.material_places[0].at("map_d"), "/s/b.mtl:3");
+        assert_eq!(names, ["wood", "leaf"]);
+        assert_eq!(file.materials[0].diffuse, Some([1.0, 0.0, 0.0]));
+        assert_eq!(file.material_places.len(), 2);
+        assert_eq!(file.material_places[1].at("map_d"), "/s/b.mtl:3");
     }
 
     /// A U-shaped floor polygon (seen from above, its notch around

@@ -99,16 +99,24 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
 }
 
 /// Rewrites the MTL lines tobj cannot take: colours with one value (grey),
-/// `newmtl` without a name, texture paths with Windows separators.
+/// numbers with a comment stuck to them, `newmtl` without a name, texture
+/// paths with Windows separators.
 /// Returns the text and the warnings (`line N: ...`).
 pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
-    fix_lines(text, |no, key, rest, _| match key {
+    fix_lines(text, |no, key, rest, full| match key {
         "Ka" | "Kd" | "Ks" | "Ke" | "Tf" if rest.split_whitespace().count() == 1 => Some((
             format!("{key} {rest} {rest} {rest}"),
             Some(format!(
                 "line {no}: `{key} {rest}` has one value; read as grey `{key} {rest} {rest} {rest}`"
             )),
         )),
+        // A comment stuck to a value (`Kd 1 0 0#red`): tobj would read
+        // `0#red` as the number and refuse the whole library.
+        "Ka" | "Kd" | "Ks" | "Ke" | "Tf" | "Ns" | "Ni" | "d" | "Tr" | "illum"
+            if full.contains('#') && !rest.is_empty() =>
+        {
+            Some((format!("{key} {rest}"), None))
+        }
         "newmtl" if rest.is_empty() => Some((
             format!("newmtl {UNNAMED}"),
             Some(format!("line {no}: `newmtl` without a name; naming the material `{UNNAMED}`")),
@@ -206,11 +214,14 @@ mod tests {
 
     #[test]
     fn mtl_lines_are_fixed_in_place() {
-        let (t, w) = fix_mtl("newmtl\nKs 0\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 .\\tex.jpg\nKa 0.25 # grey\n");
+        let (t, w) = fix_mtl(
+            "newmtl\nKs 0\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 .\\tex.jpg\nKa 0.25 # grey\nKd 1 0 0#red\nd 0.5#half\n",
+        );
         assert_eq!(
             t,
-            "newmtl (unnamed)\nKs 0 0 0\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 ./tex.jpg\nKa 0.25 0.25 0.25\n"
+            "newmtl (unnamed)\nKs 0 0 0\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 ./tex.jpg\nKa 0.25 0.25 0.25\nKd 1 0 0\nd 0.5\n"
         );
+        // The comments cut from values are not worth a warning.
         let lines: Vec<&str> = w.iter().map(|w| &w[..7]).collect();
         assert_eq!(lines, ["line 1:", "line 2:", "line 4:", "line 5:"]);
     }
