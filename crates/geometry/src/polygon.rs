@@ -55,20 +55,55 @@ pub fn triangulate(corners: &[Vec3]) -> Vec<[u32; 3]> {
     }
     let mut out = Vec::with_capacity(n - 2);
     let Some(flat) = outline(corners) else {
+        // No area: a spike out and straight back (`f 1 2 3 2`) covers
+        // nothing once cut at its pinches; anything else (corners in one
+        // line, a figure eight) is a fan, as it comes.
+        if let Some(flat) = spread(corners)
+            && let Some(pieces) = Pinched::cut(&flat, false)
+        {
+            clip_pieces(&flat, &pieces, &mut out);
+            return out;
+        }
         fan(&(0..n).collect::<Vec<_>>(), &mut |t| out.push(index(t)));
         return out;
     };
-    let Some(pieces) = Pinched::cut(&flat) else {
+    let Some(pieces) = Pinched::cut(&flat, true) else {
         clip(&flat, &mut |t| out.push(index(t)));
         return out;
     };
+    clip_pieces(&flat, &pieces, &mut out);
+    out
+}
+
+/// Clips each of the outline `flat`'s `pieces` (corner indices into it)
+/// on its own, into `out`.
+fn clip_pieces(flat: &[DVec2], pieces: &[Vec<usize>], out: &mut Vec<[u32; 3]>) {
     let mut at = Vec::new();
-    for piece in &pieces {
+    for piece in pieces {
         at.clear();
         at.extend(piece.iter().map(|&i| flat[i]));
         clip(&at, &mut |t| out.push(index(t.map(|k| piece[k]))));
     }
-    out
+}
+
+/// The corners of a polygon without area in the plane of the widest
+/// triangle that three of them make (one at the first corner, one the
+/// farthest from it, one the farthest from their line); `None` where they
+/// all lie in one line.
+fn spread(corners: &[Vec3]) -> Option<Vec<DVec2>> {
+    let c: Vec<DVec3> = corners.iter().map(|p| p.as_dvec3()).collect();
+    let a = *c.first()?;
+    let b = *c.iter().max_by(|p, q| p.distance_squared(a).total_cmp(&q.distance_squared(a)))?;
+    let side = |p: &DVec3| (b - a).cross(*p - a);
+    let far = c.iter().max_by(|p, q| side(p).length_squared().total_cmp(&side(q).length_squared()))?;
+    let normal = side(far);
+    let size = normal.abs();
+    if !(size.max_element() > 0.0 && size.is_finite()) {
+        return None;
+    }
+    let k = size.max_position();
+    let (u, v) = ((k + 1) % 3, (k + 2) % 3);
+    Some(c.iter().map(|p| DVec2::new(p[u], p[v])).collect())
 }
 
 /// Clips ears from the outline `at` (counter-clockwise), handing each
@@ -181,6 +216,8 @@ struct Pinched<'a> {
     at: &'a [DVec2],
     /// The other visit of each corner's place, where it has exactly two.
     twin: Vec<usize>,
+    /// Whether the whole outline has area (else it may wind both ways).
+    area: bool,
 }
 
 impl<'a> Pinched<'a> {
@@ -195,8 +232,9 @@ impl<'a> Pinched<'a> {
     /// pieces that each turn the polygon's way, their corners as indices
     /// into `at`, each from its first corner in the file's order; `None`
     /// where it has none to cut, or where the cut does not leave the rest
-    /// counter-clockwise (then the outline is clipped whole).
-    fn cut(at: &'a [DVec2]) -> Option<Vec<Vec<usize>>> {
+    /// counter-clockwise (then the outline is clipped whole). `area`: the
+    /// outline's own area is not zero.
+    fn cut(at: &'a [DVec2], area: bool) -> Option<Vec<Vec<usize>>> {
         let n = at.len();
         // `+ 0.0` makes -0.0 and 0.0 one place.
         let place = |i: usize| ((at[i].x + 0.0).to_bits(), (at[i].y + 0.0).to_bits());
@@ -212,7 +250,7 @@ impl<'a> Pinched<'a> {
         if twin.iter().all(|&t| t == NONE) {
             return None;
         }
-        let this = Self { at, twin };
+        let this = Self { at, twin, area };
         // The lowest of the leftmost corners is on the outer boundary, so a
         // walk from it meets each piece between its pinch's two visits,
         // unless it is itself a pinch (then the stretch from one of its
@@ -258,7 +296,7 @@ impl<'a> Pinched<'a> {
         let flat = |(area, perimeter): (f64, f64)| area.abs() <= Self::FLAT * perimeter * perimeter;
         let mut slot = vec![NONE; n];
         let mut pieces = Vec::new();
-        let mut cut = false;
+        let (mut cut, mut kept) = (false, false);
         for i in (start..n).chain(0..start) {
             let t = self.twin[i];
             if t != NONE && slot[t] != NONE {
@@ -278,6 +316,7 @@ impl<'a> Pinched<'a> {
                     continue;
                 }
             }
+            kept |= t != NONE && slot[t] != NONE;
             let sum = match stack.last() {
                 Some(&last) => {
                     let (a, length) = swept[swept.len() - 1];
@@ -293,13 +332,18 @@ impl<'a> Pinched<'a> {
             return None;
         }
         // What is left: a part, nothing (a spike the walk started on), or
-        // a hole (the walk started inside it: the cut does not hold).
+        // a hole (the walk started inside it: the cut does not hold). Where
+        // the outline has no area, a stretch turning the other way was
+        // kept, and the rest has no area, the outline winds both ways (a
+        // figure eight with a twist) and is not cut either.
         let rest = stretch(&stack, &swept, 0);
         if stack.len() > 2 && !flat(rest) {
             if rest.0 < 0.0 {
                 return None;
             }
             pieces.push(stack);
+        } else if kept && !self.area {
+            return None;
         }
         Some(pieces)
     }
@@ -955,12 +999,25 @@ mod tests {
     /// Outlines two reviews found cut wrongly: a spike out of a notch, two
     /// holes touching the boundary, pinches at the origin written as -0, a
     /// hole touching a corner that a lobe touches too, spikes from the
-    /// leftmost corner (where the walk starts), and spikes along a line
+    /// leftmost corner (where the walk starts; the first one with a hole
+    /// touching the edge too), and spikes along a line
     /// through corners of their own (whose area rounding makes not quite
     /// zero once tilted).
     #[test]
     fn spikes_and_touching_holes_are_covered() {
-        let cases: [&[(f32, f32)]; 11] = [
+        let cases: [&[(f32, f32)]; 12] = [
+            &[
+                (0., 0.),
+                (4., 0.),
+                (4., 4.),
+                (0., 4.),
+                (0., 2.),
+                (-2., 2.),
+                (0., 2.),
+                (0., 0.),
+                (1., 2.),
+                (2., 1.),
+            ],
             &[(3., 4.), (4., 4.), (0., 1.), (0., 4.), (1., 4.), (2., 3.), (1., 2.), (2., 3.)],
             &[
                 (4., 4.),
@@ -1029,6 +1086,36 @@ mod tests {
                 panic!("case {k}: {e}");
             }
         }
+    }
+
+    /// A face of no area that is a spike out and back (`f 1 2 3 2`) gives
+    /// no triangles, where a fan made it a triangle seen from both sides;
+    /// corners in one line still give the fan's flat triangles.
+    #[test]
+    fn a_spike_alone_covers_nothing() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::new(1.0, 0.0, 0.5), Vec3::new(0.0, 1.0, 0.25));
+        assert!(triangulate(&[a, b, c, b]).is_empty());
+        assert!(triangulate(&[a, b, c, b, a, Vec3::new(-1.0, -1.0, 0.0), a]).is_empty());
+        let line = [Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0), Vec3::X];
+        assert_eq!(triangulate(&line).len(), 2);
+        // Two squares meeting at a corner, one run each way (and a spike
+        // on one): no area in all, but not nothing (a fan, as before).
+        let twisted = [
+            (0., 0.),
+            (1., 0.),
+            (1., 1.),
+            (2., 2.),
+            (1., 1.),
+            (0., 1.),
+            (0., 0.),
+            (0., -1.),
+            (-1., -1.),
+            (-1., 0.),
+        ];
+        let mut c: Vec<Vec3> = twisted.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
+        assert_eq!(triangulate(&c).len(), c.len() - 2);
+        c.reverse();
+        assert_eq!(triangulate(&c).len(), c.len() - 2);
     }
 
     /// Many visits to one place, cut in about linear time: a square with

@@ -236,6 +236,10 @@ pub fn load_obj(
             });
         let model_groups = model_groups.as_deref();
         next_face += faces;
+        // Faces of no area (spikes out and back) give no triangles.
+        if indices.is_empty() {
+            continue;
+        }
         // (file normals, computed with (groups, crease angle)).
         let (given, computed) = match normals {
             NormalMode::Auto | NormalMode::AutoCrease(_) => {
@@ -275,7 +279,7 @@ pub fn load_obj(
     if out.is_empty() {
         return Err((
             Location::file(path),
-            "the OBJ file has no faces (lines and points are not rendered)".into(),
+            "the OBJ file has no faces (lines and points are not rendered, nor faces of no area such as a spike out and back)".into(),
         ));
     }
     warnings.extend(mtl_warnings.into_inner());
@@ -657,6 +661,24 @@ mod tests {
         assert_eq!(file.materials[0].diffuse, Some([1.0, 0.0, 0.0]));
         assert_eq!(file.material_places.len(), 2);
         assert_eq!(file.material_places[1].at("map_d"), "/s/b.mtl:3");
+    }
+
+    /// A face that is a spike out and back (`f 1 2 3 2`) has no area and
+    /// gives no triangles (a fan made it a triangle seen from both sides);
+    /// a file of nothing else has no faces to render.
+    #[test]
+    fn a_spike_face_gives_no_triangles() {
+        let v = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 0 0\nv 6 0 0\nv 5 1 0\n";
+        let obj = format!("{v}f 1 2 3 2\nf 4 5 6\n");
+        let file = load_obj(Path::new("/s/k.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap();
+        assert_eq!(file.models.len(), 1);
+        assert_eq!(file.models[0].mesh.indices(), [[3, 4, 5]]);
+        let obj = format!("{v}g spike\nf 1 2 3 2\ng tri\nf 4 5 6\n");
+        let file = load_obj(Path::new("/s/k.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap();
+        assert_eq!(file.models.len(), 1);
+        let obj = format!("{v}f 1 2 3 2\n");
+        let err = load_obj(Path::new("/s/k.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap_err();
+        assert!(err.1.contains("no faces") && err.1.contains("spike"), "{}", err.1);
     }
 
     /// A U-shaped floor polygon (seen from above, its notch around
