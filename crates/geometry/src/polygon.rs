@@ -29,7 +29,8 @@ use glam::{DVec2, DVec3, Vec3};
 /// point, a hole meeting the outer edge at a corner, a spike out and
 /// straight back) is first cut there into its parts, each clipped on its
 /// own: a part cut off takes two triangles fewer than its corners would in
-/// the whole, and a spike none.
+/// the whole, a spike none, and a face that is nothing but a spike (no
+/// area, `f 1 2 3 2`) gives none.
 ///
 /// This is exact for simple polygons, for a face with a hole reached
 /// through a keyhole cut (an outline that runs in and back out along the
@@ -86,10 +87,10 @@ fn clip_pieces(flat: &[DVec2], pieces: &[Vec<usize>], out: &mut Vec<[u32; 3]>) {
     }
 }
 
-/// The corners of a polygon without area in the plane of the widest
-/// triangle that three of them make (one at the first corner, one the
-/// farthest from it, one the farthest from their line); `None` where they
-/// all lie in one line.
+/// The corners of a polygon without area in the plane of a wide triangle
+/// that three of them make (the first corner, the one farthest from it,
+/// and the one farthest from their line); `None` where they all lie in
+/// one line.
 fn spread(corners: &[Vec3]) -> Option<Vec<DVec2>> {
     let c: Vec<DVec3> = corners.iter().map(|p| p.as_dvec3()).collect();
     let a = *c.first()?;
@@ -224,8 +225,8 @@ impl<'a> Pinched<'a> {
     /// A stretch whose area is at most this fraction of its perimeter's
     /// square has none: what the rounding of f32 corners in a tilted plane
     /// leaves of a spike out and back along a line through corners of its
-    /// own. (A part or hole that thin, a thousand times longer than wide,
-    /// covers less than a pixel's width wherever it is seen whole.)
+    /// own. (A part or hole that thin, some 250 000 times longer than
+    /// wide, is a fraction of a pixel wide wherever it is seen whole.)
     const FLAT: f64 = 1e-6;
 
     /// The outline `at` (counter-clockwise) cut at its pinches into
