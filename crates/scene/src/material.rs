@@ -184,13 +184,19 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
                 MappingDef::Cylindrical => Mapping::Cylindrical,
                 MappingDef::Planar => Mapping::Planar,
             };
+            // `[u, v]`, finite.
+            let pair = |p: &Spanned<crate::format::Scale2>, what: &str| {
+                let [u, v] = p.get_ref().0;
+                let uv = Vec2::new(u as f32, v as f32);
+                if uv.is_finite() {
+                    Ok(uv)
+                } else {
+                    Err(ctx.invalid(&p.span(), format!("texture {what} must be finite")))
+                }
+            };
             let scale = match &d.scale {
                 Some(s) => {
-                    let [u, v] = s.get_ref().0;
-                    let sc = Vec2::new(u as f32, v as f32);
-                    if !sc.is_finite() {
-                        return Err(ctx.invalid(&s.span(), "texture scale must be finite"));
-                    }
+                    let sc = pair(s, "scale")?;
                     // uv × 0 is one texel everywhere, and no footprint.
                     if sc.cmpeq(Vec2::ZERO).any() {
                         let written = ctx.text.get(s.span()).unwrap_or_default();
@@ -206,17 +212,7 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
                 }
                 None => Vec2::ONE,
             };
-            let offset = match &d.offset {
-                Some(o) => {
-                    let [u, v] = o.get_ref().0;
-                    let off = Vec2::new(u as f32, v as f32);
-                    if !off.is_finite() {
-                        return Err(ctx.invalid(&o.span(), "texture offset must be finite"));
-                    }
-                    off
-                }
-                None => Vec2::ZERO,
-            };
+            let offset = d.offset.as_ref().map_or(Ok(Vec2::ZERO), |o| pair(o, "offset"))?;
             let tint = ctx.opt_color(d.tint.as_ref(), "texture tint", Vec3::ONE)?;
             Ok(Texture::Image { image, mapping, scale, offset, tint })
         }

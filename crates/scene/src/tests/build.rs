@@ -167,14 +167,16 @@ fn an_image_texture_offset_is_read_and_a_non_finite_one_refused_at_its_place() {
         _ => None,
     });
     assert_eq!(image, Some((Vec2::new(0.5, -0.25), Vec2::ONE)));
-    for offset in ["inf", "[0, nan]"] {
-        let text = format!(
-            "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", offset = {offset} }}\n"
-        );
-        let (line, column) =
-            line_col(&text, text.find(&format!("offset = {offset}")).unwrap() + "offset = ".len());
-        let err = build(&text, &res).err().map(|e| e.to_string()).unwrap_or_default();
-        assert_eq!(err, format!("mem.toml:{line}:{column}: texture offset must be finite"));
+    for key in ["offset", "scale"] {
+        for value in ["inf", "[0, nan]"] {
+            let text = format!(
+                "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", {key} = {value} }}\n"
+            );
+            let at = format!("{key} = {value}");
+            let (line, column) = line_col(&text, text.find(&at).unwrap() + key.len() + 3);
+            let err = build(&text, &res).err().map(|e| e.to_string()).unwrap_or_default();
+            assert_eq!(err, format!("mem.toml:{line}:{column}: texture {key} must be finite"));
+        }
     }
 }
 
