@@ -156,7 +156,7 @@ fn errors_point_at_the_value_in_the_string() {
 }
 
 #[test]
-fn an_image_texture_offset_is_read_and_a_non_finite_one_refused_at_its_place() {
+fn an_image_texture_offset_is_read_and_a_non_finite_offset_or_scale_refused_at_its_place() {
     let res = resources();
     let text = format!(
         "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", offset = [0.5, -0.25] }}\n"
