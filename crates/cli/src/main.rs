@@ -37,32 +37,16 @@
 
 #![forbid(unsafe_code)]
 
-/// `println!` that never panics: when standard output is closed early
-/// (`prism info --json | head`), the text is lost but the command goes on
-/// and exits as it would have.
-macro_rules! outln {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
-    }};
-}
+// `outln!` and `errln!`: `println!` and `eprintln!` that never panic on a
+// closed standard output or error (prism-view's, shared with the viewer).
+#[macro_use]
+extern crate prism_view;
 
-/// `print!` that never panics, as [`outln!`].
+/// `print!` that never panics, as `outln!`.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
         let _ = write!(std::io::stdout().lock(), $($arg)*);
-    }};
-}
-
-/// `eprintln!` that never panics: when standard error is closed
-/// (`prism render s.toml 2>&1 | head -1`), the diagnostic is lost but the
-/// command goes on, writes its files and exits as it would have (0, or 1
-/// after an error). `eprintln!` panics on such a write error (exit 101).
-macro_rules! errln {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
     }};
 }
 

@@ -27,8 +27,13 @@
 
 #![warn(missing_docs)]
 
-/// `eprintln!` that never panics: with standard error closed the line is
-/// lost, and the viewer goes on (`eprintln!` would panic).
+/// `eprintln!` that never panics: with standard error closed (`prism
+/// render s.toml 2>&1 | head -1`) the line is lost, and the program goes
+/// on, writes its files and exits as it would have (`eprintln!` would
+/// panic on the write error, exit 101). Exported for the `prism` binary,
+/// which prints through the same macros.
+#[doc(hidden)]
+#[macro_export]
 macro_rules! errln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
@@ -36,7 +41,9 @@ macro_rules! errln {
     }};
 }
 
-/// `println!` that never panics, as `errln!`.
+/// `println!` that never panics, as `errln!` (`prism info --json | head`).
+#[doc(hidden)]
+#[macro_export]
 macro_rules! outln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
