@@ -66,7 +66,19 @@ impl Cone {
         // x² + z² = k² s², s = h − y in [0, h]: the lower nappe only. In
         // coordinates relative to the apex, p = (x, y − h, z), the side is
         // the quadric pᵀ M p = 0 with M = diag(1, −k², 1).
-        let oa = Vec3::new(o.x, o.y - h, o.z);
+        //
+        // Solved from `near`, the line's point nearest the axis' middle,
+        // `shift` along the ray from the origin: from an origin far away
+        // (distance D), oᵀMo and oᵀMd cancel, and for a ray close to the
+        // slope of a generator (a ≈ 0, a root from c / hb) they left errors
+        // of hundreds of ε·D in t, false hits and misses beside the rim.
+        // From `near` the coefficients are of the cone's size; only the sum
+        // `shift + t` rounds at the scale of D, as the sphere's t does.
+        let oa0 = Vec3::new(o.x, o.y - h, o.z);
+        let shift = (Vec3::new(0.0, 0.5 * h, 0.0) - o).dot(d) / d.length_squared();
+        let shift = if shift.is_finite() { shift } else { 0.0 };
+        let near = o + shift * d;
+        let oa = Vec3::new(near.x, near.y - h, near.z);
         let a = d.x * d.x + d.z * d.z - k2 * d.y * d.y;
         let hb = oa.x * d.x + oa.z * d.z - k2 * oa.y * d.y;
         let c = oa.x * oa.x + oa.z * oa.z - k2 * oa.y * oa.y;
@@ -79,11 +91,14 @@ impl Cone {
         let mut disc = k2 * (w.x * w.x + w.z * w.z) - w.y * w.y;
         // When w is no larger than its own rounding error the line passes
         // through the apex as far as f32 can tell: a double root there.
-        let noise = 4.0 * f32::EPSILON * oa.length() * d.length();
+        // The error includes `near`'s rounding, of the scale of the
+        // origin's own distance from the apex.
+        let noise = 4.0 * f32::EPSILON * oa0.length().max(oa.length()) * d.length();
         if disc < 0.0 && w.length_squared() <= noise * noise {
             disc = 0.0;
         }
-        if let Some(t) = roots_from_disc(a, hb, c, disc).and_then(|roots| side_t(ray, o, roots, h)) {
+        if let Some(t) = roots_from_disc(a, hb, c, disc).and_then(|roots| side_t(ray, near, shift, roots, h))
+        {
             keep(&mut best, t, Part::Side);
         }
         if let Some(t) = cap_t(ray, o, 0.0, r) {
@@ -245,6 +260,47 @@ mod tests {
         close(h.t, 5.0, 1e-5);
         close3(h.point, Vec3::new(0.5, 1.0, 0.0), 1e-5);
         assert!(cone().intersect(&Ray::new(Vec3::new(0.500_01, 1.0, -5.0), Vec3::Z)).is_none());
+    }
+
+    #[test]
+    fn distant_rays_along_a_generator_hit_where_aimed() {
+        // Radius = height: a ray parallel to the far side's generator (the
+        // quadratic's a = 0) meets the near side head on. From afar the
+        // coefficients taken at the origin cancelled: hundreds of ε·D off
+        // (0.026 at D = 1000), and at D ≥ 1000 the ray went through the
+        // side to the base cap, seen from inside.
+        let c = Cone::new(Vec3::ZERO, 1.0, 1.0).unwrap();
+        for dist in [10.0f32, 100.0, 1000.0, 10_000.0] {
+            for i in 0..96 {
+                let (s, co) = (i as f32 * 0.37).sin_cos();
+                let radial = Vec3::new(s, 0.0, co);
+                let y = 0.1 + 0.08 * (i % 11) as f32;
+                let p = radial * (1.0 - y) + Vec3::Y * y;
+                let n = (radial + Vec3::Y) / 2f32.sqrt();
+                // Along the opposite generator, tilted by up to ±0.05.
+                let jitter =
+                    0.05 * Vec3::new(((i * 5) % 7) as f32 / 3.0 - 1.0, ((i * 3) % 5) as f32 / 2.0 - 1.0, 0.0);
+                let d = (-radial - Vec3::Y + jitter).normalize();
+                let ray = Ray::new(p - dist * d, d);
+                let h = c.intersect(&ray).unwrap_or_else(|| panic!("D {dist}: missed {p} along {d}"));
+                let off = (h.point - p).length() / (f32::EPSILON * dist);
+                assert!(off <= 4.0, "D {dist}: hit {} for {p}, {off} ε·D off", h.point);
+                // The normal turns with the point's azimuth: its error is the
+                // point's over the radius there.
+                let turn = 16.0 * f32::EPSILON * dist / (1.0 - y) + 1e-5;
+                assert!(h.front_face && (h.geo_normal - n).length() < turn, "{h:?}");
+                close(h.t, dist, 4.0 * f32::EPSILON * dist);
+            }
+        }
+        // Beside the rim by 0.4 % of the cone's size (reaching the base's
+        // plane at radius 1.004): a miss, not a hit on the side.
+        let d = Vec3::new(0.0, -1.0, -1.0);
+        assert_eq!(c.intersect(&Ray::new(Vec3::new(-0.72, 1000.7, 1000.0), d)), None);
+        // Head on, from 1000 away, direction not unit: the side at
+        // (0, 0.95, 0.05), not the base cap from inside.
+        let h = c.intersect(&Ray::new(Vec3::new(0.0, 1000.9, 1000.0), 1000.0 * d)).unwrap();
+        close3(h.point, Vec3::new(0.0, 0.95, 0.05), 1e-3);
+        assert!(h.front_face);
     }
 
     #[test]

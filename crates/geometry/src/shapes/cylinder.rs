@@ -67,7 +67,7 @@ impl Cylinder {
             let (lx, lz) = (o.x - hb / a * d.x, o.z - hb / a * d.z);
             let disc = a * (r * r - (lx * lx + lz * lz));
             if let Some(t) = roots_from_disc(a, hb, o.x * o.x + o.z * o.z - r * r, disc)
-                .and_then(|roots| side_t(ray, o, roots, h))
+                .and_then(|roots| side_t(ray, o, 0.0, roots, h))
             {
                 keep(&mut best, t, Part::Side);
             }

@@ -68,16 +68,17 @@ pub(crate) fn roots_from_disc(a: f32, hb: f32, c: f32, disc: f32) -> Option<(f32
     Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
-/// The nearer of the side's two `roots` (ascending) that lies in the ray's
-/// interval at a height `o.y + t·dir.y` within `[0, h]` (relative to the
-/// base), the range widened by [`SEAL`]`·h` at both ends so that a ray
+/// The nearer of the side's two `roots` (ascending, measured from `o`, the
+/// ray's point `shift` along it, relative to the base) whose `t = shift +
+/// root` lies in the ray's interval at a height `o.y + root·dir.y` within
+/// `[0, h]`, the range widened by [`SEAL`]`·h` at both ends so that a ray
 /// through a rim cannot slip between the side and the cap tests.
 #[inline]
-pub(crate) fn side_t(ray: &Ray, o: Vec3, roots: (f32, f32), h: f32) -> Option<f32> {
+pub(crate) fn side_t(ray: &Ray, o: Vec3, shift: f32, roots: (f32, f32), h: f32) -> Option<f32> {
     let eps = SEAL * h;
-    [roots.0, roots.1].into_iter().find(|&t| {
-        let y = o.y + t * ray.dir.y;
-        ray.contains(t) && y >= -eps && y <= h + eps
+    [roots.0, roots.1].into_iter().find_map(|root| {
+        let (t, y) = (shift + root, o.y + root * ray.dir.y);
+        (ray.contains(t) && y >= -eps && y <= h + eps).then_some(t)
     })
 }
 
