@@ -302,7 +302,8 @@ impl TriangleMesh {
         }
         // Vertices used by no face (or only degenerate faces) keep a zero
         // normal, which hit() replaces by the face normal.
-        self.normals = Some(acc.into_iter().map(Vec3::normalize_or_zero).collect());
+        self.normals =
+            Some(acc.into_iter().map(|n| crate::unit_or_extreme(n).unwrap_or(Vec3::ZERO)).collect());
     }
 
     /// The full hit record for face `f` hit at `t` with barycentrics

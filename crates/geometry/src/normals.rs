@@ -52,7 +52,7 @@ pub fn with_computed_normals(
     let unit: Vec<Vec3> = (0..mesh.len())
         .map(|f| {
             let [a, b, c] = mesh.triangle(f);
-            (b - a).cross(c - a).normalize_or_zero()
+            crate::unit_or_extreme((b - a).cross(c - a)).unwrap_or(Vec3::ZERO)
         })
         .collect();
     // The angle of face `g` at its corner `c`.

@@ -25,7 +25,9 @@ impl Triangle {
             check_finite("triangle corner", p)?;
         }
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
-        if n.length_squared() == 0.0 || !n.is_finite() {
+        // Not the squared length, which underflows to 0 for edges of about
+        // 1e-12 (and overflows for 1e10) that a mesh's faces handle.
+        if n == Vec3::ZERO || !n.is_finite() {
             return Err(GeometryError::Degenerate("triangle has zero area"));
         }
         Ok(Self { v })
@@ -33,8 +35,13 @@ impl Triangle {
 
     /// Unit outward normal (counter-clockwise winding).
     #[must_use]
+    /// Zero only where the corners, changed since [`Triangle::new`], no
+    /// longer span an area.
     pub fn normal(&self) -> Vec3 {
-        (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0]).normalize_or_zero()
+        // Not `normalize_or_zero`, whose squared length over- or underflows
+        // for edges past about 4e9 or below 1e-10 (a zero normal, or one of
+        // length 1.01), as `TriangleMesh`'s faces already do.
+        crate::unit_or_extreme((self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])).unwrap_or(Vec3::ZERO)
     }
 }
 
@@ -1045,6 +1052,23 @@ mod tests {
         assert!(Triangle::new([Vec3::ZERO, Vec3::X, Vec3::NAN]).is_err());
         assert_eq!(tri().bounds(), Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
         assert_eq!(tri().normal(), Vec3::Z);
+    }
+
+    #[test]
+    fn huge_and_tiny_triangles_have_unit_normals() {
+        // Edges of 5e9: the normal's squared length overflows (it was 0,
+        // and the hit was taken for the back face).
+        let big = Triangle::new([Vec3::ZERO, Vec3::new(0.0, 5e9, 0.0), Vec3::new(0.0, 0.0, 5e9)]).unwrap();
+        let h = big.intersect(&Ray::new(Vec3::new(1.0, 1.25e9, 1.25e9), Vec3::NEG_X)).unwrap();
+        assert_eq!((h.geo_normal, h.front_face), (Vec3::X, true));
+        // Edges of 1e-12: refused as of zero area before; 1e-10 gave a
+        // normal of length 1.0000027.
+        for e in [1e-12f32, 1e-11, 1e-10] {
+            let small = Triangle::new([Vec3::ZERO, Vec3::new(e, 0.0, 0.0), Vec3::new(0.0, e, 0.0)]).unwrap();
+            assert_eq!(small.normal(), Vec3::Z, "edge {e}");
+        }
+        // A triangle with no area stays refused at any size.
+        assert!(Triangle::new([Vec3::ZERO, Vec3::splat(1e-30), Vec3::splat(2e-30)]).is_err());
     }
 
     /// `intersect4` and `intersect4_branchless` keep exactly what a loop of
