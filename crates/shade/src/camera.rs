@@ -90,10 +90,11 @@ impl Camera {
             tan_half: (vfov_deg.to_radians() * 0.5).tan(),
             projection: Projection::Perspective,
             aperture: 0.0,
-            // Past 1.8e19 apart the squared length overflows; along the
-            // unit forward the same distance does not, up to f32's range.
+            // Past 1.8e19 apart the squared length overflows, and under
+            // about 1e-19 it underflows to 0 (refused by `with_lens`); along
+            // the unit forward neither happens, up to f32's range.
             focus_distance: Some(d.length())
-                .filter(|l| l.is_finite())
+                .filter(|l| l.is_finite() && *l > 0.0)
                 .unwrap_or_else(|| forward.dot(d).min(f32::MAX)),
         })
     }

@@ -345,6 +345,14 @@ fn bad_cameras_are_refused() {
     assert!(parse(&text).unwrap_err().to_string().contains("must differ"));
     let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nfov = 180");
     assert!(parse(&text).unwrap_err().to_string().contains("between 0 and 180"));
+    // Apart by less than about 1e-19, where the squared distance
+    // underflows: a camera like any other (it was refused as "focus
+    // distance must be a finite number > 0, got 0", with no place).
+    for gap in ["1e-25", "1e-30", "1e-45"] {
+        let text = BASE.replace("position = [0, 2, 10]", &format!("position = [0, 0, {gap}]"));
+        let scene = parse(&text.replace("look_at = [0, 1, 0]", "look_at = [0, 0, 0]")).unwrap();
+        assert!(scene.settings.camera.focus_distance() > 0.0, "{gap}");
+    }
 }
 
 #[test]
