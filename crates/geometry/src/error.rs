@@ -12,11 +12,16 @@ pub enum GeometryError {
         /// The value given.
         value: f32,
     },
-    /// The transform's linear part is not invertible.
+    /// The transform's linear part is not (safely) invertible.
     SingularTransform {
         /// Its determinant (computed in `f64`, so that a scale far from 1
         /// neither overflows nor vanishes).
         det: f64,
+        /// `|det|` over the product of its columns' lengths (the most
+        /// volume axes of those lengths can span): 1 for a rotation or a
+        /// scale of any size, 0 for a map that flattens space. Refused at
+        /// 1e-6 or less.
+        flatness: f64,
     },
     /// A 4×4 matrix whose last row is not `(0, 0, 0, 1)`.
     NotAffine,
@@ -31,8 +36,19 @@ impl std::fmt::Display for GeometryError {
         match self {
             Self::NonFinite(what) => write!(f, "{what} must be finite (got NaN or infinity)"),
             Self::NonPositive { what, value } => write!(f, "{what} must be positive, got {value}"),
-            Self::SingularTransform { det } => {
-                write!(f, "transform is singular (determinant {det:e}); it would flatten the object")
+            Self::SingularTransform { det, flatness } => {
+                if *det == 0.0 || !flatness.is_finite() {
+                    write!(f, "transform is singular (determinant {det:e}); it would flatten the object")
+                } else {
+                    // A shear's determinant is 1: the size of the volume
+                    // says nothing, the share of it its axes keep does.
+                    write!(
+                        f,
+                        "transform is numerically singular: its axes span {flatness:.1e} of the volume \
+                         their lengths could (at least 1e-6 is needed; determinant {det:e}); it would \
+                         all but flatten the object"
+                    )
+                }
             }
             Self::NotAffine => write!(f, "matrix is not affine: its last row must be [0, 0, 0, 1]"),
             Self::Degenerate(what) => write!(f, "{what}"),

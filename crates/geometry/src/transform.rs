@@ -72,7 +72,7 @@ impl Transform {
         // millimetres) is accepted while a flattening map is not.
         let hadamard = d.x_axis.length() * d.y_axis.length() * d.z_axis.length();
         if !(det.abs() > f64::from(MIN_REL_DET) * hadamard) {
-            return Err(GeometryError::SingularTransform { det });
+            return Err(GeometryError::SingularTransform { det, flatness: det.abs() / hadamard });
         }
         let d_inv = d.inverse();
         let inv =
@@ -507,6 +507,17 @@ mod tests {
         // Nearly flat relative to its own scale: two columns almost parallel.
         let nearly = Transform::shear(Shear { xy: 1.0, yx: 0.999_999_9, ..Shear::NONE });
         assert!(matches!(nearly, Err(GeometryError::SingularTransform { .. })));
+        // A long shear keeps its determinant of 1; the message says what
+        // is wrong with it instead.
+        let long = Transform::shear(Shear { xy: 1e8, ..Shear::NONE }).unwrap_err();
+        assert_eq!(
+            long.to_string(),
+            "transform is numerically singular: its axes span 1.0e-8 of the volume their lengths could \
+             (at least 1e-6 is needed; determinant 1e0); it would all but flatten the object"
+        );
+        assert!(Transform::shear(Shear { xy: 1e5, ..Shear::NONE }).is_ok());
+        let zero = Transform::scale(Vec3::new(1.0, 0.0, 1.0)).unwrap_err().to_string();
+        assert_eq!(zero, "transform is singular (determinant 0e0); it would flatten the object");
         // A diagonal scale is exactly invertible, however anisotropic.
         assert!(Transform::scale(Vec3::new(1.0, 1.0, 1e-7)).is_ok());
     }
