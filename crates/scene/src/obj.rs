@@ -494,6 +494,14 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
             for v in vals {
                 match v.parse::<f32>() {
                     Ok(x) if x.is_finite() => {}
+                    // Finite as written (1e39) but past f32, in which the
+                    // file is read: said as the TOML reader says it.
+                    Ok(_) if v.parse::<f64>().is_ok_and(f64::is_finite) => {
+                        return Err((
+                            line_no,
+                            format!("`{key}` value `{v}` must lie within ±{:e} (single precision)", f32::MAX),
+                        ));
+                    }
                     Ok(_) => return Err((line_no, format!("`{key}` value `{v}` is not finite"))),
                     Err(_) => return Err((line_no, format!("`{key}` value `{v}` is not a number"))),
                 }

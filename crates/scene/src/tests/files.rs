@@ -170,7 +170,7 @@ fn meshes_are_loaded_once_and_instanced() {
 #[test]
 fn malformed_objs_are_reported_with_their_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[u8], &str); 11] = [
+    let cases: [(&str, &[u8], &str); 13] = [
         (
             "range.obj",
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
@@ -197,6 +197,12 @@ fn malformed_objs_are_reported_with_their_line() {
         ),
         ("w.obj", b"v 0 0 0 0\n", "w.obj:1: `v` weight w is 0"),
         ("rgb.obj", b"v 0 0 0 1 red 0\n", "rgb.obj:1: `v` value `red` is not a number"),
+        (
+            "big.obj",
+            b"v 0 0 1e39\n",
+            "big.obj:1: `v` value `1e39` must lie within ±3.4028235e38 (single precision)",
+        ),
+        ("inf.obj", b"vn 0 0 inf\n", "inf.obj:1: `vn` value `inf` is not finite"),
         (
             "tiny.obj",
             b"v 1e30 0 0 1e-20\n",
