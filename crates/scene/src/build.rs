@@ -562,7 +562,7 @@ impl<'a> Build<'a> {
         let (mut medium, file_on) = fog.unwrap_or((None, false));
         let on = self.overrides.fog.unwrap_or(file_on);
         if on && medium.is_none() {
-            let end = view::default_fog_end(camera.position(), bounds);
+            let end = view::default_fog_end(camera.position(), camera.look_at(), bounds);
             let why = if table { "[fog] gives only `enabled`" } else { "the scene has no [fog]" };
             let by = if self.overrides.fog == Some(true) { "--fog uses" } else { "using" };
             self.warn(&format!("{why}; {by} linear white fog from 0 to {end:.1}"));

@@ -32,7 +32,8 @@ pub struct Overrides {
     pub threads: Option<usize>,
     /// Fog on or off. On in a scene without `[fog]` adds a linear white
     /// fog reaching total at 1.5 times the distance to the farthest corner
-    /// of the scene's bounds (with a warning).
+    /// of the scene's bounds, or 3 times the distance to the camera's
+    /// look-at point in a scene of planes alone (with a warning).
     pub fog: Option<bool>,
     /// Camera position (`--camera-pos`); must be finite.
     pub camera_pos: Option<Vec3>,

@@ -326,12 +326,15 @@ pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Option<Fog>, bool)>
 }
 
 /// The end of the fog `--fog` adds to a scene without `[fog]`: 1.5 times
-/// the distance from `eye` to the farthest corner of `bounds` (100 where
-/// the bounds are empty or infinite).
-pub(crate) fn default_fog_end(eye: Vec3, bounds: Aabb) -> f32 {
-    if bounds.is_empty() || !bounds.is_finite() {
-        return 100.0;
-    }
-    let far = bounds.corners().iter().map(|c| c.distance(eye)).fold(0.0_f32, f32::max);
-    if far.is_finite() && far > 0.0 { 1.5 * far } else { 100.0 }
+/// the distance from `eye` to the farthest corner of `bounds`; where the
+/// bounds are empty or infinite (a scene of planes alone), 3 times the
+/// distance from `eye` to `look_at`, so that the fog scales with the scene
+/// as the rest of the picture does (it was a fixed 100).
+pub(crate) fn default_fog_end(eye: Vec3, look_at: Vec3, bounds: Aabb) -> f32 {
+    let far = if bounds.is_empty() || !bounds.is_finite() {
+        2.0 * eye.distance(look_at)
+    } else {
+        bounds.corners().iter().map(|c| c.distance(eye)).fold(0.0_f32, f32::max)
+    };
+    if far.is_finite() && far > 0.0 { (1.5 * far).min(f32::MAX) } else { f32::MAX }
 }

@@ -295,6 +295,32 @@ fn a_fog_of_enabled_alone_is_the_switch_without_a_medium() {
 }
 
 #[test]
+fn the_default_fog_scales_with_the_scene() {
+    use prism_shade::FogMode;
+    let end = |text: &str| match with_sets(text, &["fog.enabled=true"]).unwrap().scene.fog.map(|f| f.mode) {
+        Some(FogMode::Linear { start: 0.0, end }) => end,
+        other => panic!("{other:?}"),
+    };
+    // Bounded: 1.5 × the distance from the eye to the bounds' far corner,
+    // here (±1, −1, −1) from (0, 1, 5): √41.
+    let sphere = "camera.position = [0, 1, 5]\ncamera.look_at = [0, 0, 0]\n\
+                  [[objects]]\ntype = \"sphere\"\nradius = 1\n";
+    assert!((end(sphere) - 1.5 * 41f32.sqrt()).abs() < 1e-4, "{}", end(sphere));
+    // Planes alone: 3 × the distance to the look-at point, so a scene ten
+    // times larger gets fog ten times deeper (it was 100 for both).
+    let floor = |k: f32| {
+        format!(
+            "camera.position = [0, {}, {}]\ncamera.look_at = [0, 0, 0]\n\
+             [[objects]]\ntype = \"plane\"\nnormal = [0, 1, 0]\n",
+            3.0 * k,
+            4.0 * k
+        )
+    };
+    assert_eq!(end(&floor(1.0)), 15.0);
+    assert_eq!(end(&floor(10.0)), 150.0);
+}
+
+#[test]
 fn sets_add_keys_to_tables_written_with_dotted_keys() {
     let text = "render.width = 64\nrender.height = 48\ncamera.position = [0, 1, 5]\ncamera.look_at = [0, 0, 0]\n\
                 [[objects]]\ntype = \"sphere\"\nradius = 1\n";
