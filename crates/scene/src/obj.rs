@@ -282,6 +282,20 @@ pub fn load_obj(
             "the OBJ file has no faces (lines and points are not rendered, nor faces of no area such as a spike out and back)".into(),
         ));
     }
+    // Faces, but none with an area: as good as none (an empty picture with
+    // a warning before, where a file of no faces is refused).
+    let (triangles, flat) = out.iter().fold((0, 0), |(t, z), m| (t + m.mesh.len(), z + m.degenerate));
+    if flat == triangles {
+        let what = if triangles == 1 {
+            "its one triangle has".to_string()
+        } else {
+            format!("all {triangles} of its triangles have")
+        };
+        return Err((
+            Location::file(path),
+            format!("the OBJ file has nothing to render: {what} zero area (corners repeated or in a line)"),
+        ));
+    }
     warnings.extend(mtl_warnings.into_inner());
     let mut unknown_materials = Vec::new();
     if material_error.is_none() && !mtl_files.is_empty() {

@@ -170,7 +170,7 @@ fn meshes_are_loaded_once_and_instanced() {
 #[test]
 fn malformed_objs_are_reported_with_their_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[u8], &str); 13] = [
+    let cases: [(&str, &[u8], &str); 14] = [
         (
             "range.obj",
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
@@ -203,6 +203,11 @@ fn malformed_objs_are_reported_with_their_line() {
             "big.obj:1: `v` value `1e39` must lie within ±3.4028235e38 (single precision)",
         ),
         ("inf.obj", b"vn 0 0 inf\n", "inf.obj:1: `vn` value `inf` is not finite"),
+        (
+            "flat.obj",
+            b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 4 4 1\n",
+            "flat.obj: the OBJ file has nothing to render: all 2 of its triangles have zero area",
+        ),
         (
             "tiny.obj",
             b"v 1e30 0 0 1e-20\n",
