@@ -398,6 +398,12 @@ pub fn read_layered_exr(path: &Path) -> Result<LayeredExr, OutputError> {
         .from_unbuffered(file)
         .map_err(|e| match e {
             ::exr::error::Error::Io(source) => OutputError::Read { path: path.to_path_buf(), source },
+            // The exr crate's words for an unexpected end of file (or an
+            // offset past the end).
+            ::exr::error::Error::Invalid(m) if m == "reference to missing bytes" => bad(
+                "the file ends before the data its header promises (cut short, or not completely written?)"
+                    .into(),
+            ),
             other => bad(other.to_string()),
         })?;
     let [part] = exr.layer_data.as_slice() else {
@@ -593,6 +599,15 @@ mod tests {
         );
         std::fs::write(&p, b"v/").unwrap();
         assert!(read_layered_exr(&p).unwrap_err().to_string().contains("shorter than"));
+        // Cut short anywhere past its header: said so, not in the exr
+        // crate's words ("invalid: reference to missing bytes").
+        write_layered_exr(&p, &sample_image()).unwrap();
+        let whole = std::fs::read(&p).unwrap();
+        for keep in [whole.len() / 2, whole.len() - 1] {
+            std::fs::write(&p, &whole[..keep]).unwrap();
+            let e = read_layered_exr(&p).unwrap_err().to_string();
+            assert!(e.ends_with("the file ends before the data its header promises (cut short, or not completely written?)"), "{keep}: {e}");
+        }
         // The magic number alone passes the check and fails in the decoder.
         std::fs::write(&p, EXR_MAGIC).unwrap();
         assert!(matches!(read_layered_exr(&p), Err(OutputError::Image { .. })));
