@@ -5,7 +5,7 @@ mod common;
 
 use common::{Case, cases, f_world};
 use prism_geometry::glam::Vec3;
-use prism_geometry::{Cuboid, Hit, Instance, Intersect, Ray, Shape, Shear, Sphere, Transform};
+use prism_geometry::{Cone, Cuboid, Hit, Instance, Intersect, Ray, Shape, Shear, Sphere, Transform};
 use proptest::prelude::*;
 
 fn vec3(r: f32) -> impl Strategy<Value = Vec3> {
@@ -183,6 +183,30 @@ proptest! {
                 let again = inst.intersect(&spawned);
                 prop_assert!(again.is_none(), "{}: re-hit {:?} from {:?} along {}", case.name, again, h, d);
             }
+        }
+    }
+
+    /// As above, for cones 100 and 30 times taller than wide and as much
+    /// flatter, their larger side 100 long (a solve measured from anywhere
+    /// but the spawned origin rounds `t` by about ε·(the cone's size), more
+    /// than the origin's offset near the apex of a tall cone or the rim of
+    /// a flat one).
+    #[test]
+    fn spawned_rays_leave_cones_of_any_aspect(o in vec3(1.0), target in vec3(0.5), dirs in prop::collection::vec(vec3(1.0), 8), aspect in prop::sample::select(vec![100.0f32, 30.0, 1.0 / 30.0, 0.01])) {
+        let (r, h) = if aspect > 1.0 { (100.0 / aspect, 100.0) } else { (100.0, 100.0 * aspect) };
+        let cone = Cone::new(Vec3::ZERO, r, h).unwrap();
+        let b = cone.bounds();
+        let size = b.max - b.min;
+        let ray = Ray::new(b.center() + 2.0 * o * size, b.center() + target * size - (b.center() + 2.0 * o * size));
+        let Some(hit) = cone.intersect(&ray) else { return Ok(()) };
+        for &d in &dirs {
+            let Some(d) = d.try_normalize() else { continue };
+            let d = if d.dot(hit.geo_normal) < 0.0 { -d } else { d };
+            if d.dot(hit.geo_normal) == 0.0 {
+                continue;
+            }
+            let again = cone.intersect(&Ray::spawn(hit.point, hit.geo_normal, d));
+            prop_assert!(again.is_none(), "r {r}, h {h}: re-hit {:?} from {:?} along {}", again, hit, d);
         }
     }
 

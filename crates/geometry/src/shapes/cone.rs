@@ -67,16 +67,23 @@ impl Cone {
         // coordinates relative to the apex, p = (x, y − h, z), the side is
         // the quadric pᵀ M p = 0 with M = diag(1, −k², 1).
         //
-        // Solved from `near`, the line's point nearest the axis' middle,
-        // `shift` along the ray from the origin: from an origin far away
-        // (distance D), oᵀMo and oᵀMd cancel, and for a ray close to the
-        // slope of a generator (a ≈ 0, a root from c / hb) they left errors
-        // of hundreds of ε·D in t, false hits and misses beside the rim.
-        // From `near` the coefficients are of the cone's size; only the sum
-        // `shift + t` rounds at the scale of D, as the sphere's t does.
+        // From an origin far away (distance D), oᵀMo and oᵀMd cancel, and
+        // for a ray close to the slope of a generator (a ≈ 0, a root from
+        // c / hb) they left errors of hundreds of ε·D in t, false hits and
+        // misses beside the rim. Such a ray is solved from `near`, the
+        // line's point nearest the axis' middle, `shift` along it: there
+        // the coefficients are of the cone's size, and only the sum `shift
+        // + t` rounds at the scale of D, as the sphere's t does. A ray from
+        // within twice the cone's size of it (a ray spawned from its
+        // surface) is solved from its own origin, exactly as before: the
+        // sum's rounding, about ε·(the cone's size), would exceed the
+        // spawned origin's offset near a tall cone's apex or a flat one's
+        // rim, and the ray would meet the surface it leaves.
         let oa0 = Vec3::new(o.x, o.y - h, o.z);
-        let shift = (Vec3::new(0.0, 0.5 * h, 0.0) - o).dot(d) / d.length_squared();
-        let shift = if shift.is_finite() { shift } else { 0.0 };
+        let along = (Vec3::new(0.0, 0.5 * h, 0.0) - o).dot(d);
+        let shift = along / d.length_squared();
+        let far = along.abs() > 2.0 * (r + h) * d.length();
+        let shift = if far && shift.is_finite() { shift } else { 0.0 };
         let near = o + shift * d;
         let oa = Vec3::new(near.x, near.y - h, near.z);
         let a = d.x * d.x + d.z * d.z - k2 * d.y * d.y;
