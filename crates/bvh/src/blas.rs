@@ -110,13 +110,7 @@ impl Blas {
     /// The hierarchy over `mesh`'s faces of non-zero area (the others can
     /// never be hit).
     pub fn build(mesh: &TriangleMesh, quality: BuildQuality, layout: BlasKind, kernel: Kernel) -> Self {
-        let kept: Vec<u32> = (0..mesh.len())
-            .filter(|&f| {
-                let [a, b, c] = mesh.triangle(f);
-                (b - a).cross(c - a).length_squared() != 0.0
-            })
-            .map(|f| f as u32)
-            .collect();
+        let kept: Vec<u32> = (0..mesh.len()).filter(|&f| mesh.face_has_area(f)).map(|f| f as u32).collect();
         let tris: Vec<obvhs::triangle::Triangle> = kept
             .iter()
             .map(|&f| {

@@ -126,15 +126,20 @@ impl TriangleMesh {
         [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
 
+    /// Whether face `f` spans an area, so that a ray can hit it: its
+    /// edges' cross product is not zero. (Not its squared length, which
+    /// underflows to 0 for edges under about 1e-11: a model in such units
+    /// would lose every face.)
+    #[must_use]
+    pub fn face_has_area(&self, f: usize) -> bool {
+        let [a, b, c] = self.triangle(f);
+        (b - a).cross(c - a) != Vec3::ZERO
+    }
+
     /// Number of faces with zero area (never hit).
     #[must_use]
     pub fn degenerate_count(&self) -> usize {
-        (0..self.len())
-            .filter(|&f| {
-                let [a, b, c] = self.triangle(f);
-                (b - a).cross(c - a).length_squared() == 0.0
-            })
-            .count()
+        (0..self.len()).filter(|&f| !self.face_has_area(f)).count()
     }
 
     /// The volume the faces enclose: positive where they wind

@@ -60,7 +60,21 @@ pub fn with_computed_normals(
         let t = indices[g];
         let p = |j: usize| positions[t[(c + j) % 3] as usize];
         let (e1, e2) = (p(1) - p(0), p(2) - p(0));
-        if e1 == Vec3::ZERO || e2 == Vec3::ZERO { 0.0 } else { e1.angle_between(e2) }
+        if e1 == Vec3::ZERO || e2 == Vec3::ZERO {
+            return 0.0;
+        }
+        // `angle_between` divides by the product of the squared lengths,
+        // which underflows for edges under about 1e-10 (or overflows past
+        // 1e9): a weight of 0, π or NaN. There, the same from unit edges.
+        let product = e1.length_squared() * e2.length_squared();
+        if (f32::MIN_POSITIVE..=f32::MAX).contains(&product) {
+            e1.angle_between(e2)
+        } else {
+            match (crate::unit(e1), crate::unit(e2)) {
+                (Some(u1), Some(u2)) => u1.angle_between(u2),
+                _ => 0.0,
+            }
+        }
     };
     // Faces around each welded position (compressed rows).
     let mut start = vec![0u32; positions.len() + 1];
@@ -252,5 +266,31 @@ mod tests {
         let seam = ring.triangle(0)[1];
         assert!((normal_at(&split, 0, seam) - normal_at(&split, 2, seam)).length() > 0.1);
         assert!(with_computed_normals(&ring, Some(&[1; 3]), 60.0).is_err());
+    }
+
+    #[test]
+    fn tiny_and_huge_models_get_the_same_smooth_normals() {
+        // An octahedron: by symmetry each corner's smooth normal points
+        // straight out. At 1e-12 the angle weights' squared lengths
+        // underflowed (every normal zero, so flat shading), and the faces
+        // were taken for zero-area ones.
+        let corners = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
+        let idx =
+            vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        for scale in [1.0f32, 1e-12, 1e-18, 1e12] {
+            let p: Vec<Vec3> = corners.iter().map(|&c| c * scale).collect();
+            let m = TriangleMesh::new(p.clone(), None, None, idx.clone()).unwrap();
+            assert_eq!(m.degenerate_count(), 0, "scale {scale}");
+            let out = with_computed_normals(&m, None, 180.0).unwrap();
+            for (f, tri) in idx.iter().enumerate() {
+                for (k, &v) in tri.iter().enumerate() {
+                    let n = normal_at(&out, f, p[v as usize]);
+                    assert!(
+                        (n - corners[v as usize]).length() < 1e-5,
+                        "scale {scale}, face {f} corner {k}: {n}"
+                    );
+                }
+            }
+        }
     }
 }
