@@ -13,6 +13,7 @@ pub enum GeometryError {
         value: f32,
     },
     /// The transform's linear part is not (safely) invertible.
+    #[non_exhaustive]
     SingularTransform {
         /// Its determinant (computed in `f64`, so that a scale far from 1
         /// neither overflows nor vanishes).
@@ -20,7 +21,7 @@ pub enum GeometryError {
         /// `|det|` over the product of its columns' lengths (the most
         /// volume axes of those lengths can span): 1 for a rotation or a
         /// scale of any size, 0 for a map that flattens space. Refused at
-        /// 1e-6 or less.
+        /// 1e-6 or less (`MIN_FLATNESS`).
         flatness: f64,
     },
     /// A 4×4 matrix whose last row is not `(0, 0, 0, 1)`.
@@ -44,9 +45,10 @@ impl std::fmt::Display for GeometryError {
                     // says nothing, the share of it its axes keep does.
                     write!(
                         f,
-                        "transform is numerically singular: its axes span {flatness:.1e} of the volume \
-                         their lengths could (at least 1e-6 is needed; determinant {det:e}); it would \
-                         all but flatten the object"
+                        "transform is numerically singular: its axes span {flatness:.2e} of the volume \
+                         their lengths could (more than {:e} is needed; determinant {det:e}); it would \
+                         all but flatten the object",
+                        crate::transform::MIN_FLATNESS
                     )
                 }
             }

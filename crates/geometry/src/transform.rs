@@ -5,7 +5,7 @@ use glam::{Affine3A, DMat3, Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
 /// Smallest |determinant| of the linear part, relative to the product of
 /// its column lengths, accepted as invertible.
-const MIN_REL_DET: f32 = 1e-6;
+pub(crate) const MIN_FLATNESS: f32 = 1e-6;
 
 /// An invertible affine transform from object space to world space, with
 /// its inverse and normal matrix (inverse transpose) cached.
@@ -71,7 +71,7 @@ impl Transform {
         // most (Hadamard's bound), so that a small uniform scale (a model in
         // millimetres) is accepted while a flattening map is not.
         let hadamard = d.x_axis.length() * d.y_axis.length() * d.z_axis.length();
-        if !(det.abs() > f64::from(MIN_REL_DET) * hadamard) {
+        if !(det.abs() > f64::from(MIN_FLATNESS) * hadamard) {
             return Err(GeometryError::SingularTransform { det, flatness: det.abs() / hadamard });
         }
         let d_inv = d.inverse();
@@ -512,8 +512,8 @@ mod tests {
         let long = Transform::shear(Shear { xy: 1e8, ..Shear::NONE }).unwrap_err();
         assert_eq!(
             long.to_string(),
-            "transform is numerically singular: its axes span 1.0e-8 of the volume their lengths could \
-             (at least 1e-6 is needed; determinant 1e0); it would all but flatten the object"
+            "transform is numerically singular: its axes span 1.00e-8 of the volume their lengths could \
+             (more than 1e-6 is needed; determinant 1e0); it would all but flatten the object"
         );
         assert!(Transform::shear(Shear { xy: 1e5, ..Shear::NONE }).is_ok());
         let zero = Transform::scale(Vec3::new(1.0, 0.0, 1.0)).unwrap_err().to_string();
