@@ -547,9 +547,11 @@ impl<'a> Build<'a> {
     /// The camera, the fog's medium and the fog on/off bit, with the
     /// overrides applied: the camera overrides (see [`view::camera`]) and
     /// `--fog`/`--no-fog`, which replace the file's `enabled`; on, in a
-    /// scene without `[fog]`, adds linear white fog reaching total at 1.5
-    /// times the distance to the farthest corner of `bounds`, with a
-    /// warning. `fog` is the file's medium and its `enabled`.
+    /// scene without `[fog]`, adds linear white fog reaching total at
+    /// [`view::default_fog_end`] (1.5 times the distance to the farthest
+    /// corner of `bounds`, or 3 times the distance to the look-at point
+    /// where only planes are), with a warning. `fog` is the file's medium
+    /// and its `enabled`.
     fn camera_and_fog(
         &mut self,
         camera: &CameraSource,

@@ -332,7 +332,10 @@ pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Option<Fog>, bool)>
 /// as the rest of the picture does (it was a fixed 100).
 pub(crate) fn default_fog_end(eye: Vec3, look_at: Vec3, bounds: Aabb) -> f32 {
     let far = if bounds.is_empty() || !bounds.is_finite() {
-        2.0 * eye.distance(look_at)
+        // Along the unit direction: the squared length under- or
+        // overflows for points under 1e-19 or over 1.8e19 apart.
+        let d = look_at - eye;
+        2.0 * prism_geometry::unit(d).map_or(0.0, |u| u.dot(d))
     } else {
         bounds.corners().iter().map(|c| c.distance(eye)).fold(0.0_f32, f32::max)
     };
