@@ -33,10 +33,10 @@ impl Triangle {
         Ok(Self { v })
     }
 
-    /// Unit outward normal (counter-clockwise winding).
+    /// Unit outward normal (counter-clockwise winding). Zero only where
+    /// the corners, changed since [`Triangle::new`], no longer span an
+    /// area.
     #[must_use]
-    /// Zero only where the corners, changed since [`Triangle::new`], no
-    /// longer span an area.
     pub fn normal(&self) -> Vec3 {
         // Not `normalize_or_zero`, whose squared length over- or underflows
         // for edges past about 4e9 or below 1e-10 (a zero normal, or one of
