@@ -43,13 +43,16 @@ use prism_geometry::glam::Vec3A;
 
 /// Builds a BVH2 over `aabbs` as obvhs's `build_bvh2` does (PLOC,
 /// reinsertion, leaf collapsing, reinsertion), optionally pre-splitting
-/// the triangles `tris`, without obvhs's (slow) debug validation.
+/// the triangles `tris`, without obvhs's (slow) debug validation. Boxes
+/// far from unit size are built at a power-of-two scale ([`Pow2Scale`]).
 pub(crate) fn build(
     aabbs: Vec<ObAabb>,
     tris: Option<&[obvhs::triangle::Triangle]>,
     p: BvhBuildParams,
 ) -> Bvh2 {
-    let mut bvh = collapsed_tree(aabbs, tris, &p);
+    let scale = Pow2Scale::of(&aabbs);
+    let (aabbs, tris) = scale.inputs(aabbs, tris);
+    let mut bvh = collapsed_tree(aabbs, tris.as_deref(), &p);
     if !bvh.nodes.is_empty() {
         ReinsertionOptimizer::default().run(
             &mut bvh,
@@ -57,7 +60,105 @@ pub(crate) fn build(
             None,
         );
     }
+    if !scale.is_one() {
+        for node in &mut bvh.nodes {
+            let b = *node.aabb();
+            node.set_aabb(ObAabb { min: scale.up(b.min), max: scale.up(b.max) });
+        }
+    }
     bvh
+}
+
+/// The power of two a build scales its boxes by.
+///
+/// The builders (obvhs's PLOC, reinsertion and leaf collapsing, the wide
+/// layout's plan, the CWBVH conversion) weigh boxes by their surface
+/// area, in `f32`. Boxes whose coordinates reach 10²⁰ have areas past
+/// `f32::MAX`: the costs became infinite or `NaN`, the wide plan found
+/// leaves over its size, and obvhs's CWBVH conversion then indexed out of
+/// bounds (a panic on an OBJ file with three corners at 10²⁰). Tiny ones
+/// lose their areas to underflow. So where the largest coordinate lies
+/// outside `[2⁻³², 2³²]`, the build runs on boxes (and triangles, for
+/// pre-splitting) multiplied by `2⁻ᵏ`, which brings it near 1, and the
+/// finished nodes' boxes are multiplied by `2ᵏ`. Both are exact for
+/// normal numbers, so the boxes are those the same tree has unscaled; a
+/// coordinate that the scaling down takes below the smallest normal
+/// number (under 2⁻⁹⁴ in a mesh that reaches 2³²) moves by less than
+/// 2⁻¹²⁶ · 2ᵏ, far inside the slab test's own rounding at that scale.
+/// Ordinary scenes (coordinates within 2³², about 4 · 10⁹) are built as
+/// they are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Pow2Scale(i32);
+
+impl Pow2Scale {
+    /// The largest coordinate that is built as it is, and the smallest.
+    const BIG: f32 = 4_294_967_296.0;
+    const SMALL: f32 = 1.0 / 4_294_967_296.0;
+
+    /// The scale for `aabbs`: `2ᵏ` near their largest finite coordinate
+    /// (1, `k = 0`, when that lies within `[2⁻³², 2³²]` or is 0).
+    pub(crate) fn of(aabbs: &[ObAabb]) -> Self {
+        let reach = aabbs
+            .iter()
+            .map(|a| a.min.abs().max(a.max.abs()).max_element())
+            .filter(|r| r.is_finite())
+            .fold(0.0f32, f32::max);
+        if reach == 0.0 || (Self::SMALL..=Self::BIG).contains(&reach) {
+            return Self(0);
+        }
+        Self(reach.log2().floor() as i32)
+    }
+
+    /// Whether the build runs unscaled.
+    pub(crate) fn is_one(self) -> bool {
+        self.0 == 0
+    }
+
+    /// `k` of the scale `2ᵏ`.
+    pub(crate) fn exponent(self) -> i32 {
+        self.0
+    }
+
+    /// `v · 2ⁿ`, in two steps so that neither factor overflows or is
+    /// subnormal (`|n|` up to about 250).
+    fn times_pow2(v: Vec3A, n: i32) -> Vec3A {
+        let half = n / 2;
+        v * 2f32.powi(half) * 2f32.powi(n - half)
+    }
+
+    /// A coordinate of the build's boxes at the scene's scale.
+    pub(crate) fn up(self, v: Vec3A) -> Vec3A {
+        if self.is_one() { v } else { Self::times_pow2(v, self.0) }
+    }
+
+    /// A scene coordinate at the build's scale.
+    fn down(self, v: Vec3A) -> Vec3A {
+        if self.is_one() { v } else { Self::times_pow2(v, -self.0) }
+    }
+
+    /// The build's inputs at its scale: the boxes, and the triangles copied
+    /// and scaled where there are any and the scale is not 1.
+    pub(crate) fn inputs<'t>(
+        self,
+        mut aabbs: Vec<ObAabb>,
+        tris: Option<&'t [obvhs::triangle::Triangle]>,
+    ) -> (Vec<ObAabb>, Option<std::borrow::Cow<'t, [obvhs::triangle::Triangle]>>) {
+        if self.is_one() {
+            return (aabbs, tris.map(std::borrow::Cow::Borrowed));
+        }
+        for a in &mut aabbs {
+            *a = ObAabb { min: self.down(a.min), max: self.down(a.max) };
+        }
+        let tris = tris.map(|ts| {
+            let down = |v: prism_geometry::glam::Vec3A| self.down(v);
+            std::borrow::Cow::Owned(
+                ts.iter()
+                    .map(|t| obvhs::triangle::Triangle { v0: down(t.v0), v1: down(t.v1), v2: down(t.v2) })
+                    .collect(),
+            )
+        });
+        (aabbs, tris)
+    }
 }
 
 /// [`ploc_tree`] with its leaves collapsed to at most

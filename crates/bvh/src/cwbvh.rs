@@ -204,8 +204,23 @@ pub(crate) fn build(
         return CwBvh::default();
     }
     let p = quality.params();
-    let bvh2 = bvh2::ploc_tree(aabbs, tris, &p);
-    bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
+    // Boxes far from unit size are built at a power-of-two scale: a node's
+    // origin `p` is multiplied back, and its children's exponents `e`
+    // (the grid step is `2^(e - 127)`) raised by the same power.
+    let scale = bvh2::Pow2Scale::of(&aabbs);
+    let (aabbs, tris) = scale.inputs(aabbs, tris);
+    let bvh2 = bvh2::ploc_tree(aabbs, tris.as_deref(), &p);
+    let mut cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false);
+    if !scale.is_one() {
+        let k = scale.exponent();
+        for node in &mut cw.nodes {
+            node.p = scale.up(node.p.into()).into();
+            for e in &mut node.e {
+                *e = (i32::from(*e) + k).clamp(1, 254) as u8;
+            }
+        }
+    }
+    cw
 }
 
 #[cfg(test)]

@@ -242,8 +242,19 @@ impl WideBvh {
     ) -> Option<(Self, bool)> {
         let mut p = quality.params();
         p.max_prims_per_leaf = max_leaf.clamp(1, MAX_LEAF);
-        let b = crate::bvh2::collapsed_tree(aabbs, tris, &p);
-        Some((Self::from_bvh2(&b, p.max_prims_per_leaf, kernel)?, b.uses_spatial_splits))
+        // Boxes far from unit size are built at a power-of-two scale.
+        let scale = crate::bvh2::Pow2Scale::of(&aabbs);
+        let (aabbs, tris) = scale.inputs(aabbs, tris);
+        let b = crate::bvh2::collapsed_tree(aabbs, tris.as_deref(), &p);
+        let mut w = Self::from_bvh2(&b, p.max_prims_per_leaf, kernel)?;
+        if !scale.is_one() {
+            for node in &mut w.nodes {
+                for v in node.planes.iter_mut().flatten() {
+                    *v = scale.up(Vec3A::splat(*v)).x;
+                }
+            }
+        }
+        Some((w, b.uses_spatial_splits))
     }
 
     /// Selects the kernel its walks use; refused (`false`) when the CPU

@@ -244,3 +244,57 @@ fn shared_meshes_agree_across_layouts() {
         assert!(hits > MESH_RAYS / 10, "{name}: {hits}");
     }
 }
+
+/// Meshes far from unit size: builds weigh boxes by their area in `f32`,
+/// which overflows for coordinates near 10²⁰ (obvhs's CWBVH conversion
+/// then panicked on an OBJ file with three corners at 10²⁰ beside unit
+/// triangles) and underflows for tiny ones. Every layout and quality
+/// builds them (at a power-of-two scale) and answers as brute force, and
+/// the same mesh scaled by a power of two gives the same hits scaled.
+#[test]
+fn meshes_far_from_unit_size_build_and_agree_with_brute_force() {
+    let mut rng = Rng::new(20_261_207);
+    let base = random_mesh(&mut rng, 6);
+    // (where the far triangle reaches, the scale of the rest): mixed
+    // sizes, the largest float, all large, all tiny, and unit size.
+    let cases = [
+        (1e20f32, 1.0f32),
+        (3e38, 1.0),
+        (2f32.powi(50), 2f32.powi(45)),
+        (2f32.powi(-40), 2f32.powi(-40)),
+        (1.0, 1.0),
+    ];
+    for (far, scale) in cases {
+        // The unit mesh scaled, with one triangle reaching `far`.
+        let mut positions: Vec<Vec3> = base.positions().iter().map(|p| *p * scale).collect();
+        let mut indices = base.indices().to_vec();
+        let n = positions.len() as u32;
+        positions.extend([Vec3::new(far, 0.0, 0.0), Vec3::new(0.0, far, 0.0), Vec3::new(0.0, 0.0, far)]);
+        indices.push([n, n + 2, n + 1]);
+        let mesh = Arc::new(TriangleMesh::new(positions, None, None, indices).unwrap());
+        let objects = [Object::Mesh { mesh: 0, transform: Transform::IDENTITY }];
+        let reference = build(std::slice::from_ref(&mesh), &objects, BuildQuality::Medium, BlasKind::Wide);
+        for q in BuildQuality::ALL {
+            for kind in [BlasKind::Wide, BlasKind::Cwbvh, BlasKind::Bvh2] {
+                let accel = build(std::slice::from_ref(&mesh), &objects, q, kind);
+                let mut hits = 0;
+                for k in 0..200 {
+                    // Toward the unit part from around it, and toward the far triangle.
+                    let o = rng.unit() * 3.0 * scale;
+                    let target = if k % 4 == 0 {
+                        Vec3::splat(far / 3.0)
+                    } else {
+                        Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0)) * scale
+                    };
+                    let ray = Ray::new(o, target - o);
+                    let hit = compare_closest(&accel, &ray)
+                        .unwrap_or_else(|e| panic!("far {far}, scale {scale}, {q:?}, {kind:?}: {e}"));
+                    let same = reference.closest_hit(&ray);
+                    assert_eq!(hit.map(|h| h.hit.t.to_bits()), same.map(|h| h.hit.t.to_bits()), "{ray:?}");
+                    hits += usize::from(hit.is_some());
+                }
+                assert!(hits > 100, "far {far}, scale {scale}, {q:?}, {kind:?}: {hits} hits of 200");
+            }
+        }
+    }
+}
