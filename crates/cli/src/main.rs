@@ -115,7 +115,7 @@ enum Command {
 
 #[derive(Args)]
 struct ViewArgs {
-    /// The scene file, or an OBJ mesh to look at.
+    /// The scene file, `-` for a scene on standard input (read once: `r` cannot reload it), or an OBJ mesh to look at.
     scene: PathBuf,
     #[command(flatten)]
     overrides: Overrides,
@@ -149,7 +149,8 @@ struct RenderArgs {
     /// --set render.spp=16 --set fog.enabled=false --set objects.0.radius=2.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
-    /// No progress bar and no closing statistics line.
+    /// No start line, progress bar or closing statistics line (warnings
+    /// and errors are still printed).
     #[arg(short, long)]
     quiet: bool,
     /// On Ctrl-C (or SIGTERM, SIGHUP), write the rows rendered so far (the rest black) instead of nothing.

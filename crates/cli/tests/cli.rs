@@ -121,6 +121,23 @@ fn inputs_are_never_overwritten() {
     assert_eq!(listing(dir.path()), ["s.toml", "tex.png"]);
 }
 
+#[test]
+fn missing_files_are_named_as_the_scene_names_them() {
+    // A scene in the current directory: its files are named as written,
+    // not `./tex.png`; one in a folder names them with the folder.
+    let dir = tempfile::tempdir().unwrap();
+    fs::create_dir(dir.path().join("sub")).unwrap();
+    let scene = GOOD.replace("color = [0.8, 0.1, 0.1]", "texture = { type = \"image\", path = \"tex.png\" }");
+    fs::write(dir.path().join("s.toml"), &scene).unwrap();
+    fs::write(dir.path().join("sub").join("s.toml"), &scene).unwrap();
+    for (scene, named) in [("s.toml", "tex.png"), ("./s.toml", "tex.png"), ("sub/s.toml", "sub/tex.png")] {
+        let out = prism(dir.path(), &["info", scene]);
+        assert!(!out.status.success());
+        let err = text(&out.stderr);
+        assert!(err.contains(&format!("cannot read texture {named}: no such file")), "{scene}: {err}");
+    }
+}
+
 // The malformed-input table (every class of bad scene, mesh, texture and
 // option) is in tests/malformed.rs.
 

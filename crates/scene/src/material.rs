@@ -60,7 +60,13 @@ impl Materials {
             let list = if known.is_empty() { "none".to_string() } else { known.join(", ") };
             ctx.invalid(
                 &name.span(),
-                format!("unknown material `{}`; the scene defines: {list}", name.get_ref()),
+                match prism_shade::closest(name.get_ref(), &known) {
+                    Some(near) => format!(
+                        "unknown material `{}`; did you mean `{near}`? (the scene defines: {list})",
+                        name.get_ref()
+                    ),
+                    None => format!("unknown material `{}`; the scene defines: {list}", name.get_ref()),
+                },
             )
         })
     }

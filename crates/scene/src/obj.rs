@@ -302,9 +302,10 @@ pub fn load_obj(
         let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
         for (line, name) in unknown_usemtl(text, &names) {
             unknown_materials.push(format!(
-                "{}:{line}: `usemtl {name}` names no material of {} (it defines: {}); those faces get the default material",
+                "{}:{line}: `usemtl {name}` names no material of {}{} (it defines: {}); those faces get the default material",
                 path.display(),
                 mtllibs.join(", "),
+                prism_shade::did_you_mean(name, &names),
                 if names.is_empty() { "none".to_string() } else { names.join(", ") }
             ));
         }

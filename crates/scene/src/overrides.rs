@@ -227,7 +227,7 @@ mod cli {
                     .long("max-depth")
                     .value_name("N")
                     .value_parser(whole_number)
-                    .help("Maximum recursion depth of reflection and refraction rays"),
+                    .help("Maximum recursion depth of reflected, refracted and see-through rays"),
             )
             .arg(vec3("camera-pos", "Camera position, replacing the scene's"))
             .arg(vec3("look-at", "The point at the centre of the image, replacing the scene's"))

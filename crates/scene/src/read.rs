@@ -282,12 +282,14 @@ fn mtl_texture_path(dir: &Path, value: &str) -> Result<PathBuf, Failure> {
 }
 
 /// `raw` resolved against `base`, checked to be a regular file; its
-/// canonical path.
+/// canonical path. Against the current directory (`.`, a scene there or
+/// on standard input) `raw` is used as it is, so that a message names
+/// `sky.hdr`, as the scene wrote it, not `./sky.hdr`.
 fn regular_file(base: &Path, raw: &str, what: &'static str) -> Result<PathBuf, Failure> {
     if raw.trim().is_empty() {
         return Err(Failure::EmptyPath { what });
     }
-    checked(base.join(raw), what)
+    checked(if base == Path::new(".") { PathBuf::from(raw) } else { base.join(raw) }, what)
 }
 
 /// The canonical path of `path` if it is a regular file.

@@ -234,7 +234,13 @@ fn find_camera<'f>(
             message: if names.is_empty() {
                 format!("the scene has no camera named `{wanted}`: none of its cameras has a name")
             } else {
-                format!("the scene has no camera named `{wanted}`; its cameras are: {}", names.join(", "))
+                match prism_shade::closest(wanted.as_str(), names) {
+                    Some(near) => format!(
+                        "the scene has no camera named `{wanted}`; did you mean `{near}`? (its cameras are: {})",
+                        names.join(", ")
+                    ),
+                    None => format!("the scene has no camera named `{wanted}`; its cameras are: {}", names.join(", ")),
+                }
             },
         })
 }

@@ -93,7 +93,7 @@ pub use layers::{
 };
 pub use light::{AreaLight, AreaShape, Falloff, Light, LightKind, spot_weight};
 pub use material::Material;
-pub use names::did_you_mean;
+pub use names::{closest, did_you_mean};
 pub use output::{
     OutputError, OutputFormat, OutputTarget, aov_path, aov_preview_rgb8, output_target, read_exr_rgb,
     write_aov_exr, write_aov_files, write_aov_preview_png, write_bytes_atomic, write_exr_rgb, write_image,

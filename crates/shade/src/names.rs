@@ -3,18 +3,23 @@
 
 /// The candidate closest to `word`, if it is close enough to be what was
 /// meant: at most one edit in four characters (at least one edit, case
-/// ignored), or one of the two is a prefix of the other (`fov_deg` →
-/// `fov`, `gauss` → `gaussian`).
+/// ignored on both sides, so that a scene's own names such as `Glass`
+/// are found too), or one of the two is a prefix of the other (`fov_deg`
+/// → `fov`, `gauss` → `gaussian`).
 #[must_use]
 pub fn closest<'c>(word: &str, candidates: &[&'c str]) -> Option<&'c str> {
     let lower = word.to_ascii_lowercase();
+    let folded: Vec<(&'c str, String)> = candidates.iter().map(|c| (*c, c.to_ascii_lowercase())).collect();
     let (best, dist) =
-        candidates.iter().map(|c| (*c, strsim::damerau_levenshtein(&lower, c))).min_by_key(|&(_, d)| d)?;
+        folded.iter().map(|(c, l)| (*c, strsim::damerau_levenshtein(&lower, l))).min_by_key(|&(_, d)| d)?;
     let limit = (word.chars().count() / 4).max(1);
     if dist <= limit {
         return Some(best);
     }
-    candidates.iter().copied().find(|c| c.len() >= 2 && (lower.starts_with(c) || c.starts_with(&lower)))
+    folded
+        .iter()
+        .find(|(_, l)| l.len() >= 2 && (lower.starts_with(l.as_str()) || l.starts_with(&lower)))
+        .map(|(c, _)| *c)
 }
 
 /// `; did you mean `x`?` for `word` among `candidates`, or nothing.
@@ -39,5 +44,15 @@ mod tests {
         assert_eq!(closest("x", &[]), None);
         assert_eq!(did_you_mean("gauss", &["box", "gaussian"]), "; did you mean `gaussian`?");
         assert_eq!(did_you_mean("sinc", &["box", "gaussian"]), "");
+    }
+
+    #[test]
+    fn names_with_capitals_are_matched_whatever_the_case() {
+        let names = ["Glass", "RedPlastic", "floor"];
+        assert_eq!(closest("glas", &names), Some("Glass"));
+        assert_eq!(closest("redplastc", &names), Some("RedPlastic"));
+        assert_eq!(closest("FLOOR", &names), Some("floor"));
+        assert_eq!(closest("Red", &names), Some("RedPlastic"));
+        assert_eq!(closest("chrome", &names), None);
     }
 }

@@ -130,7 +130,7 @@ fn a_usemtl_missing_from_the_library_is_a_warning_where_the_mtl_is_used() {
     assert_eq!(about.len(), 1, "{:?}", loaded.warnings);
     assert!(
         about[0].ends_with(&format!(
-            "cube.obj:{line}: `usemtl miror` names no material of cube.mtl (it defines: glass, mirror, painted); those faces get the default material"
+            "cube.obj:{line}: `usemtl miror` names no material of cube.mtl; did you mean `mirror`? (it defines: glass, mirror, painted); those faces get the default material"
         )),
         "{}",
         about[0]

@@ -162,6 +162,11 @@ fn named_cameras_are_chosen_with_the_flag() {
     let err = with_camera(&text, Some("side")).unwrap_err().to_string();
     assert!(err.contains("--camera") && err.contains("no camera named `side`"), "{err}");
     assert!(err.contains("top, close"), "lists the names: {err}");
+    let err = with_camera(&text, Some("tpo")).unwrap_err().to_string();
+    assert!(
+        err.contains("no camera named `tpo`; did you mean `top`? (its cameras are: top, close)"),
+        "{err}"
+    );
     // Without [camera], the first of [[cameras]] is the default.
     let no_main = text.replace("[camera]\nposition = [0, 2, 10]\nlook_at = [0, 1, 0]\n", "");
     assert_eq!(with_camera(&no_main, None).unwrap().settings.camera.position(), Vec3::new(0.0, 10.0, 0.0));

@@ -293,11 +293,19 @@ fn singular_transforms_are_refused_at_the_step() {
 
 #[test]
 fn unknown_material_names_list_the_known_ones() {
-    refused(&[(
-        "[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"blue\"\n",
-        "unknown material `blue`; the scene defines: red",
-        Some("\"blue\""),
-    )]);
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"blue\"\n",
+            "unknown material `blue`; the scene defines: red",
+            Some("\"blue\""),
+        ),
+        // A misspelt name gets the closest, whatever its case.
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"Rde\"\n",
+            "unknown material `Rde`; did you mean `red`? (the scene defines: red)",
+            Some("\"Rde\""),
+        ),
+    ]);
 }
 
 #[test]

@@ -119,7 +119,7 @@ fn problems_in_a_set_name_the_flag() {
         // A file the set names: the message is the set's, with no place in the file.
         (
             &["objects.1.material=m", "materials.m.texture={type=\"image\",path=\"nope.png\"}"],
-            "--set: materials.m.texture={type=\"image\",path=\"nope.png\"}: cannot read texture ./nope.png: no such file",
+            "--set: materials.m.texture={type=\"image\",path=\"nope.png\"}: cannot read texture nope.png: no such file",
         ),
         (
             &["render.spp=123456789012345678901234567890123456789012345"],
