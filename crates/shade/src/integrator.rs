@@ -15,6 +15,7 @@ use prism_bvh::SceneHit;
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Hit, Ray};
 use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Recursion never goes deeper than this, whatever the settings say (a
 /// pair of perfect mirrors with no contribution cut-off would otherwise
@@ -89,7 +90,15 @@ pub(crate) struct Tracer<'a> {
     /// A see-through shadow ray's bookkeeping ([`Tracer::transmittance`]),
     /// kept between rays: emptied, not made again, for each.
     scratch: ShadowScratch,
+    /// The render's cancel flag ([`Tracer::watching`]), and whether it was
+    /// seen set: every ray traced after that returns black at once.
+    cancel: Option<&'a AtomicBool>,
+    stopped: bool,
 }
+
+/// A tracer with a cancel flag reads it once every this many rays
+/// ([`Tracer::trace`]).
+const CANCEL_RAYS: u64 = 4096;
 
 /// The footprint cone of the camera's rays: one pixel wide (the image
 /// plane's height at unit distance over the rows); none when textures are
@@ -224,7 +233,37 @@ impl<'a> Tracer<'a> {
             shadow_rays: 0,
             packet_rays: 0,
             scratch: ShadowScratch::default(),
+            cancel: None,
+            stopped: false,
         }
+    }
+
+    /// This tracer, stopping when `cancel` is set: a path that one sample
+    /// spends long in (thousands of rays under a deep `max_depth` between
+    /// parallel glass panes, 2^40 of them at depth 40) gives up within
+    /// [`CANCEL_RAYS`] rays of a Ctrl-C, returning black for every ray
+    /// after. The render drops the row (see [`crate::render`]).
+    pub(crate) fn watching(mut self, cancel: Option<&'a AtomicBool>) -> Self {
+        self.cancel = cancel;
+        self
+    }
+
+    /// Whether a ray of this tracer gave up because the render was
+    /// cancelled: what it traced since is not the picture.
+    pub(crate) fn gave_up(&self) -> bool {
+        self.stopped
+    }
+
+    /// Whether the render was cancelled (read every [`CANCEL_RAYS`] rays).
+    #[inline]
+    fn stopping(&mut self) -> bool {
+        if !self.stopped
+            && self.rays.is_multiple_of(CANCEL_RAYS)
+            && let Some(c) = self.cancel
+        {
+            self.stopped = c.load(Ordering::Relaxed);
+        }
+        self.stopped
     }
 
     /// Radiance arriving at the origin of the camera ray `ray` (unit
@@ -405,6 +444,9 @@ impl<'a> Tracer<'a> {
         cone: RayCone,
         media: &Media,
     ) -> Vec3 {
+        if self.stopping() {
+            return Vec3::ZERO;
+        }
         let hit = self.scene.accel.closest_hit(ray);
         self.trace_hit(ray, hit, depth, weight, path, skip_exit, cone, media)
     }

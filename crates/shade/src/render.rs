@@ -297,7 +297,7 @@ pub(crate) fn render_pixels<'a>(
             return stop(row, sink);
         }
         let mut stopped = false;
-        let mut tracer = Tracer::new(scene, settings, see_through, &camera_media);
+        let mut tracer = Tracer::new(scene, settings, see_through, &camera_media).watching(hooks.cancel);
         tracer.packets = choice.area_shadows;
         let mut bad = 0u64;
         // Camera rays traced for the beauty (fewer than pixels × spp under adaptive sampling).
@@ -390,7 +390,9 @@ pub(crate) fn render_pixels<'a>(
                 }
             }
         }
-        if stopped {
+        // A path given up midway (the tracer saw the cancel) left its pixel
+        // unfinished, even where the loops above then ran to the row's end.
+        if stopped || tracer.gave_up() {
             // As a row skipped after the cancel: zero sums, the AOV miss values.
             return stop(row, sink);
         }

@@ -355,3 +355,39 @@ fn a_scene_scaled_down_renders_the_same_picture() {
         assert!(off <= 2, "scale {s}: {off} of {} pixels differ", one.pixels.len());
     }
 }
+
+/// A Ctrl-C is seen inside one sample's path, not only between samples:
+/// between six parallel glass panes at depth 40 with no contribution
+/// cut-off, one camera ray splits into up to 2^40 rays (hours). A cancel
+/// set while that sample is traced stops it within a few thousand rays;
+/// the unfinished row is dropped (black), the render reports the cancel.
+#[test]
+fn a_cancel_stops_a_sample_whose_path_never_ends() {
+    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+    let panes: Vec<_> = (0..6)
+        .map(|k| {
+            let x = k as f32 - 2.5;
+            (Plane::new(Vec3::new(x, 0.0, 0.0), Vec3::X).expect("ok").into(), I, glass(1.5))
+        })
+        .collect();
+    let cam = camera(Vec3::new(0.1, 0.0, 0.0), Vec3::new(1.1, 0.0, 0.3), Vec3::Y, 45.0, 1, 1);
+    let shot = scene(panes, vec![light(Vec3::new(0.0, 5.0, 0.0))], cam);
+    let set = shot.settings(1, 40);
+    let cancel = AtomicBool::new(false);
+    let (img, stats) = std::thread::scope(|s| {
+        let render = s.spawn(|| {
+            prism_shade::render(
+                &shot.scene,
+                &set,
+                RenderHooks { cancel: Some(&cancel), ..RenderHooks::default() },
+            )
+        });
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        assert!(!render.is_finished(), "the sample's path should take hours");
+        cancel.store(true, Relaxed);
+        // Without the check inside the path this join would wait for hours.
+        render.join().expect("no panic")
+    });
+    assert!(stats.cancelled);
+    assert_eq!(img.pixels, vec![Vec3::ZERO], "the unfinished pixel is dropped");
+}
