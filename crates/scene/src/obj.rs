@@ -422,11 +422,15 @@ fn polygon_triangles(indices: &[u32], arities: &[u32], positions: &[Vec3]) -> Cu
     Cut { triangles: out, per_face }
 }
 
+/// The largest emission component (`Ke`) an MTL file may give.
+const MAX_KE: f32 = 1e30;
+
 /// Checks the MTL lines that tobj would panic on or that prism would
 /// refuse later without a line: colours (`Ka`, `Kd`, `Ks`, `Ke`) need
 /// three numbers (one is read as grey before this, see `wild.rs`), finite
-/// and `>= 0`; `Ns`, `Ni`, `d` and `Tr` a finite number `>= 0`, `Tr` at
-/// most 1; `illum` a whole number 0 to 255; `map_Kd` and the other maps
+/// and `>= 0` (`Ke` at most [`MAX_KE`]); `Ns`, `Ni`, `d` and `Tr` a finite
+/// number `>= 0`, `Tr` at most 1; `Tf` one or three numbers from 0 to 1;
+/// `illum` a whole number 0 to 255; `map_Kd` and the other maps
 /// tobj reads a file name (tobj says only "material parse error" for
 /// these). Errors carry the 1-based line.
 fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
@@ -443,6 +447,35 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
             ) => {
                 if words.next().is_none() {
                     return Err((i + 1, format!("`{key}` needs a file name")));
+                }
+                continue;
+            }
+            // The transmission filter: one number or three, each 0 to 1
+            // (a filter passes at most all the light); the CIE XYZ and
+            // spectral forms are not read (clear, as without one).
+            Some("Tf") => {
+                let values: Vec<&str> = words.collect();
+                if matches!(values.first(), Some(&("xyz" | "spectral"))) {
+                    continue;
+                }
+                if !matches!(values.len(), 1 | 3) {
+                    return Err((
+                        i + 1,
+                        format!(
+                            "`Tf` needs one number or three (r g b, the transmission filter), found {}",
+                            values.len()
+                        ),
+                    ));
+                }
+                if let Some(v) =
+                    values.iter().find(|v| !v.parse::<f32>().is_ok_and(|x| (0.0..=1.0).contains(&x)))
+                {
+                    return Err((
+                        i + 1,
+                        format!(
+                            "`Tf` value `{v}` must be a number from 0 to 1 (the transmission filter passes at most all the light)"
+                        ),
+                    ));
                 }
                 continue;
             }
@@ -473,6 +506,16 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
         for v in &values[..want] {
             if !v.parse::<f32>().is_ok_and(|x| x.is_finite() && x >= 0.0) {
                 return Err((i + 1, format!("`{key}` value `{v}` must be a finite number >= 0")));
+            }
+            // A pixel sums up to 65 536 samples of an emission, each seen
+            // along paths of up to 64 bounces, in 32-bit floats.
+            if key == "Ke" && v.parse::<f32>().is_ok_and(|x| x > MAX_KE) {
+                return Err((
+                    i + 1,
+                    format!(
+                        "`Ke` value `{v}` must be at most 1e30 (a pixel's sum of its samples must stay finite)"
+                    ),
+                ));
             }
             // `d` above 1 reads as 1 (opaque); `Tr` is 1 − d, so above 1 it
             // would be a negative opacity.
@@ -781,6 +824,24 @@ mod tests {
             Err((2, "`Tr` value `1.5` must be between 0 and 1 (the transparency, 1 − d)".into()))
         );
         assert!(precheck_mtl("Tr 1\nTr 0.25\nd 1.5\n").is_ok());
+        // `Tf`: one number or three, each 0 to 1; its XYZ and spectral forms pass.
+        assert!(precheck_mtl("Tf 0.5\nTf 0 0.25 1\nTf xyz 1 1 1\nTf spectral f.rfl\n").is_ok());
+        for (tf, what) in [("2 2 2", "`2`"), ("nan", "`nan`"), ("0.5 -0.1 0", "`-0.1`"), ("1 1", "found 2")] {
+            let e = precheck_mtl(&format!("newmtl g\nTf {tf}\n")).unwrap_err();
+            assert_eq!(e.0, 2, "{tf}");
+            assert!(e.1.starts_with("`Tf`") && e.1.contains(what), "{tf}: {}", e.1);
+        }
+        // An emission whose samples' sum would overflow.
+        assert!(precheck_mtl("Ke 1e30 0 1\n").is_ok());
+        let e = precheck_mtl("newmtl a\nKe 1e38 1e38 1e38\n").unwrap_err();
+        assert_eq!(
+            e,
+            (
+                2,
+                "`Ke` value `1e38` must be at most 1e30 (a pixel's sum of its samples must stay finite)"
+                    .into()
+            )
+        );
     }
 
     #[test]
