@@ -14,7 +14,11 @@
 //! removed again (`writable::MadeDirs`). A signal that comes while the
 //! finished image is being written lets the write finish (the image is
 //! whole, and no temporary file is left); a turntable then stops before
-//! its next frame. A second signal exits at once, with 128 + its number.
+//! its next frame. A second signal exits at once, with 128 + its number,
+//! after taking away the temporary files of a write in progress
+//! (`prism_shade::remove_unfinished_outputs`): the output keeps what it
+//! held before. The handlers only note a signal; a thread of their own
+//! (signal-hook's iterator) sets the flag or exits.
 //!
 //! The handlers are installed once, just before the output folders are
 //! made; before that (while the scene loads) the signals have their default
@@ -27,7 +31,9 @@
 //! finished image is being encoded. A SIGKILL (which cannot be caught)
 //! during the render therefore leaves nothing; one during that short write
 //! can leave such a `.tmp` file, but never a truncated file at the output
-//! path.
+//! path. A render's image and its AOV files are shown together
+//! (`prism_shade::all_or_nothing`): a failure while writing any of them
+//! (a full disk) leaves every output as it was.
 
 use prism_shade::OutputError;
 use std::fmt;
@@ -78,20 +84,29 @@ fn ignored_at_start(signal: i32) -> bool {
 fn install_handlers() -> Result<Handlers, std::io::Error> {
     let flag = Arc::new(AtomicBool::new(false));
     let first = Arc::new(AtomicUsize::new(0));
-    for (sig, _) in signals() {
-        #[cfg(unix)]
-        if sig == signal_hook::consts::SIGHUP && ignored_at_start(sig) {
-            continue;
+    #[cfg_attr(not(unix), allow(unused_mut))]
+    let mut wanted: Vec<i32> = signals().into_iter().map(|(sig, _)| sig).collect();
+    #[cfg(unix)]
+    wanted.retain(|&sig| !(sig == signal_hook::consts::SIGHUP && ignored_at_start(sig)));
+    // signal-hook's handlers only note the signals; this thread acts on
+    // them. The first sets the number, then the flag that makes the
+    // render stop and read it. A second (of any of them) ends prism at
+    // once: with the image being written, its temporary files are taken
+    // away first, so that none is left beside the output.
+    let mut incoming = signal_hook::iterator::Signals::new(&wanted)?;
+    let (flag_seen, first_seen) = (Arc::clone(&flag), Arc::clone(&first));
+    std::thread::Builder::new().name("prism-signals".into()).spawn(move || {
+        for sig in incoming.forever() {
+            if flag_seen.load(Ordering::SeqCst) {
+                prism_shade::remove_unfinished_outputs();
+                let name = signals().into_iter().find(|(s, _)| *s == sig).map_or("a signal", |(_, n)| n);
+                errln!("error: {name} again: stopped at once; nothing more was written");
+                std::process::exit(128 + sig);
+            }
+            first_seen.store(usize::try_from(sig).unwrap_or(0), Ordering::SeqCst);
+            flag_seen.store(true, Ordering::SeqCst);
         }
-        // In this order for each signal: the shutdown sees the flag as
-        // the signal before left it, and the number is stored before the
-        // flag that makes the render stop and read it.
-        let status = 128 + sig;
-        signal_hook::flag::register_conditional_shutdown(sig, status, Arc::clone(&flag))?;
-        // Stored by the first signal only: a second one has exited above.
-        signal_hook::flag::register_usize(sig, Arc::clone(&first), usize::try_from(sig).unwrap_or(0))?;
-        signal_hook::flag::register(sig, Arc::clone(&flag))?;
-    }
+    })?;
     Ok(Handlers { flag, signal: first })
 }
 

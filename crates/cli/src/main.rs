@@ -601,11 +601,17 @@ fn render_to(
             // On the render's threads (`--threads`): the PNG encoder is
             // parallel, by rows (no more workers than rows: idle ones cost).
             let threads = settings.threads.map(|n| n.min(image.height.max(1) as usize));
-            prism_shade::in_pool(threads, || plan.write_image(&image, alpha.as_deref(), passes.as_ref()))?;
-            match &passes {
-                Some(p) => plan.write_passes(&image, alpha.as_deref(), p)?,
-                None => Vec::new(),
-            }
+            // The image and its AOV files replace what was there together,
+            // or (a full disk midway) none of them does.
+            prism_shade::in_pool(threads, || {
+                prism_shade::all_or_nothing(|| {
+                    plan.write_image(&image, alpha.as_deref(), passes.as_ref())?;
+                    match &passes {
+                        Some(p) => plan.write_passes(&image, alpha.as_deref(), p),
+                        None => Ok(Vec::new()),
+                    }
+                })
+            })?
         }
     };
     if args.stats_json.is_some() {

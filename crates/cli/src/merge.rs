@@ -59,12 +59,16 @@ pub fn merge_command(args: &MergeArgs) -> Result<()> {
     // A folder made here goes again if nothing is written.
     let mut made = crate::writable::MadeDirs::default();
     let passes = has_aovs.then_some(&aovs);
-    let result = made
-        .make(args.output.parent().unwrap_or(Path::new("")), "the output directory")
-        .and_then(|()| Ok(plan.write_image(&image, None, passes)?))
-        .and_then(|()| match passes {
-            Some(p) => Ok(plan.write_passes(&image, None, p)?),
-            None => Ok(Vec::new()),
+    let result =
+        made.make(args.output.parent().unwrap_or(Path::new("")), "the output directory").and_then(|()| {
+            // The image and its AOV files together, or none of them.
+            Ok(prism_shade::all_or_nothing(|| {
+                plan.write_image(&image, None, passes)?;
+                match passes {
+                    Some(p) => plan.write_passes(&image, None, p),
+                    None => Ok(Vec::new()),
+                }
+            })?)
         });
     if result.is_err() {
         made.remove_empty();

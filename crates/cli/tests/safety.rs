@@ -264,6 +264,47 @@ mod signals {
     }
 
     #[test]
+    fn a_second_signal_while_the_image_is_written_exits_and_leaves_the_old_image() {
+        // As above, with the image there before: two signals while the
+        // temporary file is written stop prism at once, and take the
+        // temporary file away; the old image stays.
+        let dir = tempfile::tempdir().unwrap();
+        let scene = "[render]\nwidth = 2048\nheight = 2048\nspp = 1\nbackground = [0.2, 0.3, 0.4]\n\
+                     [camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+        fs::create_dir(dir.path().join("new")).unwrap();
+        let new = dir.path().join("new");
+        fs::write(new.join("img.exr"), b"OLD").unwrap();
+        let (mut child, err, seen) = start_to(dir.path(), scene, "new/img.exr", &[]);
+        let start = Instant::now();
+        let mut sent = false;
+        while child.try_wait().expect("wait").is_none() && start.elapsed() < Duration::from_secs(30) {
+            let tmp = listing(&new).iter().any(|f| f.starts_with(".img.exr.") && f.ends_with(".tmp"));
+            if tmp {
+                signal(&child, "-TERM");
+                std::thread::sleep(Duration::from_millis(20));
+                signal(&child, "-INT");
+                sent = true;
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert!(sent, "the temporary file was never seen: {err}");
+        if status.code() == Some(0) {
+            // The write finished between the two signals (a fast disk): the
+            // new image, whole.
+            let img = image::open(new.join("img.exr")).expect("a whole EXR").to_rgb32f();
+            assert_eq!((img.width(), img.height()), (2048, 2048));
+        } else {
+            assert_eq!(status.code(), Some(130), "{err}");
+            assert!(err.contains("Ctrl-C again: stopped at once"), "{err}");
+            assert_eq!(fs::read(new.join("img.exr")).unwrap(), b"OLD", "{err}");
+        }
+        assert_eq!(listing(&new), ["img.exr"], "no temporary file: {err}");
+    }
+
+    #[test]
     fn a_sighup_ignored_at_start_stays_ignored() {
         // `nohup prism render …`: the terminal closing does not stop it.
         let dir = tempfile::tempdir().unwrap();

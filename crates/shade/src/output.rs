@@ -233,6 +233,7 @@ fn replace_atomically(
 ) -> Result<(), OutputError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    let named = path;
     let path = target;
     let name = path.file_name().ok_or_else(|| invalid(path, "not a file path"))?;
     let dir = match path.parent() {
@@ -246,6 +247,7 @@ fn replace_atomically(
     let tmp = dir.join(tmp_name);
     // Readable too: a writer may read back what it wrote (the EXR header).
     let file = OpenOptions::new().read(true).write(true).create_new(true).open(&tmp).map_err(io)?;
+    let unfinished = Unfinished::note(&tmp);
     let result = (|| {
         let mut w = BufWriter::new(file);
         encode(&mut w)?;
@@ -253,12 +255,140 @@ fn replace_atomically(
         let file = w.into_inner().map_err(|e| io(e.into_error()))?;
         file.sync_all().map_err(io)?;
         drop(file);
-        std::fs::rename(&tmp, path).map_err(io)
+        // Inside [`all_or_nothing`]: shown with the others at its end.
+        let pending = Pending { tmp: tmp.clone(), target: path.to_path_buf(), named: named.to_path_buf() };
+        match STAGED.with(|s| s.borrow_mut().as_mut().map(|list| list.push(pending.clone()))) {
+            Some(()) => {
+                std::mem::forget(unfinished);
+                Ok(())
+            }
+            None => pending.show(),
+        }
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// A temporary file written and synced, waiting to be renamed over its
+/// target ([`all_or_nothing`]).
+#[derive(Clone, Debug)]
+struct Pending {
+    tmp: PathBuf,
+    target: PathBuf,
+    /// The path the caller gave (named in errors).
+    named: PathBuf,
+}
+
+impl Pending {
+    /// Renames the temporary file over the target, no longer unfinished.
+    fn show(&self) -> Result<(), OutputError> {
+        let done = std::fs::rename(&self.tmp, &self.target)
+            .map_err(|source| OutputError::Io { path: self.named.clone(), source });
+        Unfinished::forget(&self.tmp);
+        done
+    }
+}
+
+thread_local! {
+    /// The files [`all_or_nothing`] holds back on this thread (`None`
+    /// outside one).
+    static STAGED: std::cell::RefCell<Option<Vec<Pending>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `write`, whose atomic file writes on this thread (every writer of
+/// this module) are then shown together: each file is written and synced
+/// to its temporary file as usual, and only when `write` has succeeded
+/// are they all renamed over their targets, in order. If `write` fails
+/// (a full disk at the third of five passes), every temporary file is
+/// removed and no target changes: a render's image and its AOV files are
+/// replaced together or not at all. (A rename failing midway, which
+/// needs the folder to change under the render, leaves the files before
+/// it replaced.) Nested calls join the outer one.
+///
+/// # Errors
+/// `write`'s error, or the first failed rename.
+pub fn all_or_nothing<R>(write: impl FnOnce() -> Result<R, OutputError>) -> Result<R, OutputError> {
+    let outer = STAGED.with(|s| {
+        let mut s = s.borrow_mut();
+        let outer = s.is_some();
+        if !outer {
+            *s = Some(Vec::new());
+        }
+        outer
+    });
+    if outer {
+        return write();
+    }
+    let result = write();
+    let pending = STAGED.with(|s| s.borrow_mut().take()).unwrap_or_default();
+    match result {
+        Ok(r) => {
+            let mut shown = Ok(());
+            for p in &pending {
+                if shown.is_ok() {
+                    shown = p.show();
+                } else {
+                    let _ = std::fs::remove_file(&p.tmp);
+                    Unfinished::forget(&p.tmp);
+                }
+            }
+            shown.map(|()| r)
+        }
+        Err(e) => {
+            for p in &pending {
+                let _ = std::fs::remove_file(&p.tmp);
+                Unfinished::forget(&p.tmp);
+            }
+            Err(e)
+        }
+    }
+}
+
+/// The temporary files being written or held back, in every thread, so
+/// that a forced exit can take them away ([`remove_unfinished_outputs`]).
+static UNFINISHED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A temporary file noted in [`UNFINISHED`] while it lives: forgotten when
+/// dropped (written and renamed, or removed after an error).
+struct Unfinished(PathBuf);
+
+impl Unfinished {
+    fn note(tmp: &Path) -> Self {
+        if let Ok(mut list) = UNFINISHED.lock() {
+            list.push(tmp.to_path_buf());
+        }
+        Self(tmp.to_path_buf())
+    }
+
+    fn forget(tmp: &Path) {
+        if let Ok(mut list) = UNFINISHED.lock()
+            && let Some(k) = list.iter().position(|p| p == tmp)
+        {
+            list.swap_remove(k);
+        }
+    }
+}
+
+impl Drop for Unfinished {
+    fn drop(&mut self) {
+        Self::forget(&self.0);
+    }
+}
+
+/// Removes the temporary files of every write in progress (or held back by
+/// [`all_or_nothing`]), for a process about to exit before they finish (a
+/// second Ctrl-C while the image is written): no `.<name>.<pid>.<n>.tmp`
+/// is left behind. The targets are untouched.
+pub fn remove_unfinished_outputs() {
+    let list = match UNFINISHED.lock() {
+        Ok(mut list) => std::mem::take(&mut *list),
+        Err(_) => return,
+    };
+    for tmp in list {
+        let _ = std::fs::remove_file(tmp);
+    }
 }
 
 /// Writes `bytes` to `path` atomically (as every image: a temporary file
@@ -793,6 +923,43 @@ mod tests {
         let mut levels = floor.clone();
         levels.dedup();
         assert!(levels.len() > 60, "{} grey levels", levels.len());
+    }
+
+    #[test]
+    fn writes_held_together_show_all_or_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = Image { width: 1, height: 1, pixels: vec![Vec3::ONE] };
+        let (a, b) = (dir.path().join("a.png"), dir.path().join("a.depth.exr"));
+        std::fs::write(&a, b"OLD").unwrap();
+        // The third write fails (its folder is missing): the first two
+        // targets stay as they were and no temporary file is left.
+        let missing = dir.path().join("no-such-dir").join("x.exr");
+        let failed = all_or_nothing(|| {
+            write_image(&a, &img, OutputFormat::Png)?;
+            write_image(&b, &img, OutputFormat::Exr)?;
+            assert_eq!(std::fs::read(&a).unwrap(), b"OLD", "held back until the end");
+            write_image(&missing, &img, OutputFormat::Exr)
+        });
+        assert!(matches!(failed, Err(OutputError::Io { .. })));
+        assert_eq!(std::fs::read(&a).unwrap(), b"OLD");
+        assert_eq!(listing(dir.path()), ["a.png"]);
+        assert!(!UNFINISHED.lock().unwrap().iter().any(|t| t.starts_with(dir.path())), "forgotten");
+        // All succeed: all are shown, nested calls joining the outer one.
+        all_or_nothing(|| {
+            write_image(&a, &img, OutputFormat::Png)?;
+            all_or_nothing(|| write_image(&b, &img, OutputFormat::Exr))?;
+            assert!(!b.exists() && std::fs::read(&a).unwrap() == b"OLD", "nothing shown yet");
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(listing(dir.path()), ["a.depth.exr", "a.png"]);
+        assert_ne!(std::fs::read(&a).unwrap(), b"OLD");
+        // A temporary file of a write in progress is noted, and taken away
+        // by `remove_unfinished_outputs` (a forced exit's clean-up).
+        let stray = Unfinished::note(&dir.path().join(".a.png.1.0.tmp"));
+        std::fs::write(&stray.0, b"part").unwrap();
+        remove_unfinished_outputs();
+        assert_eq!(listing(dir.path()), ["a.depth.exr", "a.png"]);
     }
 
     #[test]
