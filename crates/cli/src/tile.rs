@@ -71,16 +71,31 @@ fn parse_bounds(s: &str) -> Result<PixelBounds, String> {
             v.len()
         ));
     };
-    let n = |t: &str| t.parse::<u32>().map_err(|_| format!("`{t}` is not a pixel number (0 or more)"));
+    let n = |t: &str| {
+        whole(t).map_err(|too_large| match too_large {
+            true => format!("`{t}` is too large for a pixel number (at most {})", u32::MAX),
+            false => format!("`{t}` is not a pixel number (0 or more)"),
+        })
+    };
     PixelBounds::new(n(x0)?, n(x1)?, n(y0)?, n(y1)?).map_err(|e| e.to_string())
 }
 
 /// `I/N`.
 fn parse_tile(s: &str) -> Result<(u32, u32), String> {
     let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/8 for the first of 8 tiles")?;
-    let num =
-        |t: &str| t.trim().parse::<u32>().map_err(|_| format!("`{t}` is not a whole number (expected I/N)"));
+    let num = |t: &str| {
+        whole(t.trim()).map_err(|too_large| match too_large {
+            true => format!("`{t}` is too large (at most {}; expected I/N)", u32::MAX),
+            false => format!("`{t}` is not a whole number (expected I/N)"),
+        })
+    };
     Ok((num(i)?, num(n)?))
+}
+
+/// `t` as a `u32`; `Err(true)` where it is a whole number too large for
+/// one, `Err(false)` where it is not a whole number.
+fn whole(t: &str) -> Result<u32, bool> {
+    t.parse::<u32>().map_err(|_| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// The task index of a farm job, from the first of [`INDEX_VARIABLES`]
@@ -260,6 +275,16 @@ mod tests {
         assert_eq!(r, Some((PixelBounds::new(0, 8, 2, 4).unwrap(), Some((1, 2)))));
         assert_eq!(part(None, None).region(8, 4).unwrap(), None);
         let err = |p: PartArgs| p.region(8, 4).unwrap_err().to_string();
+        // A whole number too large for one is called that, not "not a whole number".
+        assert_eq!(
+            err(part(None, Some("0/18446744073709551615"))),
+            "--tile 0/18446744073709551615: `18446744073709551615` is too large (at most 4294967295; expected I/N)"
+        );
+        assert_eq!(err(part(None, Some("x/2"))), "--tile x/2: `x` is not a whole number (expected I/N)");
+        assert!(
+            err(part(Some("0,99999999999,0,1"), None))
+                .ends_with("is too large for a pixel number (at most 4294967295)")
+        );
         assert_eq!(
             err(part(Some("1,9,0,1"), None)),
             "--pixel-bounds 1,9,0,1: the bounds 1,9,0,1 reach past the 8×4 image"

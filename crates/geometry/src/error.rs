@@ -32,21 +32,37 @@ pub enum GeometryError {
     InvalidMesh(String),
 }
 
+/// `x` as a person writes it: `1`, `0.256`, `-3.5`, `1.2e-30`: three
+/// significant figures, without trailing zeros, and in exponent form
+/// outside `[10⁻³, 10⁶)`.
+fn figure(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    if !(1e-3..1e6).contains(&x.abs()) {
+        return format!("{x:.2e}").replace(".00e", "e").replace("0e", "e");
+    }
+    let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
 impl std::fmt::Display for GeometryError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::NonFinite(what) => write!(f, "{what} must be finite (got NaN or infinity)"),
             Self::NonPositive { what, value } => write!(f, "{what} must be positive, got {value}"),
             Self::SingularTransform { det, flatness } => {
-                if *det == 0.0 || !flatness.is_finite() {
-                    write!(f, "transform is singular (determinant {det:e}); it would flatten the object")
+                let det = figure(*det);
+                if det == "0" || !flatness.is_finite() {
+                    write!(f, "transform is singular (determinant {det}); it would flatten the object")
                 } else {
                     // A shear's determinant is 1: the size of the volume
                     // says nothing, the share of it its axes keep does.
                     write!(
                         f,
                         "transform is numerically singular: its axes span {flatness:.2e} of the volume \
-                         their lengths could (more than {:e} is needed; determinant {det:e}); it would \
+                         their lengths could (more than {:e} is needed; determinant {det}); it would \
                          all but flatten the object",
                         crate::transform::MIN_FLATNESS
                     )
@@ -60,3 +76,27 @@ impl std::fmt::Display for GeometryError {
 }
 
 impl std::error::Error for GeometryError {}
+
+#[cfg(test)]
+mod tests {
+    use super::figure;
+
+    #[test]
+    fn numbers_in_messages_read_as_written() {
+        let cases = [
+            (1.0, "1"),
+            (0.0, "0"),
+            (-0.0, "0"),
+            (0.256_000_011_444_091_96, "0.256"),
+            (-3.5, "-3.5"),
+            (123.456, "123"),
+            (1e-30, "1e-30"),
+            (1.25e-7, "1.25e-7"),
+            (2.5e12, "2.5e12"),
+            (0.001, "0.001"),
+        ];
+        for (x, want) in cases {
+            assert_eq!(figure(x), want, "{x}");
+        }
+    }
+}

@@ -513,11 +513,11 @@ mod tests {
         assert_eq!(
             long.to_string(),
             "transform is numerically singular: its axes span 1.00e-8 of the volume their lengths could \
-             (more than 1e-6 is needed; determinant 1e0); it would all but flatten the object"
+             (more than 1e-6 is needed; determinant 1); it would all but flatten the object"
         );
         assert!(Transform::shear(Shear { xy: 1e5, ..Shear::NONE }).is_ok());
         let zero = Transform::scale(Vec3::new(1.0, 0.0, 1.0)).unwrap_err().to_string();
-        assert_eq!(zero, "transform is singular (determinant 0e0); it would flatten the object");
+        assert_eq!(zero, "transform is singular (determinant 0); it would flatten the object");
         // A diagonal scale is exactly invertible, however anisotropic.
         assert!(Transform::scale(Vec3::new(1.0, 1.0, 1e-7)).is_ok());
     }

@@ -134,10 +134,25 @@ pub(crate) fn build_obj_scene(
         }
         None => framing.light(c, r),
     };
-    if !(c.is_finite() && r.is_finite() && eye.is_finite() && light.is_finite() && eye != c) {
+    // With the camera given (`--camera-pos` and `--look-at`), the framed
+    // eye is not used; the default light still comes from the bounds.
+    let given_camera = ov.camera_pos.is_some() && ov.look_at.is_some();
+    let point = |v: Vec3| {
+        let n = |x: f32| if x.abs() < 1e6 { x.to_string() } else { format!("{x:e}") };
+        format!("[{}, {}, {}]", n(v.x), n(v.y), n(v.z))
+    };
+    if !(given_camera || (c.is_finite() && r.is_finite() && eye.is_finite() && eye != c)) {
         return Err(ctx.invalid_file(format!(
-            "cannot frame the mesh, its bounds {} to {} are too large (or too small for their distance from the origin)",
-            bounds.min, bounds.max
+            "cannot frame the mesh, its bounds {} to {} are too large (or too small for their distance from the origin); give --camera-pos and --look-at",
+            point(bounds.min),
+            point(bounds.max)
+        )));
+    }
+    if !light.is_finite() {
+        return Err(ctx.invalid_file(format!(
+            "cannot place the default light for the mesh, its bounds {} to {} are too large; give --light X,Y,Z",
+            point(bounds.min),
+            point(bounds.max)
         )));
     }
     let settings = settings::resolve(&ctx, None, d, options)?;

@@ -122,12 +122,22 @@ impl SceneFile {
     /// [`SceneError::Syntax`] at the place toml names.
     pub fn parse(text: &str, file_name: &Path) -> Result<Self, SceneError> {
         toml::from_str(text).map_err(|e| {
-            let location = match e.span() {
-                Some(span) => Location::at_span(file_name, text, &span),
+            // serde's own limit on nesting (a table header of a hundred
+            // dotted keys) comes without a place: the deepest line is it.
+            let span =
+                e.span().or_else(|| (e.message().trim() == "recursion limit").then(|| deepest_line(text)));
+            let location = match &span {
+                Some(span) => Location::at_span(file_name, text, span),
                 None => Location::file(file_name),
             };
             let entry = e.span().and_then(|s| crate::suggest::entry_at(text, s.start, e.message()));
-            let mut message = syntax_message(e.message(), entry);
+            let mut message = if e.message().trim() == "recursion limit" {
+                "tables nested too deep for the reader (recursion limit): a scene nests a few levels, \
+                 such as [materials.NAME] or an object's transform steps"
+                    .to_owned()
+            } else {
+                syntax_message(e.message(), entry)
+            };
             if let Some(span) = e.span() {
                 message = with_the_text(text, span.clone(), message);
                 message.push_str(&unclosed_note(text, span.start, &message));
@@ -135,6 +145,21 @@ impl SceneFile {
             SceneError::Syntax { location, message }
         })
     }
+}
+
+/// The span of the line of `text` with the most nesting marks (`.`, `[`,
+/// `{`), for an error that comes without a place.
+fn deepest_line(text: &str) -> std::ops::Range<usize> {
+    let mut best = (0, 0..0);
+    let mut start = 0;
+    for line in text.split_inclusive('\n') {
+        let marks = line.bytes().filter(|b| matches!(b, b'.' | b'[' | b'{')).count();
+        if marks > best.0 {
+            best = (marks, start..start + line.trim_end().len());
+        }
+        start += line.len();
+    }
+    best.1
 }
 
 /// For a message about an unfinished array or inline table (toml reports

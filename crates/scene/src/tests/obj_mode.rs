@@ -150,3 +150,28 @@ fn a_field_of_view_too_narrow_to_frame_the_mesh_names_the_flag() {
     let away = (cam.position() - centre).length() / radius;
     assert!(away > 5000.0 && away <= 1e4, "{away}");
 }
+
+#[test]
+fn a_mesh_too_large_to_frame_renders_from_a_given_camera_and_light() {
+    // Corners near f32::MAX: no framed eye or default light is finite.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("far.obj");
+    fs::write(&path, "v 3e38 0 0\nv 0 3e38 0\nv 0 0 3e38\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 4 5 6\n")
+        .unwrap();
+    let with = |camera: bool, light: bool| {
+        let overrides = Overrides {
+            camera_pos: camera.then_some(Vec3::new(0.3, 0.3, 5.0)),
+            look_at: camera.then_some(Vec3::new(0.3, 0.3, 0.0)),
+            ..Overrides::default()
+        };
+        let obj = ObjOptions { light: light.then_some(Vec3::new(0.0, 5.0, 5.0)), ..ObjOptions::default() };
+        load_obj_scene(&path, &LoadOptions { overrides, obj, ..LoadOptions::default() })
+    };
+    let e = with(false, true).unwrap_err().to_string();
+    assert!(e.contains("cannot frame the mesh, its bounds [0, 0, 0] to [3e38, 3e38, 3e38]"), "{e}");
+    assert!(e.ends_with("give --camera-pos and --look-at"), "{e}");
+    let e = with(true, false).unwrap_err().to_string();
+    assert!(e.contains("cannot place the default light") && e.ends_with("give --light X,Y,Z"), "{e}");
+    let loaded = with(true, true).unwrap();
+    assert_eq!(loaded.settings.camera.position(), Vec3::new(0.3, 0.3, 5.0));
+}

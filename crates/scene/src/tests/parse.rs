@@ -630,3 +630,10 @@ fn a_transform_step_written_as_a_table_is_refused_at_its_value() {
         ),
     ]);
 }
+
+#[test]
+fn nesting_past_the_readers_limit_is_refused_at_its_line() {
+    // serde's recursion limit comes without a place; the deepest line is it.
+    let header = format!("[{}]\nx = 1\n", vec!["a"; 1000].join("."));
+    refused(&[(&header, "tables nested too deep for the reader (recursion limit)", Some("[a.a.a"))]);
+}
