@@ -221,9 +221,18 @@ pub fn assemble(tiles: &[(PathBuf, Tile)]) -> Result<(Image, AovImages)> {
     let (w, h) = (first.width, first.height);
     let covered: u64 = tiles.iter().map(|(_, t)| t.bounds.area()).sum();
     if covered < u64::from(w) * u64::from(h) {
+        // Every index there but pixels uncovered (tiles whose image size
+        // was altered after the render): said by the pixels below.
         if let Some((_, n)) = first.header.tile {
             let have: Vec<u32> = tiles.iter().filter_map(|(_, t)| t.header.tile.map(|x| x.0)).collect();
             let missing: Vec<String> = (0..n).filter(|i| !have.contains(i)).map(|i| i.to_string()).collect();
+            if missing.is_empty() {
+                bail!(
+                    "the {n} tiles are all here but cover {covered} of the {w}×{h} image's {} pixels: \
+                     their image size does not match their split (files altered after the render?); nothing written",
+                    u64::from(w) * u64::from(h)
+                );
+            }
             bail!(
                 "tiles missing: {} of {n} (indices {}); nothing written",
                 missing.len(),
@@ -438,6 +447,18 @@ mod tests {
         assert_eq!(
             e,
             "tiles missing: 4 of 4×6 pixels are in no tile (4 rows between row 2 and row 5); nothing written"
+        );
+        // Every index of the split, on an image size altered after the render.
+        let taller = |i| {
+            let mut t = tile(i, 3);
+            t.1.height = 12;
+            t
+        };
+        let e = err(&[taller(0), taller(1), taller(2)]);
+        assert_eq!(
+            e,
+            "the 3 tiles are all here but cover 24 of the 4×12 image's 48 pixels: their image size does not match \
+             their split (files altered after the render?); nothing written"
         );
     }
 }
