@@ -232,6 +232,26 @@ mod signals {
         }
     }
 
+    /// Sends `signals` (20 ms apart) to `child` once the temporary file of
+    /// `img.exr` is in `folder` (the image is being written); whether it
+    /// was seen within 30 s.
+    fn signal_while_written(child: &mut Child, folder: &Path, signals: &[&str]) -> bool {
+        let start = Instant::now();
+        while child.try_wait().expect("wait").is_none() && start.elapsed() < Duration::from_secs(30) {
+            if listing(folder).iter().any(|f| f.starts_with(".img.exr.") && f.ends_with(".tmp")) {
+                for (k, sig) in signals.iter().enumerate() {
+                    if k > 0 {
+                        std::thread::sleep(Duration::from_millis(20));
+                    }
+                    signal(child, sig);
+                }
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        false
+    }
+
     #[test]
     fn sigterm_while_the_image_is_written_leaves_the_whole_image_and_no_temporary_file() {
         // A plain background at 2048×2048 renders in a moment and takes a
@@ -242,17 +262,7 @@ mod signals {
                      [camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
         let (mut child, err, seen) = start_to(dir.path(), scene, "new/img.exr", &[]);
         let new = dir.path().join("new");
-        let start = Instant::now();
-        let mut sent = false;
-        while child.try_wait().expect("wait").is_none() && start.elapsed() < Duration::from_secs(30) {
-            let tmp = listing(&new).iter().any(|f| f.starts_with(".img.exr.") && f.ends_with(".tmp"));
-            if tmp {
-                signal(&child, "-TERM");
-                sent = true;
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        let sent = signal_while_written(&mut child, &new, &["-TERM"]);
         let status = wait(&mut child);
         let err = rest(err, seen);
         assert!(sent, "the temporary file was never seen: {err}");
@@ -275,19 +285,7 @@ mod signals {
         let new = dir.path().join("new");
         fs::write(new.join("img.exr"), b"OLD").unwrap();
         let (mut child, err, seen) = start_to(dir.path(), scene, "new/img.exr", &[]);
-        let start = Instant::now();
-        let mut sent = false;
-        while child.try_wait().expect("wait").is_none() && start.elapsed() < Duration::from_secs(30) {
-            let tmp = listing(&new).iter().any(|f| f.starts_with(".img.exr.") && f.ends_with(".tmp"));
-            if tmp {
-                signal(&child, "-TERM");
-                std::thread::sleep(Duration::from_millis(20));
-                signal(&child, "-INT");
-                sent = true;
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        let sent = signal_while_written(&mut child, &new, &["-TERM", "-INT"]);
         let status = wait(&mut child);
         let err = rest(err, seen);
         assert!(sent, "the temporary file was never seen: {err}");
