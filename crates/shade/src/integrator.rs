@@ -94,7 +94,20 @@ pub(crate) struct Tracer<'a> {
     /// seen set: every ray traced after that returns black at once.
     cancel: Option<&'a AtomicBool>,
     stopped: bool,
+    /// Rays on the stack that went on through a surface unshaded, at the
+    /// same depth ([`Tracer::trace_hit`]); at most [`MAX_THROUGH`].
+    through: u32,
 }
+
+/// The most unshaded continuations through surfaces one path may stack
+/// up ([`Tracer::trace_hit`]'s re-entered front face and a see-through
+/// solid's skipped exit), which do not count against `max_depth`. Where
+/// the spawned ray's offset cannot carry it off the surface (a glass
+/// sphere of radius 1e-20, a glass mesh of sliver triangles reaching
+/// 1e4), each continuation met the same surface again, without end, until
+/// the stack overflowed (an abort, found by a fuzz hunt). Past this many
+/// the path counts as absorbed (black).
+const MAX_THROUGH: u32 = 32;
 
 /// A tracer with a cancel flag reads it once every this many rays
 /// ([`Tracer::trace`]).
@@ -235,6 +248,7 @@ impl<'a> Tracer<'a> {
             scratch: ShadowScratch::default(),
             cancel: None,
             stopped: false,
+            through: 0,
         }
     }
 
@@ -246,6 +260,18 @@ impl<'a> Tracer<'a> {
     pub(crate) fn watching(mut self, cancel: Option<&'a AtomicBool>) -> Self {
         self.cancel = cancel;
         self
+    }
+
+    /// `go` (a ray traced on through a surface at the same depth), unless
+    /// [`MAX_THROUGH`] such rays are already on the stack: then black.
+    fn through(&mut self, go: impl FnOnce(&mut Self) -> Vec3) -> Vec3 {
+        if self.through >= MAX_THROUGH {
+            return Vec3::ZERO;
+        }
+        self.through += 1;
+        let l = go(self);
+        self.through -= 1;
+        l
     }
 
     /// Whether a ray of this tracer gave up because the render was
@@ -502,7 +528,8 @@ impl<'a> Tracer<'a> {
             // next triangle's plane lies beyond the ray's offset. Go on
             // through it, unshaded.
             let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
-            let l = self.trace(&next, depth, weight * absorb, end, skip_exit, cone, media) * absorb;
+            let l = self.through(|t| t.trace(&next, depth, weight * absorb, end, skip_exit, cone, media))
+                * absorb;
             return self.fog_blend(l, fog_t);
         }
         if h.object == skip_exit && !h.hit.front_face && is_closed(scene, h.object) {
@@ -510,7 +537,8 @@ impl<'a> Tracer<'a> {
             // too, and is absorbed as the refracted one is.
             let next = Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, ray.dir, self.offset);
             let media = media.left(h.object);
-            let l = self.trace(&next, depth, weight * absorb, end, NO_OBJECT, cone, &media) * absorb;
+            let l = self.through(|t| t.trace(&next, depth, weight * absorb, end, NO_OBJECT, cone, &media))
+                * absorb;
             return self.fog_blend(l, fog_t);
         }
         let l = self.shade(ray, &h, mat, depth, weight * absorb, end, cone, media) * absorb;

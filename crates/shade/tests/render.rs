@@ -391,3 +391,26 @@ fn a_cancel_stops_a_sample_whose_path_never_ends() {
     assert!(stats.cancelled);
     assert_eq!(img.pixels, vec![Vec3::ZERO], "the unfinished pixel is dropped");
 }
+
+/// A see-through solid too small for a spawned ray's offset to leave its
+/// surface: each unshaded continuation through it (a re-entered front
+/// face) met the same surface again at the same depth, until the stack
+/// overflowed and the process aborted, even at depth 1. Now such a path
+/// counts as absorbed after a few dozen, and the render finishes with
+/// finite pixels.
+#[test]
+fn a_glass_sphere_too_small_for_the_ray_offset_renders() {
+    for see_through in [
+        Material { transmission: 1.0, ior: 1.5, ..Material::diffuse(Vec3::splat(0.8)) },
+        Material { transparency: 1.0, ..Material::diffuse(Vec3::splat(0.8)) },
+    ] {
+        let radius = 1e-20;
+        let ball = (Sphere::new(Vec3::ZERO, radius).expect("ok").into(), I, see_through);
+        let cam = camera(Vec3::new(0.0, 0.0, 5.0 * radius), Vec3::ZERO, Vec3::Y, 45.0, 32, 24);
+        let shot = scene(vec![ball], vec![], cam);
+        for depth in [1, 8] {
+            let img = render(&shot, 1, depth);
+            assert!(img.pixels.iter().all(|p| p.is_finite()), "depth {depth}");
+        }
+    }
+}
