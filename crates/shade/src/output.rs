@@ -382,11 +382,21 @@ impl Drop for Unfinished {
 /// second Ctrl-C while the image is written): no `.<name>.<pid>.<n>.tmp`
 /// is left behind. The targets are untouched.
 pub fn remove_unfinished_outputs() {
-    let list = match UNFINISHED.lock() {
-        Ok(mut list) => std::mem::take(&mut *list),
+    remove_unfinished(|_| true);
+}
+
+/// Removes the unfinished temporary files that `which` picks (and forgets
+/// them).
+fn remove_unfinished(which: impl Fn(&Path) -> bool) {
+    let picked: Vec<PathBuf> = match UNFINISHED.lock() {
+        Ok(mut list) => {
+            let (picked, kept) = std::mem::take(&mut *list).into_iter().partition(|t| which(t));
+            *list = kept;
+            picked
+        }
         Err(_) => return,
     };
-    for tmp in list {
+    for tmp in picked {
         let _ = std::fs::remove_file(tmp);
     }
 }
@@ -955,10 +965,11 @@ mod tests {
         assert_eq!(listing(dir.path()), ["a.depth.exr", "a.png"]);
         assert_ne!(std::fs::read(&a).unwrap(), b"OLD");
         // A temporary file of a write in progress is noted, and taken away
-        // by `remove_unfinished_outputs` (a forced exit's clean-up).
+        // by the clean-up of a forced exit (`remove_unfinished_outputs`:
+        // here only this test's, as other tests write at the same time).
         let stray = Unfinished::note(&dir.path().join(".a.png.1.0.tmp"));
         std::fs::write(&stray.0, b"part").unwrap();
-        remove_unfinished_outputs();
+        remove_unfinished(|t| t.starts_with(dir.path()));
         assert_eq!(listing(dir.path()), ["a.depth.exr", "a.png"]);
     }
 
