@@ -249,8 +249,8 @@ fn shared_meshes_agree_across_layouts() {
 /// which overflows for coordinates near 10²⁰ (obvhs's CWBVH conversion
 /// then panicked on an OBJ file with three corners at 10²⁰ beside unit
 /// triangles) and underflows for tiny ones. Every layout and quality
-/// builds them (at a power-of-two scale) and answers as brute force, and
-/// the same mesh scaled by a power of two gives the same hits scaled.
+/// builds them (at a power-of-two scale) and answers as brute force, each
+/// with the same `t` as the wide layout of the default quality.
 #[test]
 fn meshes_far_from_unit_size_build_and_agree_with_brute_force() {
     let mut rng = Rng::new(20_261_207);

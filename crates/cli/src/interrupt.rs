@@ -16,9 +16,14 @@
 //! whole, and no temporary file is left); a turntable then stops before
 //! its next frame. A second signal exits at once, with 128 + its number,
 //! after taking away the temporary files of a write in progress
-//! (`prism_shade::remove_unfinished_outputs`): the output keeps what it
-//! held before. The handlers only note a signal; a thread of their own
-//! (signal-hook's iterator) sets the flag or exits.
+//! (`prism_shade::exit_removing_unfinished`): each output then holds
+//! either what it held before or, where the renames had already been
+//! made, the whole new file, never a mix of a render's image and another
+//! render's AOV files. The handlers only note a signal; a thread of their
+//! own (signal-hook's iterator) sets the flag or exits. Two deliveries of
+//! the same signal before that thread wakes count as one (`kill -INT`
+//! twice in a row from a script), as the kernel itself merges a pending
+//! signal's repeats.
 //!
 //! The handlers are installed once, just before the output folders are
 //! made; before that (while the scene loads) the signals have their default
@@ -98,10 +103,9 @@ fn install_handlers() -> Result<Handlers, std::io::Error> {
     std::thread::Builder::new().name("prism-signals".into()).spawn(move || {
         for sig in incoming.forever() {
             if flag_seen.load(Ordering::SeqCst) {
-                prism_shade::remove_unfinished_outputs();
                 let name = signals().into_iter().find(|(s, _)| *s == sig).map_or("a signal", |(_, n)| n);
-                errln!("error: {name} again: stopped at once; nothing more was written");
-                std::process::exit(128 + sig);
+                errln!("error: {name} again: stopped at once; no output is left half-written");
+                prism_shade::exit_removing_unfinished(128 + sig);
             }
             first_seen.store(usize::try_from(sig).unwrap_or(0), Ordering::SeqCst);
             flag_seen.store(true, Ordering::SeqCst);

@@ -219,7 +219,9 @@ impl Plan {
     /// previews; returns the files written, in order.
     ///
     /// # Errors
-    /// As the writers; files written before an error stay.
+    /// As the writers; files written before an error stay, unless the
+    /// call is inside `prism_shade::all_or_nothing` (as the render's and
+    /// merge's are), which then removes them all.
     pub fn write_passes(
         &self,
         color: &Image,

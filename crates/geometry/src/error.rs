@@ -33,8 +33,9 @@ pub enum GeometryError {
 }
 
 /// `x` as a person writes it: `1`, `0.256`, `-3.5`, `1.2e-30`: three
-/// significant figures, without trailing zeros, and in exponent form
-/// outside `[10⁻³, 10⁶)`.
+/// significant figures below 1000 and whole numbers up to 10⁶, without
+/// trailing zeros, and in exponent form (three figures) outside
+/// `[10⁻³, 10⁶)`.
 fn figure(x: f64) -> String {
     if x == 0.0 {
         return "0".into();

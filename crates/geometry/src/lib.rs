@@ -83,6 +83,25 @@ pub fn unit(v: glam::Vec3) -> Option<glam::Vec3> {
     (v / largest).try_normalize()
 }
 
+/// The length of `v`, as `Vec3::length` gives it (the same bits) where
+/// its squared length is a normal finite float, else computed from `v`
+/// divided by its largest component, so that a vector longer than about
+/// 1.8e19 (whose square overflows) or shorter than about 1e-19 (whose
+/// square vanishes) still has its length: `0` only for the zero vector,
+/// infinite only past `f32::MAX`.
+#[must_use]
+pub fn length(v: glam::Vec3) -> f32 {
+    let l2 = v.length_squared();
+    if (f32::MIN_POSITIVE..=f32::MAX).contains(&l2) {
+        return l2.sqrt();
+    }
+    let largest = v.abs().max_element();
+    if !(largest > 0.0 && largest.is_finite()) {
+        return if largest == 0.0 { 0.0 } else { largest.abs() };
+    }
+    (v / largest).length() * largest
+}
+
 /// `v` scaled to length 1 as `Vec3::normalize` does it (the same bits)
 /// where its squared length is a normal finite float, else [`unit()`]'s
 /// answer: for the hot paths that must not change their results for
@@ -134,5 +153,32 @@ mod unit_tests {
         assert_eq!(unit_between(Vec3::ONE, Vec3::new(1.0, 1.0, 3.0)), Some(Vec3::Z));
         assert_eq!(unit_between(a, a), None);
         assert_eq!(unit_between(Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::ZERO), None);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn length_holds_for_vectors_whose_square_is_out_of_range() {
+        // Ordinary vectors: glam's bits.
+        for v in [Vec3::new(3.0, 4.0, 0.0), Vec3::new(0.1, -0.2, 0.3), Vec3::splat(1e18)] {
+            assert_eq!(length(v).to_bits(), v.length().to_bits(), "{v}");
+        }
+        // Squares past the range: the length still, to a few ulps.
+        for (v, want) in [
+            (Vec3::new(3e20, 4e20, 0.0), 5e20f32),
+            (Vec3::new(0.0, 3e-25, -4e-25), 5e-25),
+            (Vec3::new(1e38, 1e38, 1e38), 1e38 * 3f32.sqrt()),
+            (Vec3::new(1e-40, 0.0, 0.0), 1e-40),
+        ] {
+            let got = length(v);
+            assert!((got - want).abs() <= 4.0 * f32::EPSILON * want, "{v}: {got} vs {want}");
+        }
+        assert_eq!(length(Vec3::ZERO), 0.0);
+        assert_eq!(length(Vec3::new(3e38, 3e38, 0.0)), f32::INFINITY);
+        assert_eq!(length(Vec3::new(f32::INFINITY, 0.0, 0.0)), f32::INFINITY);
     }
 }

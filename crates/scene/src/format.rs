@@ -147,13 +147,32 @@ impl SceneFile {
     }
 }
 
-/// The span of the line of `text` with the most nesting marks (`.`, `[`,
-/// `{`), for an error that comes without a place.
+/// The span of the line of `text` that nests deepest (a table header's
+/// dotted keys, or the arrays and inline tables open on it), for an
+/// error that comes without a place.
 fn deepest_line(text: &str) -> std::ops::Range<usize> {
     let mut best = (0, 0..0);
     let mut start = 0;
     for line in text.split_inclusive('\n') {
-        let marks = line.bytes().filter(|b| matches!(b, b'.' | b'[' | b'{')).count();
+        let body = line.split('#').next().unwrap_or("").trim();
+        let marks = if body.starts_with('[') && !body.contains('=') {
+            body.bytes().filter(|&b| b == b'.').count() + 1
+        } else {
+            // The deepest nesting of brackets and braces on the line.
+            let mut depth = 0usize;
+            let mut deepest = 0;
+            for b in body.bytes() {
+                match b {
+                    b'[' | b'{' => {
+                        depth += 1;
+                        deepest = deepest.max(depth);
+                    }
+                    b']' | b'}' => depth = depth.saturating_sub(1),
+                    _ => {}
+                }
+            }
+            deepest
+        };
         if marks > best.0 {
             best = (marks, start..start + line.trim_end().len());
         }

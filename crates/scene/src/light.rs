@@ -155,7 +155,7 @@ fn area(ctx: &Ctx, d: &LightDef, kind: LightKindDef, span: &Range<usize>) -> Res
             let (corner, _) = need_vec(&d.corner, "corner")?;
             let (edge_u, _) = need_vec(&d.edge_u, "edge_u")?;
             let (edge_v, v_span) = need_vec(&d.edge_v, "edge_v")?;
-            let area = edge_u.cross(edge_v).length();
+            let area = prism_geometry::length(edge_u.cross(edge_v));
             if area.is_infinite() {
                 return Err(ctx.invalid(
                     &v_span,

@@ -94,6 +94,8 @@ pub(crate) struct Tracer<'a> {
     /// seen set: every ray traced after that returns black at once.
     cancel: Option<&'a AtomicBool>,
     stopped: bool,
+    /// The ray count at which the flag is read next.
+    next_check: u64,
     /// Rays on the stack that went on through a surface unshaded, at the
     /// same depth ([`Tracer::trace_hit`]); at most [`MAX_THROUGH`].
     through: u32,
@@ -248,6 +250,7 @@ impl<'a> Tracer<'a> {
             scratch: ShadowScratch::default(),
             cancel: None,
             stopped: false,
+            next_check: 0,
             through: 0,
         }
     }
@@ -256,7 +259,7 @@ impl<'a> Tracer<'a> {
     /// spends long in (thousands of rays under a deep `max_depth` between
     /// parallel glass panes, 2^40 of them at depth 40) gives up within
     /// [`CANCEL_RAYS`] rays of a Ctrl-C, returning black for every ray
-    /// after. The render drops the row (see [`crate::render`]).
+    /// after. The render drops the row (see [`crate::render()`]).
     pub(crate) fn watching(mut self, cancel: Option<&'a AtomicBool>) -> Self {
         self.cancel = cancel;
         self
@@ -283,10 +286,15 @@ impl<'a> Tracer<'a> {
     /// Whether the render was cancelled (read every [`CANCEL_RAYS`] rays).
     #[inline]
     fn stopping(&mut self) -> bool {
+        // Read once the count has passed the mark, not when it is a
+        // multiple: between two calls it grows by a hit's shadow rays too,
+        // and a path whose steps add an even number from an odd count
+        // would never land on one.
         if !self.stopped
-            && self.rays.is_multiple_of(CANCEL_RAYS)
+            && self.rays >= self.next_check
             && let Some(c) = self.cancel
         {
+            self.next_check = self.rays + CANCEL_RAYS;
             self.stopped = c.load(Ordering::Relaxed);
         }
         self.stopped

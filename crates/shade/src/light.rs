@@ -336,7 +336,9 @@ impl AreaShape {
     #[must_use]
     pub fn area(&self) -> f32 {
         match *self {
-            Self::Quad { edge_u, edge_v, .. } => edge_u.cross(edge_v).length(),
+            // Edges of 1e10 (a normal area of 1e20) or 1e-12: the cross
+            // product's squared length is out of range, its length is not.
+            Self::Quad { edge_u, edge_v, .. } => prism_geometry::length(edge_u.cross(edge_v)),
             Self::Disk { radius, .. } => PI * radius * radius,
             Self::Sphere { radius, .. } => 4.0 * PI * radius * radius,
         }
@@ -401,7 +403,7 @@ impl AreaLight {
         let (x, normal, area) = match self.shape {
             AreaShape::Quad { corner, edge_u, edge_v } => {
                 let n = edge_u.cross(edge_v);
-                let area = n.length();
+                let area = prism_geometry::length(n);
                 (corner + u * edge_u + v * edge_v, n / area, area)
             }
             AreaShape::Disk { center, normal, radius } => {

@@ -284,10 +284,51 @@ struct Pending {
 impl Pending {
     /// Renames the temporary file over the target, no longer unfinished.
     fn show(&self) -> Result<(), OutputError> {
-        let done = std::fs::rename(&self.tmp, &self.target)
-            .map_err(|source| OutputError::Io { path: self.named.clone(), source });
-        Unfinished::forget(&self.tmp);
-        done
+        show_all(std::slice::from_ref(self))
+    }
+}
+
+/// Renames each of `pending` over its target, in order, holding the
+/// [`UNFINISHED`] lock throughout: a forced exit's clean-up
+/// ([`exit_removing_unfinished`]) comes wholly before or after them, so
+/// that the files are replaced together or not at all. After a failed
+/// rename the rest are removed. Each is forgotten as unfinished.
+fn show_all(pending: &[Pending]) -> Result<(), OutputError> {
+    let mut list = UNFINISHED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut shown = Ok(());
+    for p in pending {
+        if shown.is_ok() {
+            shown = std::fs::rename(&p.tmp, &p.target)
+                .map_err(|source| OutputError::Io { path: p.named.clone(), source });
+        }
+        if shown.is_err() {
+            let _ = std::fs::remove_file(&p.tmp);
+        }
+        if let Some(k) = list.iter().position(|t| *t == p.tmp) {
+            list.swap_remove(k);
+        }
+    }
+    shown
+}
+
+/// The files held back by the [`all_or_nothing`] running on this thread;
+/// those still there when it is dropped (its write failed or panicked)
+/// are removed, and the thread's staging ends either way.
+struct Staging;
+
+impl Staging {
+    /// The files held back, now the caller's to show.
+    fn take(&self) -> Vec<Pending> {
+        STAGED.with(|s| s.borrow_mut().as_mut().map(std::mem::take)).unwrap_or_default()
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        for p in STAGED.with(|s| s.borrow_mut().take()).unwrap_or_default() {
+            let _ = std::fs::remove_file(&p.tmp);
+            Unfinished::forget(&p.tmp);
+        }
     }
 }
 
@@ -321,33 +362,14 @@ pub fn all_or_nothing<R>(write: impl FnOnce() -> Result<R, OutputError>) -> Resu
     if outer {
         return write();
     }
-    let result = write();
-    let pending = STAGED.with(|s| s.borrow_mut().take()).unwrap_or_default();
-    match result {
-        Ok(r) => {
-            let mut shown = Ok(());
-            for p in &pending {
-                if shown.is_ok() {
-                    shown = p.show();
-                } else {
-                    let _ = std::fs::remove_file(&p.tmp);
-                    Unfinished::forget(&p.tmp);
-                }
-            }
-            shown.map(|()| r)
-        }
-        Err(e) => {
-            for p in &pending {
-                let _ = std::fs::remove_file(&p.tmp);
-                Unfinished::forget(&p.tmp);
-            }
-            Err(e)
-        }
-    }
+    // Removes what is still held back if `write` fails or panics.
+    let staging = Staging;
+    let r = write()?;
+    show_all(&staging.take()).map(|()| r)
 }
 
 /// The temporary files being written or held back, in every thread, so
-/// that a forced exit can take them away ([`remove_unfinished_outputs`]).
+/// that a forced exit can take them away ([`exit_removing_unfinished`]).
 static UNFINISHED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
 /// A temporary file noted in [`UNFINISHED`] while it lives: forgotten when
@@ -377,16 +399,23 @@ impl Drop for Unfinished {
     }
 }
 
-/// Removes the temporary files of every write in progress (or held back by
-/// [`all_or_nothing`]), for a process about to exit before they finish (a
-/// second Ctrl-C while the image is written): no `.<name>.<pid>.<n>.tmp`
-/// is left behind. The targets are untouched.
-pub fn remove_unfinished_outputs() {
-    remove_unfinished(|_| true);
+/// Exits the process with `code` after removing the temporary files of
+/// every write in progress, holding the lock the renames take until the
+/// process ends: a render's files held back by [`all_or_nothing`] are
+/// then either all shown already or none is, and no new temporary file
+/// is noted after the clean-up (for a second Ctrl-C while the image is
+/// written).
+pub fn exit_removing_unfinished(code: i32) -> ! {
+    let list = UNFINISHED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    for tmp in list.iter() {
+        let _ = std::fs::remove_file(tmp);
+    }
+    std::process::exit(code)
 }
 
 /// Removes the unfinished temporary files that `which` picks (and forgets
-/// them).
+/// them): [`exit_removing_unfinished`]'s clean-up, for some of them.
+#[cfg(test)]
 fn remove_unfinished(which: impl Fn(&Path) -> bool) {
     let picked: Vec<PathBuf> = match UNFINISHED.lock() {
         Ok(mut list) => {
@@ -965,7 +994,7 @@ mod tests {
         assert_eq!(listing(dir.path()), ["a.depth.exr", "a.png"]);
         assert_ne!(std::fs::read(&a).unwrap(), b"OLD");
         // A temporary file of a write in progress is noted, and taken away
-        // by the clean-up of a forced exit (`remove_unfinished_outputs`:
+        // by the clean-up of a forced exit (`exit_removing_unfinished`:
         // here only this test's, as other tests write at the same time).
         let stray = Unfinished::note(&dir.path().join(".a.png.1.0.tmp"));
         std::fs::write(&stray.0, b"part").unwrap();

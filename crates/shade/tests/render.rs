@@ -414,3 +414,45 @@ fn a_glass_sphere_too_small_for_the_ray_offset_renders() {
         }
     }
 }
+
+/// The cancel is read once the ray count passes a mark, not when it is a
+/// multiple of one: here every pane hit adds one shadow ray per light
+/// (two), the count stays odd after pixel 0 (an opaque face that sees
+/// neither light), and a check on multiples never came (a review found
+/// the render still running 20 s after the cancel).
+#[test]
+fn a_cancel_is_seen_whatever_the_ray_count_steps_by() {
+    use prism_geometry::Cuboid;
+    use prism_shade::{Light, LightKind};
+    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+    let half = Material { diffuse: 0.5, transmission: 0.5, ..glass(1.5) };
+    let wall = Material { diffuse: 0.5, transmission: 0.0, reflectivity: 0.5, ..glass(1.5) };
+    let mut objects: Vec<_> = (0..6)
+        .map(|k| {
+            let m = if k == 0 || k == 5 { wall.clone() } else { half.clone() };
+            (Plane::new(Vec3::new(k as f32 - 2.5, 0.0, 0.0), Vec3::X).expect("ok").into(), I, m)
+        })
+        .collect();
+    let block = Cuboid::new(Vec3::new(0.001, -3.0, 0.3), Vec3::new(0.49, 3.0, 0.4)).expect("ok");
+    objects.push((block.into(), I, Material::diffuse(Vec3::ONE)));
+    let sun = |x: f32| Light {
+        kind: LightKind::Directional { direction: Vec3::new(x, -1.0, 0.0).normalize() },
+        color: Vec3::ONE,
+        intensity: 1.0,
+    };
+    let cam = camera(Vec3::ZERO, Vec3::Z, Vec3::Y, 45.0, 2, 1);
+    let shot = scene_lit(objects, vec![sun(1.0), sun(-1.0)], cam);
+    let set = shot.settings(1, 40);
+    let cancel = AtomicBool::new(false);
+    let stats = std::thread::scope(|s| {
+        let render = s.spawn(|| {
+            let hooks = RenderHooks { cancel: Some(&cancel), ..RenderHooks::default() };
+            prism_shade::render(&shot.scene, &set, hooks).1
+        });
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        assert!(!render.is_finished(), "the path should take hours");
+        cancel.store(true, Relaxed);
+        render.join().expect("no panic")
+    });
+    assert!(stats.cancelled);
+}

@@ -325,3 +325,25 @@ fn a_light_whose_colour_times_intensity_overflows_is_refused_at_its_intensity() 
     // At the edge: large, but finite, is accepted.
     parse(&format!("{BASE}[[lights]]\nposition = [0, 5, 0]\nintensity = 3e38\ncolor = [1, 1, 1]\n")).unwrap();
 }
+
+#[test]
+fn quad_lights_of_any_representable_area_are_accepted() {
+    // Edges of 1e10 (area 1e20) and 1e-12 (area 1e-24): the cross
+    // product's squared length is out of f32's range, its length is not
+    // (they were refused as overflowing and as having zero area).
+    for (edge, area) in [(1e10f32, 1e20f32), (1e-12, 1e-24), (1.0, 1.0)] {
+        let quad = format!(
+            "[[lights]]\ntype = \"quad\"\ncorner = [0, 1, 0]\nedge_u = [{edge:e}, 0, 0]\nedge_v = [0, 0, {edge:e}]\n"
+        );
+        let loaded = parse(&format!("{BASE}{quad}")).unwrap_or_else(|e| panic!("edge {edge}: {e}"));
+        let Some(LightKind::Area(q)) = loaded.scene.lights.last().map(|l| l.kind) else { panic!("a quad") };
+        assert!((q.shape.area() - area).abs() <= 1e-6 * area, "edge {edge}: area {}", q.shape.area());
+        assert!(loaded.scene.validate().is_ok());
+    }
+    // An area past f32::MAX is still refused, saying so.
+    refused(&[(
+        "[[lights]]\ntype = \"quad\"\ncorner = [0, 1, 0]\nedge_u = [1e20, 0, 0]\nedge_v = [0, 0, 1e20]\n",
+        "area overflows 32-bit floats",
+        Some("edge_v"),
+    )]);
+}
