@@ -16,7 +16,7 @@
 //! whole, and no temporary file is left); a turntable then stops before
 //! its next frame. A second signal exits at once, with 128 + its number,
 //! after taking away the temporary files of a write in progress
-//! (`prism_shade::exit_removing_unfinished`): each output then holds
+//! (`prism_shade::stop_unfinished_outputs`): each output then holds
 //! either what it held before or, where the renames had already been
 //! made, the whole new file, never a mix of a render's image and another
 //! render's AOV files. The handlers only note a signal; a thread of their
@@ -105,7 +105,9 @@ fn install_handlers() -> Result<Handlers, std::io::Error> {
             if flag_seen.load(Ordering::SeqCst) {
                 let name = signals().into_iter().find(|(s, _)| *s == sig).map_or("a signal", |(_, n)| n);
                 errln!("error: {name} again: stopped at once; no output is left half-written");
-                prism_shade::exit_removing_unfinished(128 + sig);
+                // Held to the end: no rename or new temporary file after.
+                let _hold = prism_shade::stop_unfinished_outputs();
+                std::process::exit(128 + sig);
             }
             first_seen.store(usize::try_from(sig).unwrap_or(0), Ordering::SeqCst);
             flag_seen.store(true, Ordering::SeqCst);

@@ -95,8 +95,8 @@ pub use light::{AreaLight, AreaShape, Falloff, Light, LightKind, spot_weight};
 pub use material::Material;
 pub use names::{closest, did_you_mean};
 pub use output::{
-    OutputError, OutputFormat, OutputTarget, all_or_nothing, aov_path, aov_preview_rgb8,
-    exit_removing_unfinished, output_target, read_exr_rgb, write_aov_exr, write_aov_files,
+    OutputError, OutputFormat, OutputTarget, UnfinishedHold, all_or_nothing, aov_path, aov_preview_rgb8,
+    output_target, read_exr_rgb, stop_unfinished_outputs, write_aov_exr, write_aov_files,
     write_aov_preview_png, write_bytes_atomic, write_exr_rgb, write_image, write_image_exr, write_png,
     write_png_rgb8,
 };

@@ -290,7 +290,7 @@ impl Pending {
 
 /// Renames each of `pending` over its target, in order, holding the
 /// [`UNFINISHED`] lock throughout: a forced exit's clean-up
-/// ([`exit_removing_unfinished`]) comes wholly before or after them, so
+/// ([`stop_unfinished_outputs`]) comes wholly before or after them, so
 /// that the files are replaced together or not at all. After a failed
 /// rename the rest are removed. Each is forgotten as unfinished.
 fn show_all(pending: &[Pending]) -> Result<(), OutputError> {
@@ -369,7 +369,7 @@ pub fn all_or_nothing<R>(write: impl FnOnce() -> Result<R, OutputError>) -> Resu
 }
 
 /// The temporary files being written or held back, in every thread, so
-/// that a forced exit can take them away ([`exit_removing_unfinished`]).
+/// that a forced exit can take them away ([`stop_unfinished_outputs`]).
 static UNFINISHED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
 /// A temporary file noted in [`UNFINISHED`] while it lives: forgotten when
@@ -399,22 +399,28 @@ impl Drop for Unfinished {
     }
 }
 
-/// Exits the process with `code` after removing the temporary files of
-/// every write in progress, holding the lock the renames take until the
-/// process ends: a render's files held back by [`all_or_nothing`] are
-/// then either all shown already or none is, and no new temporary file
-/// is noted after the clean-up (for a second Ctrl-C while the image is
-/// written).
-pub fn exit_removing_unfinished(code: i32) -> ! {
+/// A hold on every write's temporary files ([`stop_unfinished_outputs`]):
+/// while it lives, no write notes a new one or renames one over its
+/// target.
+#[must_use = "the hold ends when it is dropped"]
+pub struct UnfinishedHold(#[allow(dead_code)] std::sync::MutexGuard<'static, Vec<PathBuf>>);
+
+/// Removes the temporary files of every write in progress and returns a
+/// hold on the lock the renames take: a process about to exit (a second
+/// Ctrl-C while the image is written) keeps it until it ends, so that a
+/// render's files held back by [`all_or_nothing`] are either all shown
+/// already or none is, and no new temporary file is noted after the
+/// clean-up.
+pub fn stop_unfinished_outputs() -> UnfinishedHold {
     let list = UNFINISHED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     for tmp in list.iter() {
         let _ = std::fs::remove_file(tmp);
     }
-    std::process::exit(code)
+    UnfinishedHold(list)
 }
 
 /// Removes the unfinished temporary files that `which` picks (and forgets
-/// them): [`exit_removing_unfinished`]'s clean-up, for some of them.
+/// them): [`stop_unfinished_outputs`]'s clean-up, for some of them.
 #[cfg(test)]
 fn remove_unfinished(which: impl Fn(&Path) -> bool) {
     let picked: Vec<PathBuf> = match UNFINISHED.lock() {
@@ -994,7 +1000,7 @@ mod tests {
         assert_eq!(listing(dir.path()), ["a.depth.exr", "a.png"]);
         assert_ne!(std::fs::read(&a).unwrap(), b"OLD");
         // A temporary file of a write in progress is noted, and taken away
-        // by the clean-up of a forced exit (`exit_removing_unfinished`:
+        // by the clean-up of a forced exit (`stop_unfinished_outputs`:
         // here only this test's, as other tests write at the same time).
         let stray = Unfinished::note(&dir.path().join(".a.png.1.0.tmp"));
         std::fs::write(&stray.0, b"part").unwrap();
