@@ -1,7 +1,7 @@
 //! Finite cones with a base cap.
 
 use super::azimuth_u;
-use super::upright::{Part, Upright, cap_t, cap_uv, keep, roots_from_disc, side_t};
+use super::upright::{Part, Upright, beyond_caps, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -21,7 +21,9 @@ use glam::{Vec2, Vec3};
 /// (the image's top row at the apex); on the base cap as
 /// [`crate::Cylinder`]'s bottom cap, `((x / r + 1) / 2, (1 − z / r) / 2)`.
 /// The side is accepted up to `1e-6 · height` below the base so that a ray
-/// through the rim cannot slip between the side and cap tests.
+/// through the rim cannot slip between the side and cap tests; a ray that
+/// stays below the base plane (one leaving the base cap, grazing it) or
+/// above the apex meets nothing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cone(Upright);
 
@@ -62,6 +64,9 @@ impl Cone {
         let (r, h) = (self.0.radius, self.0.height);
         let k = r / h;
         let k2 = k * k;
+        if beyond_caps(o, d, h) {
+            return None;
+        }
         let mut best: Option<(f32, Part)> = None;
         // x² + z² = k² s², s = h − y in [0, h]: the lower nappe only. In
         // coordinates relative to the apex, p = (x, y − h, z), the side is
@@ -182,12 +187,15 @@ mod tests {
     }
 
     /// As the cylinder's: a crossing the side accepts just below the base
-    /// lies inside the bounds.
+    /// lies inside the bounds; a ray that stays below the base misses.
     #[test]
     fn bounds_hold_the_sealed_rim() {
-        let ray = Ray::new(Vec3::new(-5.0, -1e-6, 0.0), Vec3::X);
+        let ray = Ray::new(Vec3::new(-5.0, -1e-6, 0.0), Vec3::new(1.0, 1e-9, 0.0));
         assert!(cone().intersect_t(&ray).is_some());
         assert!(cone().bounds().intersect_ray(&ray).is_some());
+        for d in [Vec3::X, Vec3::new(1.0, -1e-9, 0.0)] {
+            assert!(cone().intersect_t(&Ray::new(Vec3::new(-5.0, -1e-6, 0.0), d)).is_none(), "{d}");
+        }
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Finite cylinders with both caps.
 
 use super::azimuth_u;
-use super::upright::{Part, Upright, cap_t, cap_uv, keep, roots_from_disc, side_t};
+use super::upright::{Part, Upright, beyond_caps, cap_t, cap_uv, keep, roots_from_disc, side_t};
 use crate::{Aabb, GeometryError, Hit, Intersect, Ray};
 use glam::{Vec2, Vec3};
 
@@ -19,7 +19,9 @@ use glam::{Vec2, Vec3};
 /// and an image seen from outside reads as in an image viewer.
 ///
 /// The side is accepted up to `1e-6 · height` beyond either cap so that a
-/// ray through the rim cannot slip between the side and cap tests.
+/// ray through the rim cannot slip between the side and cap tests; a ray
+/// that stays beyond a cap's plane (one leaving the cap, grazing it) meets
+/// nothing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cylinder(Upright);
 
@@ -58,6 +60,9 @@ impl Cylinder {
         let o = ray.origin - self.0.base;
         let d = ray.dir;
         let (r, h) = (self.0.radius, self.0.height);
+        if beyond_caps(o, d, h) {
+            return None;
+        }
         let mut best: Option<(f32, Part)> = None;
         // Side: x² + z² = r², with 0 <= y <= h.
         let a = d.x * d.x + d.z * d.z;
@@ -139,16 +144,21 @@ mod tests {
         Cylinder::new(Vec3::new(0.0, -1.0, 0.0), 1.0, 2.0).unwrap()
     }
 
-    /// The side accepts crossings up to `SEAL · height` beyond a cap; the
-    /// bounds hold them, so that a hierarchy's box test cannot cull a hit
-    /// the shape reports (a BVH leaf of one object found this).
+    /// The side accepts crossings up to `SEAL · height` beyond a cap by a
+    /// ray heading toward the cap's plane; the bounds hold them, so that a
+    /// hierarchy's box test cannot cull a hit the shape reports (a BVH leaf
+    /// of one object found this). A ray that stays beyond the plane misses.
     #[test]
     fn bounds_hold_the_sealed_rim() {
         let c = cyl();
-        for y in [1.0 + 1e-6, -1.0 - 1e-6] {
-            let ray = Ray::new(Vec3::new(-5.0, y, 0.0), Vec3::X);
+        for (y, toward) in [(1.0 + 1e-6, -1.0), (-1.0 - 1e-6, 1.0)] {
+            let ray = Ray::new(Vec3::new(-5.0, y, 0.0), Vec3::new(1.0, toward * 1e-9, 0.0));
             assert!(c.intersect_t(&ray).is_some(), "side accepts y = {y}");
             assert!(c.bounds().intersect_ray(&ray).is_some(), "bounds hold y = {y}");
+            for dy in [0.0, -toward * 1e-9] {
+                let away = Ray::new(Vec3::new(-5.0, y, 0.0), Vec3::new(1.0, dy, 0.0));
+                assert!(c.intersect_t(&away).is_none(), "y = {y}, dy = {dy}");
+            }
         }
     }
 

@@ -22,7 +22,9 @@ use crate::{GeometryError, Ray};
 /// How far (relative to the height) the side of a cylinder or cone is
 /// accepted past its caps, so that a ray through the rim, where side and cap
 /// meet, cannot slip between the two tests by rounding. Rays passing more
-/// than `SEAL · height` beyond a cap miss.
+/// than `SEAL · height` beyond a cap miss, and so does a ray that stays
+/// beyond a cap's plane over its whole length (`upright::beyond_caps`): the
+/// band would catch a ray spawned from a cap that leaves it grazing.
 pub(crate) const SEAL: f32 = 1e-6;
 
 /// Smallest accepted radius, height or edge length.

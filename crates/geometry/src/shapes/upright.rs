@@ -82,6 +82,17 @@ pub(crate) fn side_t(ray: &Ray, o: Vec3, shift: f32, roots: (f32, f32), h: f32) 
     })
 }
 
+/// Whether a ray from `o` (relative to the base) along `d` stays below
+/// the base plane or above the top (`y = h`) over its whole length: such a
+/// ray cannot meet the solid, which lies in `0 <= y <= h`. It is rejected
+/// before the side is tested, since the side's [`SEAL`] band reaches
+/// beyond the caps and would catch a ray spawned from a cap that leaves
+/// it grazing its plane (the spawned origin lies inside the band).
+#[inline]
+pub(crate) fn beyond_caps(o: Vec3, d: Vec3, h: f32) -> bool {
+    (o.y < 0.0 && d.y <= 0.0) || (o.y > h && d.y >= 0.0)
+}
+
 /// Where a solid stands and how large it is: the centre of its base cap,
 /// its (base) radius, and its height along +Y.
 #[derive(Clone, Copy, Debug, PartialEq)]
