@@ -361,7 +361,9 @@ pub(crate) mod x86 {
         /// The lanes that meet the triangle within their interval, with no
         /// edge function exactly zero.
         ok: u32,
-        /// The lanes with an edge function exactly zero.
+        /// The lanes with an edge function zero or subnormal, or inside
+        /// the edges with a scaled `t` past the range of `f32` products:
+        /// the scalar test's.
         exact: u32,
     }
 
@@ -391,11 +393,11 @@ pub(crate) mod x86 {
             let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
             let zero = _mm256_setzero_ps();
             let or3 = |a, b, c| _mm256_or_ps(_mm256_or_ps(a, b), c);
-            let is0 = or3(
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
-            );
+            // Zero or subnormal (`|x| < f32::MIN_POSITIVE`, ordered).
+            let magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX));
+            let least = _mm256_set1_ps(f32::MIN_POSITIVE);
+            let tiny = |x| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_and_ps(x, magnitude), least);
+            let is0 = or3(tiny(u), tiny(vv), tiny(w));
             let negative = or3(
                 _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
                 _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
@@ -418,7 +420,7 @@ pub(crate) mod x86 {
             );
             let rcp = _mm256_div_ps(_mm256_set1_ps(1.0), det);
             let t = _mm256_mul_ps(t_scaled, rcp);
-            let abs = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
+            let abs = _mm256_and_ps(det, magnitude);
             let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(abs, _mm256_set1_ps(f32::INFINITY));
             let inside = _mm256_and_ps(
                 _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_loadu_ps(t_min.as_ptr())),
@@ -428,6 +430,15 @@ pub(crate) mod x86 {
                 outside,
                 _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero), finite), inside),
             );
+            // A lane inside its edges whose scaled `t` is past the range of
+            // `f32` products is the scalar test's too (as in `lanes`).
+            let t_abs = _mm256_and_ps(t_scaled, magnitude);
+            let unsure = _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_NGE_UQ>(t_abs, least),
+                _mm256_cmp_ps::<_CMP_NLT_UQ>(t_abs, _mm256_set1_ps(f32::INFINITY)),
+            );
+            let is0 = _mm256_or_ps(is0, _mm256_andnot_ps(outside, unsure));
+            let exact = _mm256_movemask_ps(is0) as u32;
             let ok = _mm256_movemask_ps(_mm256_andnot_ps(is0, pass)) as u32;
             Some(Test8 { t, b1: _mm256_mul_ps(vv, rcp), b2: _mm256_mul_ps(w, rcp), ok, exact })
         }
@@ -2199,7 +2210,9 @@ mod tests {
     /// of one to eight rays from nearby origins in nearby directions,
     /// against one to four triangles, with integer coordinates (edge
     /// functions exactly zero, the scalar test's lanes), degenerate
-    /// triangles, zero direction components and several intervals.
+    /// triangles, zero direction components and several intervals, at unit
+    /// size and scaled by 2⁻⁶² and 2⁴⁵ (edge functions and distances past
+    /// the range of `f32` products, also the scalar test's).
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn avx2_eight_ray_leaf_test_is_the_portable_one() {
@@ -2213,21 +2226,22 @@ mod tests {
         let avx2 = unsafe { x86::Avx2::new() };
         let mut r = prism_testkit::Rng::new(29);
         let mut f = move || r.f32() * 2.0 - 1.0;
-        let (mut hits, mut exact_cases, mut nearest) = (0u32, 0u32, 0u32);
-        for case in 0..20_000usize {
+        let (mut hits, mut exact_cases, mut nearest, mut scaled_hits) = (0u32, 0u32, 0u32, 0u32);
+        for case in 0..30_000usize {
             let integer = case % 4 == 0;
+            let scale = [1.0, 2f32.powi(-62), 2f32.powi(45)][(case / 5) % 3];
             let mut p = |s: f32| {
                 let v = Vec3::new(f(), f(), f()) * s;
                 if integer { v.round() } else { v }
             };
             let tris: Vec<[Vec3; 3]> = (0..1 + case % 4)
                 .map(|k| {
-                    let t = [p(2.0), p(2.0), p(2.0)];
+                    let t = [p(2.0), p(2.0), p(2.0)].map(|c| c * scale);
                     if (case + k) % 9 == 0 { [t[0], t[1], t[1]] } else { t }
                 })
                 .collect();
             let tris = Triangles4::new(&tris);
-            let (o0, d0) = (p(3.0), p(1.0) + Vec3::Z * 0.5);
+            let (o0, d0) = (p(3.0) * scale, p(1.0) + Vec3::Z * 0.5);
             let mut group: Option<TriangleRays8> = None;
             for i in 0..1 + case % 8 {
                 let mut d = d0 + p(0.2);
@@ -2239,7 +2253,7 @@ mod tests {
                 }
                 let (t_min, t_max) =
                     [(0.0, f32::INFINITY), (0.5, 1.5), (f32::MIN, f32::MAX), (-1.0, 0.25)][(case + i) % 4];
-                let tr = TriangleRay::new(&Ray::with_interval(o0 + p(0.1), d, t_min, t_max));
+                let tr = TriangleRay::new(&Ray::with_interval(o0 + p(0.1) * scale, d, t_min, t_max));
                 group.get_or_insert_with(|| TriangleRays8::like(&tr)).push(&tr);
             }
             let Some(g) = group else { continue };
@@ -2265,10 +2279,11 @@ mod tests {
             nearest += near_a.lanes.count_ones();
             hits += want.count_ones();
             exact_cases += u32::from(integer && want != 0);
+            scaled_hits += if scale == 1.0 { 0 } else { want.count_ones() };
         }
         assert!(
-            hits > 2000 && exact_cases > 300 && nearest == hits,
-            "{hits} hits, {exact_cases} integer cases with hits, {nearest} nearest hits"
+            hits > 2000 && exact_cases > 300 && nearest == hits && scaled_hits > 500,
+            "{hits} hits, {exact_cases} integer cases with hits, {nearest} nearest hits, {scaled_hits} scaled"
         );
     }
 }

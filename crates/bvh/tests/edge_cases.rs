@@ -306,3 +306,71 @@ fn grazing_rims_are_not_culled_by_a_leaf_of_one() {
         compare_all(&accel, &ray).unwrap();
     }
 }
+
+/// A tilted mesh (a bumpy 16×16 grid of triangles) and the rays around
+/// it, scaled by 2⁻⁶⁰, 2⁻⁴⁶, 1 and 2⁴³: camera rays, single and in
+/// packets, hit the same triangles, and the rays spawned from their hits
+/// (the offset of a scene that size) leave it, single and in packets.
+/// Where the triangle test's `f32` products under- or overflow, a ray
+/// leaving a mesh of 1e-14 met it again (the mesh was unlit) and a mesh
+/// of 1e13 seen from 3e13 was missed.
+#[test]
+fn meshes_of_any_size_are_met_and_left_as_at_unit_size() {
+    let n = 16;
+    let corner = |i: usize, j: usize| {
+        let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+        Vec3::new(x, y, 0.5 * x + 0.25 * y + 0.05 * ((i * 7 + j * 3) % 5) as f32 / 5.0)
+    };
+    let unit_points: Vec<Vec3> = (0..=n).flat_map(|j| (0..=n).map(move |i| corner(i, j))).collect();
+    let mut faces = Vec::new();
+    for j in 0..n as u32 {
+        for i in 0..n as u32 {
+            let k = j * (n as u32 + 1) + i;
+            faces.push([k, k + 1, k + n as u32 + 2]);
+            faces.push([k, k + n as u32 + 2, k + n as u32 + 1]);
+        }
+    }
+    let eye = Vec3::new(0.4, 0.3, 3.0);
+    let mut want: Option<Vec<Option<u32>>> = None;
+    for e in [0, -60, -46, 43] {
+        let s = 2f32.powi(e);
+        let mesh = TriangleMesh::new(unit_points.iter().map(|p| *p * s).collect(), None, None, faces.clone())
+            .unwrap();
+        let accel = Accel::build(vec![Arc::new(mesh)], vec![mesh_object(0)]).unwrap();
+        let offset = prism_geometry::offset_scale(3.0 * s);
+        let rays: Vec<Ray> = (0..64 * 64)
+            .map(|k| {
+                let aim = Vec3::new((k % 64) as f32 / 63.0, (k / 64) as f32 / 63.0, 0.3);
+                Ray::new(eye * s, (aim - eye) * s)
+            })
+            .collect();
+        let hits: Vec<Option<SceneHit>> = rays.iter().map(|r| accel.closest_hit(r)).collect();
+        let faces_hit: Vec<Option<u32>> = hits.iter().map(|h| h.as_ref().map(|h| h.triangle)).collect();
+        for (chunk, want) in rays.chunks(8).zip(faces_hit.chunks(8)) {
+            let mut out = [None; 8];
+            accel.closest_record_packet(chunk, &mut out);
+            let got: Vec<Option<u32>> = out.iter().map(|h| h.and_then(|h| h.triangle())).collect();
+            assert_eq!(got, want, "2^{e}: packet");
+        }
+        match &want {
+            None => want = Some(faces_hit),
+            Some(w) => assert_eq!(&faces_hit, w, "2^{e}: the triangles hit"),
+        }
+        let mut leaving = Vec::new();
+        for h in hits.iter().flatten() {
+            for d in [Vec3::Z, h.hit.geo_normal, Vec3::new(0.3, -0.2, 1.0)] {
+                let d = if d.dot(h.hit.geo_normal) < 0.0 { -d } else { d };
+                leaving.push(Ray::spawn_scaled(h.hit.point, h.hit.geo_normal, d, offset));
+            }
+        }
+        assert!(leaving.len() > 3 * 1000, "2^{e}: {} rays", leaving.len());
+        for r in &leaving {
+            assert!(accel.closest_hit(r).is_none() && !accel.occluded(r), "2^{e}: {r:?} met the mesh again");
+        }
+        for chunk in leaving.chunks(8) {
+            let mut out = [false; 8];
+            accel.occluded_packet(chunk, &mut out[..chunk.len()]);
+            assert!(out.iter().all(|o| !o), "2^{e}: a packet met the mesh again");
+        }
+    }
+}

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use prism_geometry::glam::{Vec2, Vec3};
-use prism_geometry::{Cone, Cuboid, Cylinder, Plane, Shear, Sphere, Transform};
+use prism_geometry::{Cone, Cuboid, Cylinder, Plane, Shear, Sphere, Transform, Triangle};
 use prism_shade::{
     FogMode, ImageTexture, Mapping, Material, PointLight, RenderHooks, RenderSettings, Texture, Wrap,
 };
@@ -324,18 +324,26 @@ fn any_region_on_any_thread_count_is_bit_identical_to_the_full_render() {
 }
 
 #[test]
-fn a_scene_scaled_down_renders_the_same_picture() {
-    // A mirror ball and a glass ball on a floor under a point light, every
-    // length times `s`: the same picture (ray offsets scale with the
-    // scene; a fixed one put a small scene's reflected and shadow rays
-    // past the surfaces they should meet).
+fn a_scene_scaled_up_or_down_renders_the_same_picture() {
+    // A mirror ball, a glass ball and a tilted triangle on a floor under a
+    // point light, every length times `s`: the same picture (ray offsets
+    // scale with the scene; a fixed one put a small scene's reflected and
+    // shadow rays past the surfaces they should meet). Also scaled up, and
+    // by 2⁻⁴⁶ and 2⁴³, where the triangle test's `f32` products under- and
+    // overflow (the triangle was unlit, or missed).
     let shot = |s: f32| {
         let mirror = Material { reflectivity: 1.0, ..Material::diffuse(Vec3::ONE) };
+        let corners = [Vec3::new(-0.4, 0.0, 1.6), Vec3::new(0.4, 0.0, 1.2), Vec3::new(0.0, 0.9, 1.0)];
         let mut sh = scene(
             vec![
                 (Plane::new(Vec3::ZERO, Vec3::Y).expect("ok").into(), I, Material::diffuse(Vec3::splat(0.7))),
                 (Sphere::new(Vec3::new(-0.8, 1.0, 0.0) * s, s).expect("ok").into(), I, mirror),
                 (Sphere::new(Vec3::new(1.2, 0.6, 0.5) * s, 0.6 * s).expect("ok").into(), I, glass(1.5)),
+                (
+                    Triangle::new(corners.map(|c| c * s)).expect("ok").into(),
+                    I,
+                    Material::diffuse(Vec3::new(0.9, 0.3, 0.2)),
+                ),
             ],
             vec![light(Vec3::new(1.0, 6.0, 3.0) * s)],
             camera(Vec3::new(0.0, 2.0, 6.0) * s, Vec3::new(0.0, 0.6, 0.0) * s, Vec3::Y, 45.0, 48, 36),
@@ -344,7 +352,7 @@ fn a_scene_scaled_down_renders_the_same_picture() {
         sh
     };
     let one = render(&shot(1.0), 1, 6);
-    for s in [1e-2, 1e-4, 1e-6] {
+    for s in [1e-2, 1e-4, 1e-6, 2f32.powi(-46), 1e4, 1e8, 2f32.powi(43)] {
         let small = render(&shot(s), 1, 6);
         let off = one
             .pixels

@@ -71,7 +71,9 @@ impl Intersect for Triangle {
 /// The ray is sheared so that it runs along +Z; each triangle is then
 /// tested in 2D with edge functions that are exact in sign on shared edges
 /// (falling back to `f64` when an edge function is exactly zero), so a ray
-/// aimed at a shared edge or vertex of a closed mesh never slips through.
+/// aimed at a shared edge or vertex of a closed mesh never slips through;
+/// a distance that underflows to zero is also decided in `f64`, so that a
+/// ray leaving a tiny triangle does not meet it again at `t = 0`.
 /// Prepare once per ray ([`TriangleRay::new`]), then test many triangles
 /// ([`TriangleRay::intersect`]).
 ///
@@ -95,6 +97,22 @@ pub struct TriangleRay {
     t_min: f32,
     /// The ray's `t_max`, lowered to `f32::MAX` (so `+∞` never passes).
     t_max: f32,
+}
+
+/// Whether `x` is zero or subnormal: an edge function or a scaled
+/// distance that the triangle test decides in `f64` instead (in every
+/// kernel, so that they agree bit for bit). `NaN` is not.
+#[inline(always)]
+fn tiny(x: f32) -> bool {
+    x.abs() < f32::MIN_POSITIVE
+}
+
+/// Whether the scaled distance `x` (the paper's `T`) is zero, subnormal,
+/// infinite or `NaN`: past the range of `f32` products, which the
+/// triangle test then sums in `f64` (in every kernel).
+#[inline(always)]
+fn unsure(x: f32) -> bool {
+    !(x.abs() >= f32::MIN_POSITIVE && x.abs() < f32::INFINITY)
 }
 
 /// `[t_min, t_max]` narrowed to finite bounds: the interval test then also
@@ -171,7 +189,7 @@ impl TriangleRay {
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
-        if u == 0.0 || v == 0.0 || w == 0.0 {
+        if tiny(u) || tiny(v) || tiny(w) {
             let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
             u = (cx * by - cy * bx) as f32;
             v = (ax * cy - ay * cx) as f32;
@@ -186,7 +204,24 @@ impl TriangleRay {
         }
         let t_scaled = u * az + v * bz + w * cz;
         let rcp = 1.0 / det;
-        let t = t_scaled * rcp;
+        let mut t = t_scaled * rcp;
+        if unsure(t_scaled) {
+            // Zero or subnormal by underflow, as a rule: for a triangle of
+            // 1e-14 (edge functions of 1e-28) and an origin 1e-18 off its
+            // plane (a spawned ray's offset in a scene that small) the
+            // products fall below the smallest normal `f32`, and a ray
+            // leaving the triangle met it again at `t = −0` or at a small
+            // `t` of the wrong sign. Infinite by overflow: a triangle of
+            // 1e13 seen from 3e13 (edge functions of 1e26) was missed.
+            // Their sum in `f64` decides.
+            let exact =
+                (f64::from(u) * f64::from(az) + f64::from(v) * f64::from(bz) + f64::from(w) * f64::from(cz))
+                    / f64::from(det);
+            if !(exact >= f64::from(self.t_min) && exact <= f64::from(self.t_max)) {
+                return None;
+            }
+            t = exact as f32;
+        }
         // The bounds are finite, so this also rejects an infinite or NaN t.
         if !(t >= self.t_min && t <= self.t_max) {
             return None;
@@ -197,8 +232,8 @@ impl TriangleRay {
 
 /// [`TriangleRay::lanes4`]'s values: per lane `t`, `b1`, `b2`, and as
 /// lane masks of the lanes in use, whether the lane passes the edge and
-/// determinant tests (`ok`) and whether an edge function is exactly zero
-/// (`exact`).
+/// determinant tests (`ok`) and whether the scalar test must decide it
+/// (`exact`: an edge function exactly zero, or `t` underflowed to zero).
 #[derive(Clone, Copy)]
 struct Lanes4 {
     t: Vec4,
@@ -303,7 +338,9 @@ impl TriangleRay {
         let vv = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
         let zero = Vec4::ZERO;
-        let exact = (u.cmpeq(zero) | vv.cmpeq(zero) | w.cmpeq(zero)).bitmask();
+        let least = Vec4::splat(f32::MIN_POSITIVE);
+        let tiny4 = |x: Vec4| x.abs().cmplt(least);
+        let exact = (tiny4(u) | tiny4(vv) | tiny4(w)).bitmask();
         let outside = (u.cmplt(zero) | vv.cmplt(zero) | w.cmplt(zero))
             & (u.cmpgt(zero) | vv.cmpgt(zero) | w.cmpgt(zero));
         let used = (1u32 << tris.len.min(4)) - 1;
@@ -317,6 +354,10 @@ impl TriangleRay {
         let rcp = Vec4::ONE / det;
         let ok_lanes = !outside & det.cmpne(zero) & det.is_finite_mask();
         let ok = ok_lanes.bitmask() & used;
+        // So is a lane inside its edges whose scaled `t` is past the range
+        // of `f32` products (see the scalar test).
+        let unsure4 = !(t_scaled.abs().cmpge(least) & t_scaled.abs().cmplt(Vec4::INFINITY));
+        let exact = exact | (unsure4 & !outside).bitmask();
         Some(Lanes4 { t: t_scaled * rcp, b1: vv * rcp, b2: w * rcp, ok, exact: exact & used, ok_lanes })
     }
 
@@ -662,7 +703,7 @@ impl TriangleRays8 {
             let u = cx[i] * by[i] - cy[i] * bx[i];
             let vv = ax[i] * cy[i] - ay[i] * cx[i];
             let w = bx[i] * ay[i] - by[i] * ax[i];
-            let zero = (u == 0.0) | (vv == 0.0) | (w == 0.0);
+            let zero = tiny(u) | tiny(vv) | tiny(w);
             let outside = ((u < 0.0) | (vv < 0.0) | (w < 0.0)) & ((u > 0.0) | (vv > 0.0) | (w > 0.0));
             let det = u + vv + w;
             let t_scaled = u * az[i] + vv * bz[i] + w * cz[i];
@@ -671,6 +712,9 @@ impl TriangleRays8 {
             (out.t[i], out.b1[i], out.b2[i]) = (t, vv * rcp, w * rcp);
             let pass =
                 !outside & (det != 0.0) & det.is_finite() & (t >= self.t_min[i]) & (t <= self.t_max[i]);
+            // A scaled `t` past the range of `f32` products is the scalar
+            // test's too.
+            let zero = zero | (!outside & unsure(t_scaled));
             out.ok |= u32::from(pass & !zero) << i;
             out.exact |= u32::from(zero) << i;
         }
@@ -1071,6 +1115,49 @@ mod tests {
         assert!(Triangle::new([Vec3::ZERO, Vec3::splat(1e-30), Vec3::splat(2e-30)]).is_err());
     }
 
+    /// A tilted triangle and the rays around it, scaled by 2ᵉ for e from
+    /// −66 to 60, meet and leave as at unit size: camera rays (their
+    /// directions scaled too) hit at the same `t` (to a few ulps; to 1e-5
+    /// below 2⁻⁶³, where edge functions are subnormal), and rays spawned from
+    /// the hits (the offset of a scene that size) leave it without meeting
+    /// it again. Before the test summed its scaled distance in `f64` where
+    /// `f32` products under- or overflow, a ray leaving a triangle of
+    /// 1e-14 met it again at `t = 0` or a small wrong `t` (the scene was
+    /// unlit), and a triangle of 1e13 seen from 3e13 was missed.
+    #[test]
+    fn triangles_of_any_size_are_met_and_left_as_at_unit_size() {
+        let unit = [Vec3::ZERO, Vec3::new(1.0, 0.0, 0.5), Vec3::new(0.0, 1.0, 0.5)];
+        let eye = Vec3::new(0.3, 0.3, 3.0);
+        for e in (-66..=60).step_by(3) {
+            let s = 2f32.powi(e);
+            let tri = Triangle::new(unit.map(|c| c * s)).unwrap();
+            let offset = crate::offset_scale(3.0 * s);
+            let (mut met, mut left) = (0, 0);
+            for i in 0..24 {
+                for j in 0..24 - i {
+                    let aim = Vec3::new((i as f32 + 0.3) / 24.0, (j as f32 + 0.3) / 24.0, 0.0);
+                    let at_one = Triangle::new(unit).unwrap().intersect(&Ray::new(eye, aim - eye));
+                    let ray = Ray::new(eye * s, (aim - eye) * s);
+                    let hit = tri.intersect(&ray);
+                    assert_eq!(hit.is_some(), at_one.is_some(), "2^{e}: aimed at {aim}");
+                    let (Some(h), Some(one)) = (hit, at_one) else { continue };
+                    met += 1;
+                    // Below 2⁻⁶³ the edge functions (2⁻¹²⁶ and less) are
+                    // subnormal, and `t` keeps fewer bits.
+                    let tol = if e < -63 { 1e-5 } else { 4.0 * f32::EPSILON };
+                    assert!((h.t - one.t).abs() <= tol * one.t, "2^{e}: t {} against {}", h.t, one.t);
+                    for d in [Vec3::Z, h.geo_normal, Vec3::new(0.3, -0.2, 1.0), Vec3::new(1.0, 1.0, 0.1)] {
+                        let d = if d.dot(h.geo_normal) < 0.0 { -d } else { d };
+                        let again = tri.intersect(&Ray::spawn_scaled(h.point, h.geo_normal, d, offset));
+                        assert!(again.is_none(), "2^{e}: left {h:?} along {d} and met {again:?}");
+                        left += 1;
+                    }
+                }
+            }
+            assert!(met > 200 && left == 4 * met, "2^{e}: {met} met");
+        }
+    }
+
     /// `intersect4` and `intersect4_branchless` keep exactly what a loop of
     /// `intersect` over the lanes (narrowing `t_max` after each hit) keeps:
     /// the same lane, `t`, `b1`, `b2` bit for bit, on random and degenerate
@@ -1081,8 +1168,14 @@ mod tests {
         let mut f = uniform(0x2545_f491_u64);
         let mut hits = 0;
         let mut exact_lanes = 0;
-        for case in 0..40_000 {
-            let tris = random_leaf(&mut f, case);
+        let mut scaled_hits = 0;
+        for case in 0..60_000 {
+            // Every third case scaled by 2⁻⁶² or 2⁴⁵: edge functions and
+            // distances past the range of `f32` products, the scalar
+            // test's lanes.
+            let scale = [1.0, 2f32.powi(-62), 2f32.powi(45)][(case / 7) % 3];
+            let tris: Vec<[Vec3; 3]> =
+                random_leaf(&mut f, case).into_iter().map(|t| t.map(|c| c * scale)).collect();
             let mut o = Vec3::new(f(), f(), f()) * 2.0;
             let mut d = Vec3::new(f(), f(), f());
             if case % 3 == 0 {
@@ -1101,7 +1194,7 @@ mod tests {
                 2 => (f32::MIN, f32::MAX),
                 _ => (-1.0, 0.25),
             };
-            let tr = TriangleRay::new(&Ray::with_interval(o, d, t_min, t_max));
+            let tr = TriangleRay::new(&Ray::with_interval(o * scale, d, t_min * scale, t_max * scale));
             let mut scalar = tr;
             let mut want = None;
             for (k, t) in tris.iter().enumerate() {
@@ -1121,8 +1214,9 @@ mod tests {
             assert_eq!(tr.occludes4(&Triangles4::new(&tris)), want.is_some(), "case {case}: occludes4");
             hits += usize::from(want.is_some());
             exact_lanes += usize::from(case % 3 == 0 && want.is_some());
+            scaled_hits += usize::from(scale != 1.0 && want.is_some());
         }
-        assert!(hits > 1500 && exact_lanes > 500, "{hits} {exact_lanes}");
+        assert!(hits > 1500 && exact_lanes > 500 && scaled_hits > 500, "{hits} {exact_lanes} {scaled_hits}");
     }
 
     /// One to four random triangles for test case `case`, with degenerate
