@@ -15,7 +15,9 @@ use crate::{LoadOptions, LoadedScene, MeshInfo, Overrides, SceneInfo};
 use prism_bvh::{Accel, Object};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{Aabb, Instance, Transform, TriangleMesh};
-use prism_shade::{Camera, Fog, FogMode, ImageTexture, Light, PointLight, RenderSettings, Scene};
+use prism_shade::{
+    AreaShape, Camera, Fog, FogMode, ImageTexture, Light, LightKind, PointLight, RenderSettings, Scene,
+};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -498,6 +500,9 @@ impl<'a> Build<'a> {
         let bounds = accel.bounds();
         let (camera, fog, fog_on) =
             self.camera_and_fog(camera, fog, (settings.width, settings.height), bounds)?;
+        if let Some(w) = far_warning(&camera, &lights) {
+            self.warn(&w);
+        }
         let stats = accel.stats();
         let Settings {
             width,
@@ -587,6 +592,56 @@ impl<'a> Build<'a> {
         }
         Ok((camera, medium, on))
     }
+}
+
+/// How far from the origin the camera, its focus and the lights may stand
+/// before the squared distances between them and the scene (past about
+/// 1.8e19, the square root of the largest `f32`) may overflow.
+const FAR: f32 = 1e18;
+
+/// A warning naming the camera, its focus or the lights (numbered from 1)
+/// that stand more than [`FAR`] from the origin, if any: past about 1.8e19
+/// from what they light or see, their squared distances overflow 32-bit
+/// floats and the picture comes out black (prism renders it anyway: a
+/// scene whose objects are as far keeps working where it can).
+fn far_warning(camera: &Camera, lights: &[Light]) -> Option<String> {
+    let reach = |points: &[Vec3]| points.iter().map(|p| p.abs().max_element()).fold(0.0f32, f32::max);
+    let mut far = Vec::new();
+    let mut farthest = 0.0f32;
+    let mut note = |what: String, r: f32| {
+        if r > FAR {
+            far.push(what);
+            farthest = farthest.max(r);
+        }
+    };
+    note("the camera".into(), reach(&[camera.position(), camera.look_at()]));
+    if camera.aperture() > 0.0 {
+        let focus = camera.position() + camera.forward() * camera.focus_distance();
+        note("the camera's focus point".into(), reach(&[focus]));
+    }
+    for (k, l) in lights.iter().enumerate() {
+        let points = match l.kind {
+            LightKind::Point { position, .. } | LightKind::Spot { position, .. } => vec![position],
+            LightKind::Directional { .. } => vec![],
+            LightKind::Area(a) => match a.shape {
+                AreaShape::Quad { corner, edge_u, edge_v } => {
+                    vec![corner, corner + edge_u, corner + edge_v, corner + edge_u + edge_v]
+                }
+                AreaShape::Disk { center, radius, .. } | AreaShape::Sphere { center, radius } => {
+                    vec![center - Vec3::splat(radius), center + Vec3::splat(radius)]
+                }
+            },
+        };
+        note(format!("light {}", k + 1), reach(&points));
+    }
+    (!far.is_empty()).then(|| {
+        format!(
+            "{} {} more than {FAR:.0e} from the origin (up to {farthest:.1e}): 32-bit floats square \
+             distances past about 1.8e19 to infinity, and the picture may come out black; scale the scene down",
+            far.join(", "),
+            if far.len() == 1 { "lies" } else { "lie" }
+        )
+    })
 }
 
 /// The error for an OBJ file whose material library cannot be used, for

@@ -347,3 +347,44 @@ fn quad_lights_of_any_representable_area_are_accepted() {
         Some("edge_v"),
     )]);
 }
+
+/// A light, the camera or its focus point more than 1e18 from the origin is
+/// warned about, naming each: past about 1.8e19 from what they light or
+/// see, squared distances overflow and the picture comes out black (the
+/// fuzzing found each rendering black without a word). 1e18 itself is
+/// quiet, as is the base scene.
+#[test]
+fn lights_and_cameras_too_far_away_are_warned_about() {
+    let far =
+        |loaded: &LoadedScene| loaded.warnings.iter().find(|w| w.contains("from the origin (up to")).cloned();
+    assert_eq!(far(&parse(BASE).unwrap()), None);
+    let at = |text: &str| far(&parse(text).unwrap());
+    let light =
+        "[[lights]]\ntype = \"spot\"\nposition = [0, 2e19, 0]\ndirection = [0, -1, 0]\nouter_angle = 30\n";
+    let w = at(&format!("{BASE}{light}")).expect("a warning");
+    assert!(w.starts_with("test.toml: light 2 lies more than 1e18 from the origin (up to 2.0e19)"), "{w}");
+    assert!(w.contains("square distances past about 1.8e19 to infinity"), "{w}");
+    let quad = "[[lights]]\ntype = \"quad\"\ncorner = [0, 5, 0]\nedge_u = [3e18, 0, 0]\nedge_v = [0, 0, 1]\n";
+    assert!(
+        at(&format!("{BASE}{quad}"))
+            .expect("a warning")
+            .contains("light 2 lies more than 1e18 from the origin (up to 3.0e18)")
+    );
+    let camera = BASE.replace("position = [0, 2, 10]", "position = [0, 2, -5e19]");
+    assert!(
+        at(&camera)
+            .expect("a warning")
+            .starts_with("test.toml: the camera lies more than 1e18 from the origin (up to 5.0e19)")
+    );
+    let focus =
+        BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\naperture = 0.1\nfocus_distance = 2e19");
+    assert!(at(&focus).expect("a warning").contains("the camera's focus point lies more than 1e18"));
+    let both =
+        BASE.replace("position = [5, 8, 5]", "position = [5, 1e19, 5]").replace("[0, 2, 10]", "[0, 2, 3e19]");
+    assert!(
+        at(&both)
+            .expect("a warning")
+            .contains("the camera, light 1 lie more than 1e18 from the origin (up to 3.0e19)")
+    );
+    assert_eq!(at(&BASE.replace("position = [5, 8, 5]", "position = [5, 1e18, 5]")), None);
+}
