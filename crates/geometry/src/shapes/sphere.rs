@@ -71,20 +71,33 @@ impl Sphere {
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<f32> {
         let f = ray.origin - self.center;
-        let a = ray.dir.length_squared();
-        let b = -f.dot(ray.dir);
-        let c = f.length_squared() - self.radius * self.radius;
-        // Hearn & Baker's form of the discriminant (Ray Tracing Gems ch. 7):
-        // b² − ac = a (r² − |f − (f·d / a) d|²), exact for distant spheres.
-        let l = f + (b / a) * ray.dir;
-        let disc = a * (self.radius * self.radius - l.length_squared());
-        if !(disc >= 0.0) {
+        let size = f.abs().max_element().max(self.radius);
+        let reach = ray.dir.abs().max_element();
+        if !((UNSCALED.0..=UNSCALED.1).contains(&size) && (UNSCALED.0..=UNSCALED.1).contains(&reach)) {
+            return self.solve_scaled(ray, f, size, reach);
+        }
+        super::first_in(ray, roots(f, ray.dir, self.radius)?)
+    }
+
+    /// [`Sphere::solve`] for a sphere and ray whose squares would leave
+    /// the normal range of `f32` (a sphere of radius 1e-22 seen from
+    /// fifteen radii was unlit, one of 2e-26 covered the whole view): the
+    /// origin's offset and the radius are scaled by the power of two that
+    /// brings the larger to about 1, the direction by its own, and the
+    /// roots scaled back. Powers of two change no digit, so the equation
+    /// is the same one.
+    #[cold]
+    fn solve_scaled(&self, ray: &Ray, f: Vec3, size: f32, reach: f32) -> Option<f32> {
+        if !(size.is_finite() && reach > 0.0 && reach.is_finite()) {
             return None;
         }
-        let q = b + b.signum() * disc.sqrt();
-        let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q / a) };
-        let ts = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-        super::first_in(ray, ts)
+        // 2^−e for the exponent e of x, within f32's normal powers.
+        let inverse = |x: f32| 2f64.powi(-(f64::from(x).log2().floor() as i32).clamp(-126, 126));
+        let (sf, sd) = (inverse(size), inverse(reach));
+        let (t0, t1) = roots(f * sf as f32, ray.dir * sd as f32, self.radius * sf as f32)?;
+        // t = t'·sd / sf: the scaled ray meets the scaled sphere at t'.
+        let back = |t: f32| (f64::from(t) * sd / sf) as f32;
+        super::first_in(ray, (back(t0), back(t1)))
     }
 
     /// The unit outward normal where the ray is at `t`.
@@ -92,6 +105,31 @@ impl Sphere {
     fn normal_at(&self, ray: &Ray, t: f32) -> Vec3 {
         ((ray.at(t) - self.center) / self.radius).normalize_or(Vec3::Y)
     }
+}
+
+/// The range of sizes (the larger of the origin's offset from the centre
+/// and the radius, and the direction's largest component) that
+/// [`Sphere::solve`] takes as they are: within it, the discriminant (of
+/// the order of both squared, times each other) stays within 2^±124.
+/// Outside it, it scales them.
+const UNSCALED: (f32, f32) = (1.0 / (1u64 << 31) as f32, (1u64 << 31) as f32);
+
+/// The roots, ascending, of `|f + t·d|² = r²`, if real.
+#[inline(always)]
+fn roots(f: Vec3, d: Vec3, r: f32) -> Option<(f32, f32)> {
+    let a = d.length_squared();
+    let b = -f.dot(d);
+    let c = f.length_squared() - r * r;
+    // Hearn & Baker's form of the discriminant (Ray Tracing Gems ch. 7):
+    // b² − ac = a (r² − |f − (f·d / a) d|²), exact for distant spheres.
+    let l = f + (b / a) * d;
+    let disc = a * (r * r - l.length_squared());
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let q = b + b.signum() * disc.sqrt();
+    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q / a) };
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
 impl Intersect for Sphere {
@@ -127,6 +165,54 @@ mod tests {
 
     fn sphere() -> Sphere {
         Sphere::new(Vec3::new(0.0, 0.0, -5.0), 1.0).unwrap()
+    }
+
+    /// A sphere and the rays around it, scaled by 2ᵉ for e from −100 to
+    /// 60 (directions by 1, 2ᵉ or 2⁻ᵉ), meet and leave as at unit size:
+    /// the same hits at `t` scaled as the direction is (to a few ulps),
+    /// and rays spawned outward from the hits (the offset of a scene that
+    /// size) meet nothing. Below a radius of about 1e-19 the squares
+    /// underflowed: a sphere of 1e-22 seen from fifteen radii went unlit,
+    /// one of 2e-26 covered the whole view.
+    #[test]
+    fn spheres_of_any_size_are_met_and_left_as_at_unit_size() {
+        let unit = Sphere::new(Vec3::new(0.2, -0.1, 0.3), 1.0).unwrap();
+        let eye = Vec3::new(0.5, 0.4, 15.0);
+        for e in (-100..=60).step_by(4) {
+            let s = 2f32.powi(e);
+            let sphere = Sphere::new(unit.center * s, s).unwrap();
+            let offset = crate::offset_scale(15.0 * s);
+            // (With a direction of 2⁻ᵉ, `t` is 15·2²ᵉ: past f32 below 2⁻⁶⁰.)
+            let dirs: &[f32] = if e >= -60 { &[1.0, s, 1.0 / s] } else { &[1.0, s] };
+            for &dir_scale in dirs {
+                let mut met = 0;
+                for i in 0..21 {
+                    for j in 0..21 {
+                        let aim = Vec3::new(i as f32 / 10.0 - 1.0, j as f32 / 10.0 - 1.0, 0.0);
+                        let one = unit.intersect(&Ray::new(eye, aim - eye));
+                        let ray = Ray::new(eye * s, (aim - eye) * dir_scale);
+                        let hit = sphere.intersect(&ray);
+                        assert_eq!(hit.is_some(), one.is_some(), "2^{e}, {dir_scale}: aimed at {aim}");
+                        let (Some(h), Some(one)) = (hit, one) else { continue };
+                        met += 1;
+                        let want = one.t * s / dir_scale;
+                        assert!(
+                            (h.t - want).abs() <= 8.0 * f32::EPSILON * want,
+                            "2^{e}: t {} against {want}",
+                            h.t
+                        );
+                        assert!((h.normal - one.normal).abs().max_element() < 1e-5, "2^{e}: {h:?}");
+                        for d in [h.normal, h.normal + Vec3::new(0.3, -0.2, 0.1), Vec3::new(1.0, 0.5, -0.2)] {
+                            let d = if d.dot(h.geo_normal) < 0.0 { -d } else { d };
+                            let again =
+                                sphere.intersect(&Ray::spawn_scaled(h.point, h.geo_normal, d, offset));
+                            assert!(again.is_none(), "2^{e}: left {h:?} along {d} and met {again:?}");
+                        }
+                    }
+                }
+                assert!(met > 100, "2^{e}: {met} met");
+            }
+        }
     }
 
     #[test]

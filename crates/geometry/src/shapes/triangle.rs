@@ -189,11 +189,14 @@ impl TriangleRay {
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
+        // The edge functions in `f64`, where the `f32` ones are zero or
+        // subnormal (their signs then come from these).
+        let mut wide = None;
         if tiny(u) || tiny(v) || tiny(w) {
             let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
-            u = (cx * by - cy * bx) as f32;
-            v = (ax * cy - ay * cx) as f32;
-            w = (bx * ay - by * ax) as f32;
+            let uvw = (cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax);
+            (u, v, w) = (uvw.0 as f32, uvw.1 as f32, uvw.2 as f32);
+            wide = Some(uvw);
         }
         if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
             return None;
@@ -203,25 +206,33 @@ impl TriangleRay {
             return None;
         }
         let t_scaled = u * az + v * bz + w * cz;
-        let rcp = 1.0 / det;
-        let mut t = t_scaled * rcp;
-        if unsure(t_scaled) {
-            // Zero or subnormal by underflow, as a rule: for a triangle of
-            // 1e-14 (edge functions of 1e-28) and an origin 1e-18 off its
-            // plane (a spawned ray's offset in a scene that small) the
-            // products fall below the smallest normal `f32`, and a ray
-            // leaving the triangle met it again at `t = −0` or at a small
-            // `t` of the wrong sign. Infinite by overflow: a triangle of
-            // 1e13 seen from 3e13 (edge functions of 1e26) was missed.
-            // Their sum in `f64` decides.
-            let exact =
-                (f64::from(u) * f64::from(az) + f64::from(v) * f64::from(bz) + f64::from(w) * f64::from(cz))
-                    / f64::from(det);
-            if !(exact >= f64::from(self.t_min) && exact <= f64::from(self.t_max)) {
+        if unsure(t_scaled) || tiny(det) {
+            // Past the range of `f32` products. Zero or subnormal by
+            // underflow, as a rule: for a triangle of 1e-14 (edge functions
+            // of 1e-28) and an origin 1e-18 off its plane (a spawned ray's
+            // offset in a scene that small) the products fall below the
+            // smallest normal `f32`, and a ray leaving the triangle met it
+            // again at `t = −0` or at a small `t` of the wrong sign.
+            // Infinite by overflow: a triangle of 1e13 seen from 3e13 (edge
+            // functions of 1e26) was missed. A subnormal determinant (a
+            // triangle of 1e-20) has no finite `f32` reciprocal. All of it
+            // in `f64` (every kernel sends such lanes here: a determinant
+            // that small has edge functions as small).
+            let (u, v, w) = wide.unwrap_or((f64::from(u), f64::from(v), f64::from(w)));
+            // (Edge functions below the smallest subnormal were `±0` in
+            // `f32`: their signs are these.)
+            if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
                 return None;
             }
-            t = exact as f32;
+            let det = u + v + w;
+            let t = (u * f64::from(az) + v * f64::from(bz) + w * f64::from(cz)) / det;
+            if !(t >= f64::from(self.t_min) && t <= f64::from(self.t_max)) {
+                return None;
+            }
+            return Some((t as f32, (v / det) as f32, (w / det) as f32));
         }
+        let rcp = 1.0 / det;
+        let t = t_scaled * rcp;
         // The bounds are finite, so this also rejects an infinite or NaN t.
         if !(t >= self.t_min && t <= self.t_max) {
             return None;
