@@ -19,7 +19,8 @@ impl Triangle {
     /// A triangle with corners `v`.
     ///
     /// # Errors
-    /// If a corner is not finite or the triangle has zero area.
+    /// If a corner is not finite, the triangle has zero area, or its
+    /// edges' cross product overflows `f32` (edges past about 1e19).
     pub fn new(v: [Vec3; 3]) -> Result<Self, GeometryError> {
         for p in v {
             check_finite("triangle corner", p)?;
@@ -27,7 +28,12 @@ impl Triangle {
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
         // Not the squared length, which underflows to 0 for edges of about
         // 1e-12 (and overflows for 1e10) that a mesh's faces handle.
-        if n == Vec3::ZERO || !n.is_finite() {
+        if !n.is_finite() {
+            return Err(GeometryError::Degenerate(
+                "triangle is too large: the product of its edges overflows 32-bit floats (edges up to about 1e19)",
+            ));
+        }
+        if n == Vec3::ZERO {
             return Err(GeometryError::Degenerate("triangle has zero area"));
         }
         Ok(Self { v })
@@ -1122,8 +1128,12 @@ mod tests {
             let small = Triangle::new([Vec3::ZERO, Vec3::new(e, 0.0, 0.0), Vec3::new(0.0, e, 0.0)]).unwrap();
             assert_eq!(small.normal(), Vec3::Z, "edge {e}");
         }
-        // A triangle with no area stays refused at any size.
+        // A triangle with no area stays refused at any size; one whose
+        // edges' product overflows is refused as too large, not as flat.
         assert!(Triangle::new([Vec3::ZERO, Vec3::splat(1e-30), Vec3::splat(2e-30)]).is_err());
+        let e =
+            Triangle::new([Vec3::ZERO, Vec3::new(3e38, 0.0, 0.0), Vec3::new(0.0, 3e38, 0.0)]).unwrap_err();
+        assert!(e.to_string().starts_with("triangle is too large"), "{e}");
     }
 
     /// A tilted triangle and the rays around it, scaled by 2ᵉ for e from
