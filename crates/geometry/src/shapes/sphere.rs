@@ -71,10 +71,13 @@ impl Sphere {
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<f32> {
         let f = ray.origin - self.center;
-        let size = f.abs().max_element().max(self.radius);
-        let reach = ray.dir.abs().max_element();
-        if !((UNSCALED.0..=UNSCALED.1).contains(&size) && (UNSCALED.0..=UNSCALED.1).contains(&reach)) {
-            return self.solve_scaled(ray, f, size, reach);
+        // The squares the roots need anyway (the same expressions: computed
+        // once), so the check costs four comparisons.
+        let (ff, rr, a) = (f.length_squared(), self.radius * self.radius, ray.dir.length_squared());
+        let (low, high) = (UNSCALED.0 * UNSCALED.0, UNSCALED.1 * UNSCALED.1);
+        if !(ff.max(rr) >= low && ff.max(rr) <= high && a >= low && a <= high) {
+            let size = f.abs().max_element().max(self.radius);
+            return self.solve_scaled(ray, f, size, ray.dir.abs().max_element());
         }
         super::first_in(ray, roots(f, ray.dir, self.radius)?)
     }
@@ -108,10 +111,10 @@ impl Sphere {
 }
 
 /// The range of sizes (the larger of the origin's offset from the centre
-/// and the radius, and the direction's largest component) that
-/// [`Sphere::solve`] takes as they are: within it, the discriminant (of
-/// the order of both squared, times each other) stays within 2^±124.
-/// Outside it, it scales them.
+/// and the radius, and the direction's length) that [`Sphere::solve`]
+/// takes as they are: within it, the discriminant (of the order of both
+/// squared, times each other) stays within 2^±124. Outside it, it scales
+/// them.
 const UNSCALED: (f32, f32) = (1.0 / (1u64 << 31) as f32, (1u64 << 31) as f32);
 
 /// The roots, ascending, of `|f + t·d|² = r²`, if real.
