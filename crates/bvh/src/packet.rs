@@ -358,8 +358,8 @@ pub(crate) mod x86 {
         t: __m256,
         b1: __m256,
         b2: __m256,
-        /// The lanes that meet the triangle within their interval, with no
-        /// edge function exactly zero.
+        /// The lanes that meet the triangle within their interval and need
+        /// not take the scalar test.
         ok: u32,
         /// The lanes with an edge function zero or subnormal, or inside
         /// the edges with a scaled `t` past the range of `f32` products:
@@ -502,8 +502,9 @@ pub(crate) mod x86 {
         }
 
         /// [`TriangleRays8::occluded`] with each step on all eight lanes at
-        /// once ([`test8`]). Lanes with an exactly zero edge function take
-        /// the scalar test, as there.
+        /// once ([`test8`]). Lanes with an edge function zero or subnormal,
+        /// or a scaled `t` past `f32`'s range, take the scalar test, as
+        /// there.
         #[inline(always)]
         fn occluded8(self, rays: &TriangleRays8, tris: &Triangles4) -> u32 {
             let used = (1u32 << rays.len().min(8)) - 1;
@@ -524,8 +525,9 @@ pub(crate) mod x86 {
         /// [`TriangleRays8::closest`] with each step on all eight lanes at
         /// once ([`test8`]): the lanes that pass take the triangle's `t`,
         /// `b1`, `b2` and narrow their `t_max` (blends), triangle by
-        /// triangle in order; the lanes with an exactly zero edge function
-        /// then take the scalar test, as there.
+        /// triangle in order; the lanes with an edge function zero or
+        /// subnormal, or a scaled `t` past `f32`'s range, then take the
+        /// scalar test, as there.
         #[inline(always)]
         fn closest8(self, rays: &mut TriangleRays8, tris: &Triangles4) -> Nearest8 {
             let used = (1u32 << rays.len().min(8)) - 1;

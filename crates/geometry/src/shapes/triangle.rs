@@ -76,10 +76,13 @@ impl Intersect for Triangle {
 ///
 /// The ray is sheared so that it runs along +Z; each triangle is then
 /// tested in 2D with edge functions that are exact in sign on shared edges
-/// (falling back to `f64` when an edge function is exactly zero), so a ray
-/// aimed at a shared edge or vertex of a closed mesh never slips through;
-/// a distance that underflows to zero is also decided in `f64`, so that a
-/// ray leaving a tiny triangle does not meet it again at `t = 0`.
+/// (falling back to `f64` when an edge function is zero or subnormal), so a
+/// ray aimed at a shared edge or vertex of a closed mesh never slips
+/// through. A scaled distance past the
+/// range of `f32` products (zero, subnormal or infinite) and a subnormal
+/// determinant are also decided in `f64`: a ray leaving a triangle of
+/// 1e-14 does not meet it again at `t = 0`, and one of 1e13 seen from
+/// 3e13 is not missed.
 /// Prepare once per ray ([`TriangleRay::new`]), then test many triangles
 /// ([`TriangleRay::intersect`]).
 ///
@@ -250,7 +253,8 @@ impl TriangleRay {
 /// [`TriangleRay::lanes4`]'s values: per lane `t`, `b1`, `b2`, and as
 /// lane masks of the lanes in use, whether the lane passes the edge and
 /// determinant tests (`ok`) and whether the scalar test must decide it
-/// (`exact`: an edge function exactly zero, or `t` underflowed to zero).
+/// (`exact`: an edge function zero or subnormal, or, inside the edges, a
+/// scaled `t` past the range of `f32` products).
 #[derive(Clone, Copy)]
 struct Lanes4 {
     t: Vec4,
@@ -381,8 +385,9 @@ impl TriangleRay {
     /// Whether the ray meets any of the (up to) four triangles of `tris`
     /// within its interval: `intersect4(tris).is_some()`, with the interval
     /// tested on all lanes at once and no nearest hit picked (an occlusion
-    /// query's leaf test). A lane with an exactly zero edge function takes
-    /// the scalar test, as there.
+    /// query's leaf test). A lane the scalar test must decide (an edge
+    /// function zero or subnormal, a scaled `t` past `f32`'s range) takes
+    /// it, as there.
     #[inline(always)]
     #[must_use]
     pub fn occludes4(&self, tris: &Triangles4) -> bool {
@@ -407,8 +412,8 @@ impl TriangleRay {
     /// after each hit: `(lane, t, b1, b2)` of the nearest, the last lane
     /// among equal `t`. Every value is computed by the same operations in
     /// the same order as [`TriangleRay::intersect`], so it is
-    /// bit-identical; a lane with an
-    /// exactly zero edge function takes the scalar test, whose `f64`
+    /// bit-identical; a lane with an edge function zero or subnormal, or a
+    /// scaled `t` past `f32`'s range, takes the scalar test, whose `f64`
     /// fallback decides it.
     #[inline(always)]
     #[must_use]
@@ -487,8 +492,8 @@ impl TriangleRay {
 /// [`TriangleRay::occludes4`] tests one ray against four triangles. Every
 /// lane computes what [`TriangleRay::intersect`] computes, by the same
 /// operations in the same order, so the answers are the same bit for bit;
-/// a lane with an exactly zero edge function takes the scalar test, as in
-/// [`TriangleRay::occludes4`].
+/// a lane with an edge function zero or subnormal, or a scaled `t` past
+/// `f32`'s range, takes the scalar test, as in [`TriangleRay::occludes4`].
 ///
 /// Plain arrays in loops of eight, which the compiler vectorises: in a
 /// caller compiled for AVX2, one 256-bit operation a step.
@@ -596,7 +601,7 @@ impl TriangleRays8 {
     }
 
     /// The ray of lane `i` (below [`TriangleRays8::len`]), for the scalar
-    /// test of a lane with an exactly zero edge function.
+    /// test of a lane it must decide (see [`TriangleRay::intersect`]).
     #[inline(always)]
     #[must_use]
     pub fn ray(&self, i: usize) -> TriangleRay {
@@ -705,10 +710,10 @@ impl TriangleRays8 {
     }
 
     /// Each lane's test of triangle `j` of `tris`: its `t`, `b1`, `b2`,
-    /// the lanes that meet it within their interval with no edge function
-    /// exactly zero (`ok`; their values are [`TriangleRay::intersect`]'s,
-    /// bit for bit), and the lanes with an edge function exactly zero
-    /// (`exact`), which the scalar test must decide.
+    /// the lanes that meet it within their interval that the scalar test
+    /// need not decide (`ok`; their values are [`TriangleRay::intersect`]'s,
+    /// bit for bit), and those it must (`exact`: an edge function zero or
+    /// subnormal, or a scaled `t` past `f32`'s range).
     #[inline(always)]
     fn lanes(&self, tris: &Triangles4, j: usize) -> Lanes8 {
         let [kx, ky, kz] = self.k.map(|k| k.min(2));
