@@ -188,7 +188,6 @@ proptest! {
         }
     }
 
-
     /// The cheap `t`-only and `(t, front_face)` queries agree with the full
     /// hit bit for bit, in object space and placed (planes and meshes included), for any
     /// interval; `occludes` says the same; the winner's full hit is found

@@ -1158,7 +1158,7 @@ mod tests {
             let s = 2f32.powi(e);
             let tri = Triangle::new(unit.map(|c| c * s)).unwrap();
             let offset = crate::offset_scale(3.0 * s);
-            let (mut met, mut left) = (0, 0);
+            let mut met = 0;
             for i in 0..24 {
                 for j in 0..24 - i {
                     let aim = Vec3::new((i as f32 + 0.3) / 24.0, (j as f32 + 0.3) / 24.0, 0.0);
@@ -1176,11 +1176,10 @@ mod tests {
                         let d = if d.dot(h.geo_normal) < 0.0 { -d } else { d };
                         let again = tri.intersect(&Ray::spawn_scaled(h.point, h.geo_normal, d, offset));
                         assert!(again.is_none(), "2^{e}: left {h:?} along {d} and met {again:?}");
-                        left += 1;
                     }
                 }
             }
-            assert!(met > 200 && left == 4 * met, "2^{e}: {met} met");
+            assert!(met > 200, "2^{e}: {met} met");
         }
     }
 
