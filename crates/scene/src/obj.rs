@@ -137,17 +137,20 @@ pub fn load_obj(
     let here = |w: String| format!("{}:{}", path.display(), w.strip_prefix("line ").unwrap_or(&w));
     let mut warnings: Vec<String> = decode_warning.into_iter().chain(obj_warnings).map(here).collect();
     let mtl_warnings: std::cell::RefCell<Vec<String>> = std::cell::RefCell::new(Vec::new());
-    let mtllibs = precheck(text).map_err(|(line, m)| (Location::at_line(path, line), m))?;
+    let Prechecked { mtllibs, corners } =
+        precheck(text).map_err(|(line, m)| (Location::at_line(path, line), m))?;
 
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mtl_files: Vec<PathBuf> = mtllibs.iter().map(|m| dir.join(m)).collect();
+    let exists = |name: &str| dir.join(name).exists();
+    let mtl_files: Vec<PathBuf> =
+        mtllibs.iter().flat_map(|m| library_names(m, exists)).map(|m| dir.join(m)).collect();
     // Polygons are cut here (`polygon_triangles`), not by tobj's fan.
     let options = tobj::LoadOptions { triangulate: false, single_index: true, ..Default::default() };
     // A problem found in an MTL file before tobj sees it, with its place.
     let mtl_problem: std::cell::RefCell<Option<String>> = std::cell::RefCell::new(None);
     let places: std::cell::RefCell<Vec<MtlPlace>> = std::cell::RefCell::new(Vec::new());
-    let loader = |p: &Path| {
-        let path = dir.join(p);
+    let load_library = |path: &Path| {
+        let path = path.to_path_buf();
         let Some(bytes) = read_mtl(&path) else {
             // tobj's own words would be "open file failed".
             let why = if path.exists() { "not a readable file" } else { "no such file" };
@@ -177,6 +180,29 @@ pub fn load_obj(
             places.borrow_mut().extend(mtl_places(&path, text));
         }
         loaded
+    };
+    // One `mtllib` line may name several libraries.
+    let loader = |p: &Path| {
+        let name = p.to_string_lossy();
+        let mut loaded = None;
+        let mut failed = None;
+        // As tobj merges the libraries of several `mtllib` lines: those
+        // read are used, an error only where none could be.
+        for lib in library_names(&name, exists) {
+            match (load_library(&dir.join(lib)), &mut loaded) {
+                (Ok(first), None) => loaded = Some(first),
+                (Ok((mut more, names)), Some((materials, all_names))) => {
+                    let offset = materials.len();
+                    materials.append(&mut more);
+                    all_names.extend(names.into_iter().map(|(k, v)| (k, v + offset)));
+                }
+                (Err(e), _) => failed = failed.or(Some(e)),
+            }
+        }
+        match (loaded, failed) {
+            (Some(l), _) => Ok(l),
+            (None, e) => Err(e.unwrap_or(tobj::LoadError::OpenFileFailed)),
+        }
     };
     let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
         .map_err(|e| (Location::file(path), format!("malformed OBJ: {e}")))?;
@@ -218,7 +244,7 @@ pub fn load_obj(
         let file_normals = (m.normals.len() == 3 * n)
             .then(|| m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>());
         // OBJ's v runs upward; prism's image rows run downward from v = 0.
-        let uvs = (m.texcoords.len() == 2 * n)
+        let mut uvs = (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect::<Vec<_>>());
         // The smoothing groups of this model's triangles, in file order:
         // each face's for each of its triangles.
@@ -235,7 +261,26 @@ pub fn load_obj(
                 }
             });
         let model_groups = model_groups.as_deref();
+        let model_faces = next_face..next_face + faces;
         next_face += faces;
+        // Texture coordinates at some corners and not at others: tobj
+        // gives those it has, which no longer match the vertices.
+        if uvs.is_none() && !m.texcoords.is_empty() {
+            let mixed = corners.as_ref().and_then(|c| mixed_uvs(c, model_faces, &m.texcoords, n));
+            let at = mixed
+                .as_ref()
+                .map_or_else(|| path.display().to_string(), |(_, line)| format!("{}:{line}", path.display()));
+            warnings.push(format!(
+                "{at}: model `{}` has faces without texture coordinates (`vt`) beside faces with them; {}",
+                model.name,
+                if mixed.is_some() {
+                    "their corners get uv (0, 0), the image's bottom-left corner"
+                } else {
+                    "its texture coordinates are not used"
+                }
+            ));
+            uvs = mixed.map(|(uvs, _)| uvs);
+        }
         // Faces of no area (spikes out and back) give no triangles.
         if indices.is_empty() {
             continue;
@@ -532,8 +577,9 @@ fn precheck_mtl(text: &str) -> Result<(), (usize, String)> {
 
 /// Checks every line that tobj would read; returns the `mtllib` names.
 /// Errors carry the 1-based line.
-fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
+fn precheck(text: &str) -> Result<Prechecked, (usize, String)> {
     let (mut nv, mut nvt, mut nvn, mut faces) = (0_i64, 0_i64, 0_i64, 0_usize);
+    let (mut with_vt, mut without_vt) = (false, false);
     let mut mtllibs = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
@@ -621,6 +667,11 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
                     if parts.len() > 3 || parts[0].is_empty() {
                         return Err((line_no, format!("face corner `{c}` is not v, v/vt, v//vn or v/vt/vn")));
                     }
+                    if parts.get(1).is_some_and(|vt| !vt.is_empty()) {
+                        with_vt = true;
+                    } else {
+                        without_vt = true;
+                    }
                     for (k, (part, count, what)) in [
                         (parts[0], nv, "vertex"),
                         (parts.get(1).copied().unwrap_or(""), nvt, "texture coordinate"),
@@ -671,7 +722,109 @@ fn precheck(text: &str) -> Result<Vec<String>, (usize, String)> {
             "the OBJ file has no faces (`f` lines); lines and points are not rendered".into(),
         ));
     }
-    Ok(mtllibs)
+    let corners = (with_vt && without_vt).then(|| FaceCorners::of(text));
+    Ok(Prechecked { mtllibs, corners })
+}
+
+/// The material libraries an `mtllib` line's `name` (the rest of its
+/// line) names: `name` itself where a file is called that (`exists`), as
+/// tobj reads it (a name with spaces), else each of its words, where there
+/// are several and each ends in `.mtl` (the OBJ format allows several
+/// libraries on one line).
+fn library_names(name: &str, exists: impl Fn(&str) -> bool) -> Vec<&str> {
+    let words: Vec<&str> = name.split_whitespace().collect();
+    let several = words.len() > 1
+        && words.iter().all(|w| {
+            w.len() > 4 && w.is_char_boundary(w.len() - 4) && w[w.len() - 4..].eq_ignore_ascii_case(".mtl")
+        });
+    if several && !exists(name) { words } else { vec![name] }
+}
+
+/// What [`precheck`] gathers for the load.
+#[derive(Debug)]
+struct Prechecked {
+    /// The names each `mtllib` line gives (the rest of its line).
+    mtllibs: Vec<String>,
+    /// Every face's corners, where some corners have texture coordinates
+    /// and some have none ([`mixed_uvs`]).
+    corners: Option<FaceCorners>,
+}
+
+/// Every face's corners in the file's order, as `(v, vt, vn)` indices
+/// resolved to count from 1 (0: none given), the key by which tobj makes
+/// one vertex of each distinct corner.
+#[derive(Debug)]
+struct FaceCorners {
+    /// The corners, face after face.
+    keys: Vec<[i64; 3]>,
+    /// Where each face's corners start in `keys`, and its line; one more
+    /// entry than there are faces, for the end.
+    faces: Vec<(usize, usize)>,
+}
+
+impl FaceCorners {
+    /// The corners of `text`, which [`precheck`] has accepted.
+    fn of(text: &str) -> Self {
+        let mut counts = [0_i64; 3];
+        let mut keys = Vec::new();
+        let mut faces = Vec::new();
+        for (i, raw) in text.lines().enumerate() {
+            let line = raw.split('#').next().unwrap_or("");
+            let mut words = line.split_whitespace();
+            let slot = match words.next() {
+                Some("v") => 0,
+                Some("vt") => 1,
+                Some("vn") => 2,
+                Some("f") => {
+                    faces.push((keys.len(), i + 1));
+                    for corner in words {
+                        let mut key = [0_i64; 3];
+                        for (k, part) in corner.split('/').enumerate().take(3) {
+                            let idx: i64 = part.parse().unwrap_or(0);
+                            key[k] = if idx < 0 { counts[k] + idx + 1 } else { idx };
+                        }
+                        keys.push(key);
+                    }
+                    continue;
+                }
+                _ => continue,
+            };
+            counts[slot] += 1;
+        }
+        faces.push((keys.len(), 0));
+        Self { keys, faces }
+    }
+}
+
+/// The texture coordinates of a model whose faces `faces` (numbered in the
+/// file's order) have them at some corners and not at others, where tobj
+/// gives only those it has, one per distinct corner with them: each
+/// distinct corner in tobj's order, `uv` from the file where it has one,
+/// else the OBJ format's (0, 0) (the image's bottom-left corner, as
+/// Blender reads such corners). With the line of the model's first face
+/// that lacks them, or `None` where the counts do not match tobj's.
+fn mixed_uvs(
+    corners: &FaceCorners,
+    faces: std::ops::Range<usize>,
+    texcoords: &[f32],
+    n: usize,
+) -> Option<(Vec<Vec2>, usize)> {
+    let (start, _) = *corners.faces.get(faces.start)?;
+    let (end, _) = *corners.faces.get(faces.end)?;
+    let mut seen = std::collections::HashSet::with_capacity(n);
+    let mut given = texcoords.chunks_exact(2);
+    let mut uvs = Vec::with_capacity(n);
+    for key in corners.keys.get(start..end)? {
+        if seen.insert(*key) {
+            // OBJ's v runs upward; prism's image rows run downward from v = 0.
+            uvs.push(if key[1] > 0 { given.next().map(|c| Vec2::new(c[0], 1.0 - c[1]))? } else { Vec2::Y });
+        }
+    }
+    let first_bare = corners.faces[faces.start..faces.end]
+        .iter()
+        .zip(&corners.faces[faces.start + 1..])
+        .find(|((from, _), (to, _))| corners.keys[*from..*to].iter().any(|k| k[1] == 0))?;
+    (uvs.len() == n && given.next().is_none()).then_some((uvs, first_bare.0.1))
 }
 
 #[cfg(test)]
@@ -727,6 +880,106 @@ mod tests {
         assert_eq!(file.materials[0].diffuse, Some([1.0, 0.0, 0.0]));
         assert_eq!(file.material_places.len(), 2);
         assert_eq!(file.material_places[1].at("map_d"), "/s/b.mtl:3");
+    }
+
+    /// Each triangle's corners as (position, uv) of a loaded model.
+    fn corners(model: &ObjModel) -> Vec<[(Vec3, Vec2); 3]> {
+        let m = &model.mesh;
+        let uvs = m.uvs().expect("the model has texture coordinates");
+        m.indices().iter().map(|t| t.map(|i| (m.positions()[i as usize], uvs[i as usize]))).collect()
+    }
+
+    /// Faces with texture coordinates beside faces without, in one model
+    /// (tobj then gives only the ones it has, no longer matching the
+    /// vertices): each corner with `vt` keeps its own uv (v turned down),
+    /// one without gets the OBJ format's (0, 0), also where it shares its
+    /// position with a corner that has one; relative indices and a second
+    /// model that has them all are read as usual. A warning names the
+    /// first face without them.
+    #[test]
+    fn faces_without_texture_coordinates_leave_the_others_theirs() {
+        let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0.25 0.75\n\
+                   o a\nf 1 2 3\nf 1/1 2/2 3/3 4/4\nf 3 4 1\nf -4/-4 -2/-2 -1/-1\n\
+                   o b\nf 1/4 2/3 3/2\n";
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap();
+        assert_eq!(file.models.len(), 2);
+        let p = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let uv = |u: f32, v: f32| Vec2::new(u, 1.0 - v);
+        let bare = Vec2::Y;
+        let quad = [(p[0], uv(0.0, 0.0)), (p[1], uv(1.0, 0.0)), (p[2], uv(1.0, 1.0)), (p[3], uv(0.25, 0.75))];
+        assert_eq!(
+            corners(&file.models[0]),
+            [
+                [(p[0], bare), (p[1], bare), (p[2], bare)],
+                // The quad, cut into two triangles.
+                [quad[0], quad[1], quad[2]],
+                [quad[0], quad[2], quad[3]],
+                [(p[2], bare), (p[3], bare), (p[0], bare)],
+                [quad[0], quad[2], quad[3]],
+            ]
+        );
+        assert_eq!(
+            corners(&file.models[1]),
+            [[(p[0], uv(0.25, 0.75)), (p[1], uv(1.0, 1.0)), (p[2], uv(1.0, 0.0))]]
+        );
+        assert_eq!(file.warnings.len(), 1, "{:?}", file.warnings);
+        assert!(
+            file.warnings[0].starts_with("/s/m.obj:10: model `a` has faces without texture coordinates"),
+            "{:?}",
+            file.warnings
+        );
+    }
+
+    /// One `mtllib` line may name several libraries (the OBJ format's
+    /// `mtllib a.mtl b.mtl`); a name with spaces that is not a list of
+    /// `.mtl` files stays one name, and a comment after it is not part
+    /// of it.
+    #[test]
+    fn one_mtllib_line_names_several_libraries() {
+        let v = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let read = |p: &Path| {
+            let text = match p.to_str()? {
+                "/s/a.mtl" => "newmtl red\nKd 1 0 0\n",
+                "/s/b.mtl" => "newmtl green\nKd 0 1 0\n",
+                "/s/my mats.mtl" => "newmtl blue\nKd 0 0 1\n",
+                _ => return None,
+            };
+            Some(text.as_bytes().to_vec())
+        };
+        let obj = format!("mtllib a.mtl b.mtl\n{v}usemtl red\nf 1 2 3\nusemtl green\nf 3 2 1\n");
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
+        let names: Vec<&str> = file.materials.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(names, ["red", "green"]);
+        assert_eq!(file.mtl_files, [PathBuf::from("/s/a.mtl"), PathBuf::from("/s/b.mtl")]);
+        let used: Vec<Option<usize>> = file.models.iter().map(|m| m.material).collect();
+        assert_eq!(used, [Some(0), Some(1)]);
+        assert!(file.material_error.is_none() && file.unknown_materials.is_empty());
+        assert_eq!(file.material_places.len(), 2);
+        let obj = format!("mtllib my mats.mtl # the blues\n{v}usemtl blue\nf 1 2 3\n");
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
+        assert_eq!(file.materials[0].name, "blue");
+        assert_eq!(file.mtl_files, [PathBuf::from("/s/my mats.mtl")]);
+        assert_eq!(file.models[0].material, Some(0));
+        // One of two missing: the other's materials, as with two lines.
+        let obj = format!("mtllib a.mtl gone.mtl\n{v}usemtl red\nf 1 2 3\n");
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &read).unwrap();
+        assert_eq!(file.materials.len(), 1);
+        assert_eq!(file.models[0].material, Some(0));
+    }
+
+    /// A comment after a statement, and a statement continued on the
+    /// next line with `\\`, as the OBJ format allows: read as meant, each
+    /// later line's number kept for messages.
+    #[test]
+    fn comments_after_statements_and_continued_lines_are_read() {
+        let obj = "v 0 0 0 # origin\nv 1 0 0\nv 1 1 0#corner\nv 0 1 0\nf 1 2 \\\n 3 4 # a quad\nf 1 2 \\\n\\\n 3\nf 1 2 9\n";
+        let err = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap_err();
+        assert_eq!(err.0, Location::at_line(Path::new("/s/m.obj"), 10));
+        assert!(err.1.contains("index 9 is out of range"), "{}", err.1);
+        let obj = obj.replace("f 1 2 9\n", "");
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap();
+        assert_eq!(file.models[0].mesh.len(), 3);
+        assert!(file.warnings.is_empty(), "{:?}", file.warnings);
     }
 
     /// A face that is a spike out and back (`f 1 2 3 2`) has no area and
@@ -786,7 +1039,7 @@ mod tests {
 
     #[test]
     fn precheck_reports_lines() {
-        assert_eq!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").map(|m| m.len()), Ok(0));
+        assert_eq!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").map(|p| p.mtllibs.len()), Ok(0));
         let e = precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
         assert_eq!(e.0, 4);
         assert!(e.1.contains("out of range"), "{}", e.1);
@@ -801,8 +1054,8 @@ mod tests {
         assert!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n").is_ok());
         assert!(precheck("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 -2 -1\n").is_err());
         assert_eq!(
-            precheck("mtllib my lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
-            Ok(vec!["my lib.mtl".into()])
+            precheck("mtllib my lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").map(|p| p.mtllibs),
+            Ok(vec!["my lib.mtl".to_string()])
         );
     }
 

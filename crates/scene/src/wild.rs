@@ -45,14 +45,72 @@ fn unixify(path: &str) -> Option<String> {
 
 /// Rewrites the OBJ lines tobj cannot take: `mtllib` without a name or
 /// with Windows separators, `usemtl` without a name or with more than
-/// `usemtl NAME` on its line (a comment, indentation); and, silently, two
-/// valid forms it refuses: `vt u` (read as `vt u 0`) and vertex colours
-/// (`v x y z r g b`, read as `v x y z`: prism does not use them, and tobj
-/// refuses a file where only some vertices have them). Polylines (`l`)
-/// and points (`p`) are dropped, with one warning at the first: prism
-/// renders surfaces, and tobj would make them into triangles. Returns the
-/// text and the warnings (`line N: ...`).
+/// `usemtl NAME` on its line (a comment, indentation); and, silently,
+/// valid forms it refuses or misreads: `vt u` (read as `vt u 0`), vertex
+/// colours (`v x y z r g b`, read as `v x y z`: prism does not use them,
+/// and tobj refuses a file where only some vertices have them), a comment
+/// after a statement (`f 1 2 3 # top`), and a line continued on the next
+/// by a `\` at its end (joined, the next line left empty). Polylines
+/// (`l`) and points (`p`) are dropped, with one warning at the first:
+/// prism renders surfaces, and tobj would make them into triangles.
+/// Returns the text and the warnings (`line N: ...`).
 pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
+    match join_continued(text) {
+        Cow::Borrowed(text) => fix_obj_lines(text),
+        Cow::Owned(joined) => {
+            let (fixed, warnings) = fix_obj_lines(&joined);
+            (Cow::Owned(fixed.into_owned()), warnings)
+        }
+    }
+}
+
+/// `text` with each line that ends in `\` (the OBJ format's line
+/// continuation) joined with the next, which is left empty, so that every
+/// statement keeps the line it starts on. Comment lines, and lines with a
+/// comment, are not continued: a `\` there ends a Windows path.
+fn join_continued(text: &str) -> Cow<'_, str> {
+    let continued = |line: &str| {
+        let body = line.trim_end_matches(['\n', '\r']).trim_end();
+        body.ends_with('\\') && !body.contains('#')
+    };
+    if !text.split_inclusive('\n').any(continued) {
+        return Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut emptied = 0;
+    let mut joining = false;
+    for line in text.split_inclusive('\n') {
+        let ending = &line[line.trim_end_matches(['\n', '\r']).len()..];
+        let body = line[..line.len() - ending.len()].trim_end();
+        let (body, more) = match body.strip_suffix('\\') {
+            Some(b) if !body.contains('#') => (b, true),
+            _ => (body, false),
+        };
+        if joining {
+            out.push(' ');
+        }
+        out.push_str(body);
+        if more {
+            emptied += 1;
+            joining = true;
+        } else {
+            out.push_str(ending);
+            // The lines joined into this one, left empty after it.
+            for _ in 0..emptied {
+                out.push_str(if ending.is_empty() { "\n" } else { ending });
+            }
+            emptied = 0;
+            joining = false;
+        }
+    }
+    // A continuation on the last line: nothing to join.
+    for _ in 0..emptied {
+        out.push('\n');
+    }
+    Cow::Owned(out)
+}
+
+fn fix_obj_lines(text: &str) -> (Cow<'_, str>, Vec<String>) {
     let first_element = std::cell::Cell::new(true);
     fix_lines(text, |no, key, rest, body| {
         match key {
@@ -65,12 +123,14 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
         "mtllib" if rest.is_empty() => {
             Some((String::new(), Some(format!("line {no}: `mtllib` without a file name; ignored"))))
         }
-        "mtllib" => unixify(rest).map(|p| {
-            (
-                format!("mtllib {p}"),
-                Some(format!("line {no}: `mtllib {rest}` has Windows separators; read as `{p}`")),
-            )
-        }),
+        "mtllib" => unixify(rest)
+            .map(|p| {
+                (
+                    format!("mtllib {p}"),
+                    Some(format!("line {no}: `mtllib {rest}` has Windows separators; read as `{p}`")),
+                )
+            })
+            .or_else(|| body.contains('#').then(|| (format!("mtllib {rest}"), None))),
         "vt" if rest.split_whitespace().count() == 1 => Some((format!("vt {rest} 0"), None)),
         // Colours dropped only where all six are numbers; a bad one is
         // left for the check of the line to name.
@@ -93,6 +153,11 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
                 if body.starts_with(char::is_whitespace) { " (indented)" } else { "" }
             )),
         )),
+        // tobj reads a comment after a statement as part of it: `f 1 2 3
+        // # top` as a fourth corner, `mtllib a.mtl # mats` as the name.
+        "v" | "vt" | "vn" | "vp" | "f" | "o" | "g" | "s" if body.contains('#') => {
+            Some((format!("{key} {rest}"), None))
+        }
         _ => None,
     }
     })
@@ -210,6 +275,22 @@ mod tests {
         assert_eq!(t, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n\n\n\n");
         assert_eq!(w.len(), 1);
         assert!(w[0].starts_with("line 5: `l` elements (polylines and points) are not rendered"), "{w:?}");
+    }
+
+    /// A comment after a statement is cut (tobj would read `# top` as
+    /// corners or as part of a name); a line ending in `\\` is joined with
+    /// the next, which is left empty, so the lines keep their numbers; a
+    /// comment line ending in `\\` (a Windows folder) continues nothing.
+    #[test]
+    fn obj_comments_are_cut_and_continued_lines_joined() {
+        let (t, w) =
+            fix_obj("v 0 0 0 # origin\nvt 1 0#uv\nf 1 2 3 # top\nmtllib a.mtl # mats\ng body # of it\n");
+        assert_eq!(t, "v 0 0 0\nvt 1 0\nf 1 2 3\nmtllib a.mtl\ng body\n");
+        assert!(w.is_empty(), "{w:?}");
+        let (t, w) = fix_obj("f 1 \\\r\n 2 3\r\n# C:\\models\\\r\nf 4 \\\n\\\n5 6 \\\n");
+        assert_eq!(t, "f 1   2 3\r\n\r\n# C:\\models\\\r\nf 4   5 6 \n\n\n");
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(t.lines().count(), 6);
     }
 
     #[test]
