@@ -59,10 +59,18 @@ pub fn check_output(output: &Path, inputs: &[PathBuf], what: Output) -> Result<(
 }
 
 /// Refuses an output path of kind `what` that is an existing directory
-/// (or a link to one): no file can be written there.
+/// (or a link to one), or that ends in a folder as written (`s.json/`,
+/// which `Path` reads as `s.json`): no file can be written there.
 pub fn check_not_a_directory(output: &Path, what: Output) -> Result<()> {
     if output.is_dir() {
         bail!("{}: the output is a directory; give {}", output.display(), what.name_hint());
+    }
+    if prism_shade::names_a_directory(output) {
+        bail!(
+            "{}: the output name ends in a folder (`/`, `.` or `..`); give {}",
+            output.display(),
+            what.name_hint()
+        );
     }
     Ok(())
 }

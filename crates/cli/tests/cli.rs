@@ -254,12 +254,30 @@ fn an_output_that_is_a_directory_fails_before_the_scene_is_read() {
             &["-o", "y.exr", "--aov", "depth", "--aov-preview"],
             "error: y.depth.png: the output is a directory; give a file name ending in .png or .exr",
         ),
+        // A name that ends in a folder as written, which `Path` reads as
+        // the file before it: found before the render, not at the write.
+        (
+            &["-o", "new/x.png/"],
+            "error: new/x.png/: the output name ends in a folder (`/`, `.` or `..`); give a file name ending in .png or .exr",
+        ),
+        (
+            &["-o", "x.png/.", "--frames", "2"],
+            "error: x.png/.: the output name ends in a folder (`/`, `.` or `..`); give a file name ending in .png or .exr",
+        ),
+        (
+            &["-o", "x.png", "--stats-json", "new/s.json/"],
+            "error: --stats-json: new/s.json/: the output name ends in a folder (`/`, `.` or `..`); give a file name such as stats.json",
+        ),
     ] {
         let out = prism(dir.path(), &[&["render", "s.toml"][..], args].concat());
         let err = text(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
         assert_eq!(err.trim_end(), words, "{args:?}");
     }
+    let out = prism(dir.path(), &["merge", "a.exr", "b.exr", "-o", "m.png/"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("error: m.png/: the output name ends in a folder"), "{err}");
     assert_eq!(listing(dir.path()), ["d.png", "s.toml", "sj", "x.aov.exr", "y.depth.png"]);
 }
 

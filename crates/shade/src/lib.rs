@@ -96,7 +96,7 @@ pub use material::Material;
 pub use names::{closest, did_you_mean};
 pub use output::{
     OutputError, OutputFormat, OutputTarget, UnfinishedHold, all_or_nothing, aov_path, aov_preview_rgb8,
-    output_target, read_exr_rgb, stop_unfinished_outputs, write_aov_exr, write_aov_files,
+    names_a_directory, output_target, read_exr_rgb, stop_unfinished_outputs, write_aov_exr, write_aov_files,
     write_aov_preview_png, write_bytes_atomic, write_exr_rgb, write_image, write_image_exr, write_png,
     write_png_rgb8,
 };

@@ -94,6 +94,13 @@ impl OutputFormat {
     /// # Errors
     /// [`OutputError::Invalid`] for another extension or none.
     pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        // `a.png/` is `a.png` to `Path`, but no file can be written there.
+        if names_a_directory(path) {
+            return Err(invalid(
+                path,
+                "the output name ends in a folder (`/`, `.` or `..`); give a file name ending in .png or .exr",
+            ));
+        }
         // `a.png.` has an empty extension: no format, as `a` has none.
         let ext =
             path.extension().filter(|e| !e.is_empty()).map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -106,6 +113,16 @@ impl OutputFormat {
             None => Err(invalid(path, "the output name needs a .png or .exr extension")),
         }
     }
+}
+
+/// Whether `path` as written names a folder: it ends in a separator
+/// (`out/a.png/`), or in `.` or `..`, which `Path` reads past (to it
+/// `a.png/` is the file `a.png`), where no file can be written.
+#[must_use]
+pub fn names_a_directory(path: &Path) -> bool {
+    let text = path.as_os_str().to_string_lossy();
+    let last = text.rsplit(std::path::is_separator).next().unwrap_or("");
+    !text.is_empty() && matches!(last, "" | "." | "..")
 }
 
 /// Writes a linear [`Image`] to `path` as `format`, atomically: PNG as
@@ -837,6 +854,19 @@ mod tests {
         assert!(!not_followed(0o41777, 0, 0), "root's own link in /tmp");
         assert!(!not_followed(0o40755, 0, 1000), "not writable by all");
         assert!(!not_followed(0o40777, 0, 1000), "not sticky");
+    }
+
+    #[test]
+    fn a_name_that_ends_in_a_folder_is_no_output_file() {
+        for folder in ["a.png/", "out/a.png/", "a.png/.", "a.png/..", ".", "/", "out//"] {
+            assert!(names_a_directory(Path::new(folder)), "{folder}");
+            let e = OutputFormat::from_path(Path::new(folder)).unwrap_err().to_string();
+            assert!(e.contains("ends in a folder"), "{folder}: {e}");
+        }
+        for file in ["a.png", "out/a.png", "./a.png", "../a.png", "a..png", ""] {
+            assert!(!names_a_directory(Path::new(file)), "{file}");
+        }
+        assert_eq!(OutputFormat::from_path(Path::new("out/a.PNG")).unwrap(), OutputFormat::Png);
     }
 
     #[test]
