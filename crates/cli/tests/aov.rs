@@ -374,3 +374,26 @@ fn bad_camera_flags_are_refused_naming_the_flag() {
         assert_eq!(listing(dir.path()), ["s.toml"], "{args:?}");
     }
 }
+
+/// The ids docs/aov.md gives: the render's objects, a mesh entry once per
+/// model of its OBJ file (`o` groups here), the entries after it
+/// numbered on from there, as `prism info` counts them.
+#[test]
+fn object_ids_count_a_mesh_once_per_model() {
+    let obj = "o left\nv -2 -1 0\nv -0.5 -1 0\nv -0.5 1 0\nv -2 1 0\nf 1 2 3 4\n\
+               o right\nv 0.5 -1 0\nv 2 -1 0\nv 2 1 0\nv 0.5 1 0\nf 5 6 7 8\n";
+    let scene = "[render]\nwidth = 64\nheight = 48\nspp = 1\n\
+                 [camera]\nposition = [0, 0, 6]\nlook_at = [0, 0, 0]\n\
+                 [[lights]]\nposition = [0, 0, 5]\n\
+                 [[objects]]\ntype = \"mesh\"\npath = \"two.obj\"\n\
+                 [[objects]]\ntype = \"sphere\"\ncenter = [0, 1.6, 0]\nradius = 0.3\n";
+    let dir = scene_dir(scene);
+    fs::write(dir.path().join("two.obj"), obj).unwrap();
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "t.exr", "--aov-files", "--aov", "object_id"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let id = |i, j| exr_pixel(&dir.path().join("t.object_id.exr"), i, j)[0];
+    // 45° vertical field of view at 6: 1 unit is about 9.66 pixels.
+    assert_eq!([id(18, 24), id(45, 24), id(32, 9), id(32, 24)], [0.0, 1.0, 2.0, -1.0]);
+    let out = prism(dir.path(), &["info", "s.toml"]);
+    assert!(text(&out.stdout).contains("objects    3: 2 mesh, 1 sphere"), "{}", text(&out.stdout));
+}
