@@ -86,10 +86,20 @@ impl<'a> Ctx<'a> {
     /// A finite number that `ok` accepts; else `{what} must be {rule}`.
     fn ranged(&self, n: &Num, what: &str, ok: impl Fn(f32) -> bool, rule: &str) -> Result<f32> {
         let f = self.finite(n, what)?;
+        let v = *n.get_ref();
         if ok(f) {
             Ok(f)
+        } else if f == 0.0 && v != 0.0 {
+            // Not 0 as written, but below single precision's range.
+            Err(self.invalid(
+                &n.span(),
+                format!(
+                    "{what} must be {rule}, got {v:e}, which is 0 in single precision (the smallest is {:e})",
+                    f32::from_bits(1)
+                ),
+            ))
         } else {
-            Err(self.invalid(&n.span(), format!("{what} must be {rule}, got {}", n.get_ref())))
+            Err(self.invalid(&n.span(), format!("{what} must be {rule}, got {v}")))
         }
     }
 

@@ -117,6 +117,17 @@ fn errors_point_at_the_value_in_the_string() {
     let text = scene().replace("radius = 0.5", "radius = -0.5");
     let err = build(&text, &res).unwrap_err().to_string();
     assert_eq!(err, format!("{}: sphere radius must be greater than 0, got -0.5", place_of(&text, "-0.5")));
+    // Greater than 0 as written, but 0 in the single precision prism
+    // computes in: said so, not "got 1e-50" beside "greater than 0".
+    let text = scene().replace("radius = 0.5", "radius = 1e-50");
+    let err = build(&text, &res).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        format!(
+            "{}: sphere radius must be greater than 0, got 1e-50, which is 0 in single precision (the smallest is 1e-45)",
+            place_of(&text, "1e-50")
+        )
+    );
 
     // A file the reader could not read: reported where the scene names it.
     let mut res = resources();

@@ -148,6 +148,13 @@ fn unknown_keys_are_rejected_where_they_are() {
             "unknown key `colour`; did you mean `color`?",
             Some("colour"),
         ),
+        // Of two unknown keys, the first in the file (not the first in
+        // the alphabet).
+        (
+            "[[objects]]\ntype = \"sphere\"\nzoom = 2\nbbb = 1\n",
+            "unknown key `zoom` in a sphere",
+            Some("zoom"),
+        ),
     ]);
     let err = parse(&BASE.replace("spp = 2", "widht = 3")).unwrap_err().to_string();
     assert!(
