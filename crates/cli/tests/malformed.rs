@@ -268,6 +268,16 @@ fn cases() -> Vec<Case> {
         Case::new("corrupt png", s.clone(), at(&s, "\"bad.png\""), "cannot use this texture")
             .file("bad.png", b"\x89PNG\r\n\x1a\ngarbage".to_vec()),
     );
+    let s = with("spp = 1", "spp = 1\nbackground = { image = \"sky.png\" }");
+    v.push(
+        Case::new(
+            "corrupt background image",
+            s.clone(),
+            at(&s, "\"sky.png\""),
+            "cannot use this background image",
+        )
+        .file("sky.png", b"\x89PNG\r\n\x1a\ngarbage".to_vec()),
+    );
     let png = png_bytes();
     let s = textured("half.png");
     v.push(
@@ -366,6 +376,9 @@ fn cases() -> Vec<Case> {
         "UTF-8",
     ));
     v.push(Case::new("scene: utf-16 text", utf16(GOOD), "s.toml", "UTF-16"));
+    let zeros = [GOOD.as_bytes(), &[0; 4096]].concat();
+    let past_the_text = format!("s.toml:{}:1:", GOOD.lines().count() + 1);
+    v.push(Case::new("scene: zeros after the text", zeros, &past_the_text, "a NUL byte here"));
 
     // Absurd and zero numbers.
     let s = with("width = 32\nheight = 18", "width = 1000000\nheight = 1000000");

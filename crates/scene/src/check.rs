@@ -186,6 +186,23 @@ impl<'a> Ctx<'a> {
         self.rgb_at(&c.span(), c.get_ref(), what)
     }
 
+    /// A light's colour (radiance, which may exceed 1): [`Ctx::rgb`], and
+    /// a warning where it is almost surely 8-bit values written for 0–1
+    /// ones ([`light_looks_8bit`]).
+    pub fn light_rgb(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
+        let v = self.rgb(c, what)?;
+        if light_looks_8bit(&c.get_ref().0) {
+            let [r, g, b] = c.get_ref().0.map(|x| x as u8);
+            self.note(
+                &c.span(),
+                &format!(
+                    "{what} {v} looks like 8-bit values: colour components are 0–1 (or \"#{r:02x}{g:02x}{b:02x}\"); make a light brighter with `intensity`"
+                ),
+            );
+        }
+        Ok(v)
+    }
+
     fn rgb_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
         match vec3_of(&c.0) {
             Some(v) if v.min_element() >= 0.0 => Ok(v),
@@ -214,6 +231,14 @@ impl<'a> Ctx<'a> {
 /// (`[255, 0, 0]`, `[128, 128, 128]`).
 pub(crate) fn looks_8bit(c: &[f64; 3]) -> bool {
     c.iter().all(|&x| x.fract() == 0.0 && (0.0..=255.0).contains(&x)) && c.iter().any(|&x| x > 1.0)
+}
+
+/// Whether a light's colour looks like 8-bit values: [`looks_8bit`] with
+/// a 255 in it, or with channels that differ and one of 100 or more
+/// (`[255, 200, 150]`); a grey such as `[20, 20, 20]` is a bright light.
+pub(crate) fn light_looks_8bit(c: &[f64; 3]) -> bool {
+    let max = c.iter().fold(0.0_f64, |m, &x| m.max(x));
+    looks_8bit(c) && (max == 255.0 || (max >= 100.0 && c.iter().any(|&x| x != c[0])))
 }
 
 /// Three finite `f32`s, or `None`.

@@ -37,7 +37,7 @@ pub(crate) fn light(ctx: &Ctx, l: &Spanned<LightDef>) -> Result<Light> {
         (Some(_), Some(r)) => {
             return Err(ctx.invalid(&r.span(), "give `color` or `radiance`, not both (they are the same)"));
         }
-        (Some(c), None) | (None, Some(c)) => ctx.rgb(c, &format!("{name} light colour"))?,
+        (Some(c), None) | (None, Some(c)) => ctx.light_rgb(c, &format!("{name} light colour"))?,
         (None, None) => Vec3::ONE,
     };
     let intensity = ctx.opt_num(d.intensity.as_ref(), 1.0, |n| ctx.non_negative(n, "light intensity"))?;

@@ -11,6 +11,9 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use toml::Spanned;
 
+/// The name of the material of objects that name none.
+const DEFAULT_NAME: &str = "(default)";
+
 /// The materials of a scene, in index order, with their names.
 #[derive(Default)]
 pub(crate) struct Materials {
@@ -35,19 +38,26 @@ impl Materials {
         if key.trim().is_empty() {
             return Err(ctx.invalid(&name.span(), "material names must not be empty"));
         }
+        if key == DEFAULT_NAME {
+            return Err(ctx.invalid(
+                &name.span(),
+                format!("`{DEFAULT_NAME}` is the name of the material of objects that name none; give this one another name"),
+            ));
+        }
         let i = self.add(key.clone(), m);
         self.by_name.insert(key, i);
         Ok(())
     }
 
-    /// The material of objects that name none (added on first use).
+    /// The material of objects that name none (added on first use), named
+    /// [`DEFAULT_NAME`].
     pub fn default_material(&mut self) -> u32 {
         if let Some(i) = self.default {
             return i;
         }
         let mut m = Material::diffuse(Vec3::splat(0.8));
         m.specular = 0.3;
-        let i = self.add("(default)".into(), m);
+        let i = self.add(DEFAULT_NAME.into(), m);
         self.default = Some(i);
         i
     }

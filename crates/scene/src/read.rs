@@ -152,13 +152,14 @@ impl<'a> Reader<'a> {
     fn texture(&mut self, raw: &str, wrap: Wrap, what: &'static str) {
         let key = (raw.to_owned(), wrap == Wrap::Repeat);
         if !self.res.textures.contains_key(&key) {
-            let t = regular_file(self.base, raw, what).and_then(|p| self.image(p, wrap));
+            let t = regular_file(self.base, raw, what).and_then(|p| self.image(p, wrap, what));
             self.res.insert_texture(raw, wrap, t);
         }
     }
 
-    /// The image `path` (canonical), read once per wrap mode.
-    fn image(&mut self, path: PathBuf, wrap: Wrap) -> Result<TextureFile, Failure> {
+    /// The image `path` (canonical), read once per wrap mode; a failure
+    /// names it as `what` ("texture", "background image").
+    fn image(&mut self, path: PathBuf, wrap: Wrap, what: &str) -> Result<TextureFile, Failure> {
         let key = (path, wrap == Wrap::Repeat);
         if let Some(t) = self.images.get(&key) {
             return t.clone();
@@ -174,7 +175,7 @@ impl<'a> Reader<'a> {
             location: Location::file(&key.0),
             message: match e {
                 prism_shade::ShadeError::Texture { reason, .. } => {
-                    format!("cannot use this texture: {reason}")
+                    format!("cannot use this {what}: {reason}")
                 }
                 other => other.to_string(),
             },
@@ -213,8 +214,9 @@ impl<'a> Reader<'a> {
                 let dirs = obj.mtl_files.iter().filter_map(|m| m.parent());
                 let found = dirs.map(|m| mtl_texture_path(m, tex)).find(Result::is_ok);
                 let wrap = if mtl_map::parse(tex).clamp { Wrap::Clamp } else { Wrap::Repeat };
-                let t =
-                    found.unwrap_or_else(|| mtl_texture_path(&dir, tex)).and_then(|p| self.image(p, wrap));
+                let t = found
+                    .unwrap_or_else(|| mtl_texture_path(&dir, tex))
+                    .and_then(|p| self.image(p, wrap, "texture"));
                 self.res.mtl_textures.insert(key, t);
             }
         }
@@ -377,6 +379,14 @@ pub(crate) fn scene_text_from(reader: &mut dyn std::io::Read, path: &Path) -> Re
             "invalid UTF-8 here: scene files are UTF-8 TOML text (is this a binary file?)",
         )
     })?;
+    // Valid UTF-8, which TOML would refuse at its first NUL as a bad key
+    // or value: a file padded with zeros by a crash, or not text at all.
+    if let Some(o) = text.find('\0') {
+        return Err(syntax(
+            Location::at_offset(path, text, o),
+            "a NUL byte here: scene files are UTF-8 TOML text (is this a binary file, or one cut short by a crash?)",
+        ));
+    }
     Ok(text.to_owned())
 }
 

@@ -151,11 +151,34 @@ fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
             image.join(", ")
         );
     }
-    format!(
-        "unknown {what} `{shown}`{} (expected one of: {})",
-        did_you_mean(word, &expected),
-        expected.join(", ")
-    )
+    // A key of another table (`fov` written under `[render]`): where it
+    // goes, not the nearest spelling of this table's keys.
+    let hint = match home_of(word, &expected) {
+        Some(table) if what == "key" => format!("; it is a key of `{table}`"),
+        _ => did_you_mean(word, &expected),
+    };
+    format!("unknown {what} `{shown}`{hint} (expected one of: {})", expected.join(", "))
+}
+
+/// The table of a scene file other than the one whose keys are
+/// `expected` that takes the key `word`, if one does: `[camera]` for
+/// `fov`. The keys come from the types, through the list serde gives for
+/// an unknown one.
+fn home_of(word: &str, expected: &[&str]) -> Option<&'static str> {
+    fn keys<T: serde::de::DeserializeOwned>() -> Vec<String> {
+        match toml::from_str::<T>("\"\\u0000\" = 0") {
+            Err(e) => backticked(e.message()).into_iter().skip(1).map(str::to_owned).collect(),
+            Ok(_) => Vec::new(),
+        }
+    }
+    use crate::format::{CameraDef, FogDef, RenderDef};
+    if expected.contains(&word) {
+        return None;
+    }
+    [("[render]", keys::<RenderDef>()), ("[camera]", keys::<CameraDef>()), ("[fog]", keys::<FogDef>())]
+        .into_iter()
+        .find(|(_, keys)| keys.iter().any(|k| k == word))
+        .map(|(table, _)| table)
 }
 
 /// `word`, cut to its first 60 characters and "…" when it is longer.

@@ -105,6 +105,26 @@ fn colours_that_look_8_bit_warn_and_hex_is_offered() {
     assert!(hdr.contains("color = [20, 20, 20]"));
     let loaded = parse(&hdr).unwrap();
     assert!(loaded.warnings.iter().all(|w| !w.contains("8-bit")), "{:?}", loaded.warnings);
+    // But a light's colour with a 255, or channels that differ and one of
+    // 100 or more, is almost surely 8-bit values (a white picture).
+    for (c, hex) in
+        [("[255, 200, 150]", "#ffc896"), ("[255, 255, 255]", "#ffffff"), ("[128, 64, 0]", "#804000")]
+    {
+        let text = BASE.replace("[[lights]]", &format!("[[lights]]\ncolor = {c}"));
+        let w = parse(&text).unwrap().warnings;
+        assert!(
+            w.iter().any(|w| w.contains("light colour")
+                && w.contains("looks like 8-bit values")
+                && w.contains(hex)
+                && w.contains("`intensity`")),
+            "{c}: {w:?}"
+        );
+    }
+    for c in ["[100, 100, 100]", "[99, 50, 0]", "[2.5, 200, 100]"] {
+        let text = BASE.replace("[[lights]]", &format!("[[lights]]\ncolor = {c}"));
+        let w = parse(&text).unwrap().warnings;
+        assert!(w.iter().all(|w| !w.contains("8-bit")), "{c}: {w:?}");
+    }
     let glass = BASE.replace("color = [0.8, 0.1, 0.1]", "color = [0.8, 0.1, 0.1]\nabsorption = [0, 2, 3]");
     assert!(glass.contains("absorption = [0, 2, 3]"));
     let loaded = parse(&glass).unwrap();

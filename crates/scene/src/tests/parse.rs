@@ -148,6 +148,14 @@ fn unknown_keys_are_rejected_where_they_are() {
             "unknown key `colour`; did you mean `color`?",
             Some("colour"),
         ),
+        // A key of another table: where it goes.
+        ("[fog]\nspp = 4\n", "unknown key `spp`; it is a key of `[render]`", Some("spp = 4")),
+        // The default material's name, which `prism info` would list twice.
+        (
+            "[materials.\"(default)\"]\ncolor = [1, 0, 0]\n",
+            "`(default)` is the name of the material of objects that name none",
+            Some("\"(default)\""),
+        ),
         // Of two unknown keys, the first in the file (not the first in
         // the alphabet).
         (
@@ -156,6 +164,13 @@ fn unknown_keys_are_rejected_where_they_are() {
             Some("zoom"),
         ),
     ]);
+    // Not `aov`, the nearest spelling among the render table's keys.
+    let err = parse(&BASE.replace("spp = 2", "fov = 30")).unwrap_err().to_string();
+    assert!(err.contains("unknown key `fov`; it is a key of `[camera]` (expected one of: width,"), "{err}");
+    let err = parse(&format!("width = 30\n{BASE}")).unwrap_err().to_string();
+    assert!(err.starts_with("test.toml:1:1: unknown key `width`; it is a key of `[render]`"), "{err}");
+    let err = parse(&BASE.replace("[camera]", "[camera]\nspp = 4")).unwrap_err().to_string();
+    assert!(err.contains("unknown key `spp`; it is a key of `[render]`"), "{err}");
     let err = parse(&BASE.replace("spp = 2", "widht = 3")).unwrap_err().to_string();
     assert!(
         err.starts_with("test.toml:5:1:") && err.contains("unknown key `widht`; did you mean `width`?"),
