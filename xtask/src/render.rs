@@ -22,15 +22,22 @@ pub fn run(args: &[String]) -> Result<()> {
     let output = match output {
         Some(o) => o,
         None => {
-            let stem = Path::new(scene).file_stem().context("the scene path has no file name")?;
-            let o = Path::new("out").join(stem).with_extension("png");
+            // `out/<stem>.png`, as `prism render` names it (`with_extension`
+            // would cut `my.scene` to `my`).
+            let mut name =
+                Path::new(scene).file_stem().context("the scene path has no file name")?.to_os_string();
+            name.push(".png");
+            let o = Path::new("out").join(name);
             cmd.arg("-o").arg(&o);
             o
         }
     };
     run_checked(&mut cmd)?;
-    let shown = std::fs::canonicalize(&output).unwrap_or(output);
-    println!("image: {}", shown.display());
+    match std::fs::canonicalize(&output) {
+        Ok(shown) => println!("image: {}", shown.display()),
+        // `--frames` writes numbered files beside the name, not the name.
+        Err(_) => println!("images: numbered frames named after {}", output.display()),
+    }
     Ok(())
 }
 
