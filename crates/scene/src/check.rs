@@ -227,10 +227,11 @@ impl<'a> Ctx<'a> {
 }
 
 /// Whether a colour looks like 8-bit values written by mistake for 0–1
-/// ones: whole numbers from 0 to 255, at least one of them above 1
-/// (`[255, 0, 0]`, `[128, 128, 128]`).
+/// ones: whole numbers from 0 to 255, at least one of them above 2
+/// (`[255, 0, 0]`, `[128, 128, 128]`; `[2, 2, 2]` is more likely meant
+/// as brighter than 1 than as a near-black `#020202`).
 pub(crate) fn looks_8bit(c: &[f64; 3]) -> bool {
-    c.iter().all(|&x| x.fract() == 0.0 && (0.0..=255.0).contains(&x)) && c.iter().any(|&x| x > 1.0)
+    c.iter().all(|&x| x.fract() == 0.0 && (0.0..=255.0).contains(&x)) && c.iter().any(|&x| x > 2.0)
 }
 
 /// Whether a light's colour looks like 8-bit values: [`looks_8bit`] with

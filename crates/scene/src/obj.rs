@@ -343,6 +343,15 @@ pub fn load_obj(
     }
     warnings.extend(mtl_warnings.into_inner());
     let mut unknown_materials = Vec::new();
+    if mtl_files.is_empty()
+        && let Some((line, name)) = unknown_usemtl(text, &[]).first()
+    {
+        // Materials named, but no library to find them in.
+        unknown_materials.push(format!(
+            "{}:{line}: `usemtl {name}`, but the file names no material library (`mtllib`); its faces get the default material",
+            path.display()
+        ));
+    }
     if material_error.is_none() && !mtl_files.is_empty() {
         let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
         for (line, name) in unknown_usemtl(text, &names) {
@@ -928,6 +937,26 @@ mod tests {
             "{:?}",
             file.warnings
         );
+    }
+
+    /// `usemtl` in a file without `mtllib`: one warning, at the first.
+    #[test]
+    fn materials_named_without_a_library_are_warned_about() {
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wood\nf 1 2 3\nusemtl stone\nf 3 2 1\n";
+        let file = load_obj(Path::new("/s/m.obj"), obj.as_bytes(), NormalMode::Flat, &|_| None).unwrap();
+        assert_eq!(
+            file.unknown_materials,
+            [
+                "/s/m.obj:4: `usemtl wood`, but the file names no material library (`mtllib`); its faces get the default material"
+            ]
+        );
+        let plain = load_obj(
+            Path::new("/s/m.obj"),
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            NormalMode::Flat,
+            &|_| None,
+        );
+        assert!(plain.unwrap().unknown_materials.is_empty());
     }
 
     /// One `mtllib` line may name several libraries (the OBJ format's

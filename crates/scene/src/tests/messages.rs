@@ -98,6 +98,11 @@ fn colours_that_look_8_bit_warn_and_hex_is_offered() {
         let loaded = parse(&BASE.replace("[0.8, 0.1, 0.1]", c)).unwrap();
         assert!(loaded.warnings.iter().all(|w| !w.contains("8-bit")), "{c}: {:?}", loaded.warnings);
     }
+    // Small whole numbers are more likely meant as above 1 than as a
+    // near-black 8-bit colour: the surface's "above 1" warning instead.
+    let loaded = parse(&BASE.replace("[0.8, 0.1, 0.1]", "[0, 0, 2]")).unwrap();
+    assert!(loaded.warnings.iter().all(|w| !w.contains("8-bit")), "{:?}", loaded.warnings);
+    assert!(loaded.warnings.iter().any(|w| w.contains("is above 1")), "{:?}", loaded.warnings);
     let bg = BASE.replace("spp = 2", "spp = 2\nbackground = [128, 128, 128]");
     assert!(parse(&bg).unwrap().warnings.iter().any(|w| w.contains("background") && w.contains("#808080")));
     // Light colours (HDR radiance) and absorption coefficients are not reflectances: no warning.
