@@ -66,14 +66,21 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
 
 /// `text` with each line that ends in `\` (the OBJ format's line
 /// continuation) joined with the next, which is left empty, so that every
-/// statement keeps the line it starts on. Comment lines, and lines with a
-/// comment, are not continued: a `\` there ends a Windows path.
+/// statement keeps the line it starts on. Only statements of numbers and
+/// indices are continued (`v`, `vt`, `vn`, `vp`, `f`, `l`, `p`), and no line
+/// with a comment: a `\` at the end of a name or a comment ends a Windows
+/// path.
 fn join_continued(text: &str) -> Cow<'_, str> {
-    let continued = |line: &str| {
+    // Whether `line` goes on on the next; `joining`: it is itself the
+    // continuation of a statement.
+    let continued = |line: &str, joining: bool| {
         let body = line.trim_end_matches(['\n', '\r']).trim_end();
-        body.ends_with('\\') && !body.contains('#')
+        let key = body.split_whitespace().next().unwrap_or("");
+        body.ends_with('\\')
+            && !body.contains('#')
+            && (joining || matches!(key, "v" | "vt" | "vn" | "vp" | "f" | "l" | "p"))
     };
-    if !text.split_inclusive('\n').any(continued) {
+    if !text.split_inclusive('\n').any(|l| continued(l, false)) {
         return Cow::Borrowed(text);
     }
     let mut out = String::with_capacity(text.len());
@@ -83,7 +90,7 @@ fn join_continued(text: &str) -> Cow<'_, str> {
         let ending = &line[line.trim_end_matches(['\n', '\r']).len()..];
         let body = line[..line.len() - ending.len()].trim_end();
         let (body, more) = match body.strip_suffix('\\') {
-            Some(b) if !body.contains('#') => (b, true),
+            Some(b) if continued(line, joining) => (b, true),
             _ => (body, false),
         };
         if joining {
@@ -291,6 +298,9 @@ mod tests {
         assert_eq!(t, "f 1   2 3\r\n\r\n# C:\\models\\\r\nf 4   5 6 \n\n\n");
         assert!(w.is_empty(), "{w:?}");
         assert_eq!(t.lines().count(), 6);
+        // A name that ends in `\\` goes on on no other line.
+        let (t, _) = fix_obj("g C:\\parts\\\nv 0 0 0\n");
+        assert_eq!(t, "g C:\\parts\\\nv 0 0 0\n");
     }
 
     #[test]
