@@ -168,7 +168,7 @@ impl Interrupt {
         } else {
             match write() {
                 Ok(()) => format!(
-                    "{done}; wrote the partial image to {} (rows not rendered are black)",
+                    "{done}; wrote the partial image to {} (rows not rendered are black; no passes, previews or statistics)",
                     output.display()
                 ),
                 Err(e) => format!("{done}; the partial image could not be written: {e:#}"),

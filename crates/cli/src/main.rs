@@ -153,7 +153,8 @@ struct RenderArgs {
     /// and errors are still printed).
     #[arg(short, long)]
     quiet: bool,
-    /// On Ctrl-C (or SIGTERM, SIGHUP), write the rows rendered so far (the rest black) instead of nothing.
+    /// On Ctrl-C (or SIGTERM, SIGHUP), write the rows rendered so far (the rest black) instead of nothing:
+    /// the image alone, without passes, previews or statistics.
     #[arg(long)]
     partial: bool,
     /// AOV passes, comma-separated: depth, normal, geo_normal, albedo, object_id, or all
