@@ -101,6 +101,11 @@ impl Aabb {
     /// Direction components equal to zero are handled exactly.
     #[must_use]
     pub fn intersect_ray(&self, ray: &Ray) -> Option<(f32, f32)> {
+        // An interval with a `NaN` end (or reversed) holds no `t`, and a
+        // ray along a non-finite direction meets nothing.
+        if !(ray.t_min <= ray.t_max) || !ray.dir.is_finite() {
+            return None;
+        }
         let mut t0 = ray.t_min;
         let mut t1 = ray.t_max;
         for k in 0..3 {

@@ -53,6 +53,10 @@ mod shape;
 pub mod shapes;
 #[cfg(test)]
 mod testutil;
+// The README's example, run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
 mod transform;
 
 pub use aabb::Aabb;

@@ -29,12 +29,16 @@ const MANY_FACES: usize = 32;
 ///
 /// # Errors
 /// [`GeometryError::InvalidMesh`] if `groups` does not have one entry per
-/// face.
+/// face, [`GeometryError::NonFinite`] if `crease_deg` is `NaN` (which
+/// would smooth no corner with any face, not even its own).
 pub fn with_computed_normals(
     mesh: &TriangleMesh,
     groups: Option<&[u32]>,
     crease_deg: f32,
 ) -> Result<TriangleMesh, GeometryError> {
+    if crease_deg.is_nan() {
+        return Err(GeometryError::NonFinite("crease angle"));
+    }
     if let Some(g) = groups
         && g.len() != mesh.len()
     {
@@ -182,6 +186,20 @@ mod tests {
         let tri = m.indices()[f];
         let k = tri.iter().position(|&v| m.positions()[v as usize] == point).unwrap();
         m.normals().unwrap()[tri[k] as usize]
+    }
+
+    #[test]
+    fn a_nan_crease_angle_is_refused() {
+        let quad = TriangleMesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            None,
+            None,
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        assert!(matches!(with_computed_normals(&quad, None, f32::NAN), Err(GeometryError::NonFinite(_))));
+        let m = with_computed_normals(&quad, None, 0.0).unwrap();
+        assert!(m.normals().unwrap().iter().all(|&n| n == Vec3::Z));
     }
 
     #[test]

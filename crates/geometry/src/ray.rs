@@ -20,7 +20,9 @@ pub struct Ray {
     pub origin: Vec3,
     /// Smallest accepted parameter (inclusive).
     pub t_min: f32,
-    /// Direction of travel; non-zero, not necessarily normalized.
+    /// Direction of travel; non-zero and finite, not necessarily
+    /// normalized (every shape meets nothing along a zero or non-finite
+    /// direction, nor within an interval with a `NaN` end).
     pub dir: Vec3,
     /// Largest accepted parameter (inclusive).
     pub t_max: f32,

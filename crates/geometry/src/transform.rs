@@ -54,7 +54,9 @@ impl Transform {
     /// [`GeometryError::SingularTransform`] if the linear part is not
     /// safely invertible: `|det| <= 1e-6 · |c0|·|c1|·|c2|` for its columns
     /// `c0, c1, c2` (it flattens space by a factor of a million or more
-    /// relative to its own scale; a uniform scale of any size passes).
+    /// relative to its own scale; a uniform scale of any size passes),
+    /// [`GeometryError::Degenerate`] if its inverse is past the range of
+    /// `f32` (a scale below about `1e-38`).
     pub fn try_from_affine(m: Affine3A) -> Result<Self, GeometryError> {
         if !m.is_finite() {
             return Err(GeometryError::NonFinite("transform"));
@@ -107,6 +109,8 @@ impl Transform {
     }
 
     /// Rotation by `angle` radians about the X axis (right-handed).
+    /// Unchecked: `angle` must be finite (a `NaN` or infinite angle gives
+    /// a map of `NaN`s; [`Transform::rotate_axis`] refuses one).
     #[must_use]
     pub fn rotate_x(angle: f32) -> Self {
         Self::rotation(Mat3::from_rotation_x(angle))
@@ -114,13 +118,14 @@ impl Transform {
 
     /// Rotation by `angle` radians about the Y axis (right-handed):
     /// `(x, y, z) -> (x cos a + z sin a, y, -x sin a + z cos a)`, the
-    /// report's equation 6.
+    /// report's equation 6. Unchecked, as [`Transform::rotate_x`].
     #[must_use]
     pub fn rotate_y(angle: f32) -> Self {
         Self::rotation(Mat3::from_rotation_y(angle))
     }
 
     /// Rotation by `angle` radians about the Z axis (right-handed).
+    /// Unchecked, as [`Transform::rotate_x`].
     #[must_use]
     pub fn rotate_z(angle: f32) -> Self {
         Self::rotation(Mat3::from_rotation_z(angle))
@@ -129,8 +134,12 @@ impl Transform {
     /// Rotation by `angle` radians about `axis` (any non-zero length).
     ///
     /// # Errors
-    /// [`GeometryError::Degenerate`] if `axis` is zero or not finite.
+    /// [`GeometryError::Degenerate`] if `axis` is zero or not finite,
+    /// [`GeometryError::NonFinite`] if `angle` is not.
     pub fn rotate_axis(axis: Vec3, angle: f32) -> Result<Self, GeometryError> {
+        if !angle.is_finite() {
+            return Err(GeometryError::NonFinite("rotation angle"));
+        }
         let axis =
             crate::unit(axis).ok_or(GeometryError::Degenerate("rotation axis is zero or not finite"))?;
         Ok(Self::rotation(Mat3::from_axis_angle(axis, angle)))
@@ -153,7 +162,10 @@ impl Transform {
     /// Non-uniform scale by `s`.
     ///
     /// # Errors
-    /// [`GeometryError::SingularTransform`] if a component is zero.
+    /// As [`Transform::try_from_affine`]: [`GeometryError::NonFinite`] if a
+    /// component is not finite, [`GeometryError::SingularTransform`] if one
+    /// is zero (or the components differ by a factor of a million or
+    /// more), [`GeometryError::Degenerate`] if they are below about `1e-38`.
     pub fn scale(s: Vec3) -> Result<Self, GeometryError> {
         Self::try_from_affine(Affine3A::from_scale(s))
     }
@@ -175,10 +187,22 @@ impl Transform {
     }
 
     /// `self` followed by `next` (world = next(self(object))).
+    /// Unchecked: the product of two valid maps can leave `f32`'s range
+    /// (a scale of `1e20` twice) or its inverse can (`1e-25` twice);
+    /// [`Transform::try_then`] checks it.
     #[must_use]
     pub fn then(&self, next: &Self) -> Self {
         let to_object = self.to_object * next.to_object;
         Self::from_parts(next.to_world * self.to_world, to_object, to_object.matrix3.transpose())
+    }
+
+    /// [`Transform::then`], the product checked as
+    /// [`Transform::try_from_affine`] checks a map.
+    ///
+    /// # Errors
+    /// As [`Transform::try_from_affine`], for the product.
+    pub fn try_then(&self, next: &Self) -> Result<Self, GeometryError> {
+        Self::try_from_affine(next.to_world * self.to_world)
     }
 
     /// The inverse transform.
@@ -324,6 +348,24 @@ impl Shear {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `try_then` refuses the products `then` makes without a check, and
+    /// gives `then`'s map where the product is fine; `rotate_axis` refuses
+    /// an angle that is not finite.
+    #[test]
+    fn checked_composition_and_rotation() {
+        let big = Transform::scale(Vec3::splat(1e20)).unwrap();
+        assert!(matches!(big.try_then(&big), Err(GeometryError::NonFinite(_))));
+        let small = Transform::scale(Vec3::splat(1e-25)).unwrap();
+        assert!(small.try_then(&small).is_err());
+        let a = Transform::rotate_axis(Vec3::Y, 0.5).unwrap();
+        let b = Transform::translate(Vec3::new(1.0, 2.0, 3.0)).unwrap();
+        let p = Vec3::new(0.3, -0.7, 2.0);
+        assert_eq!(a.try_then(&b).unwrap().point(p), a.then(&b).point(p));
+        for angle in [f32::NAN, f32::INFINITY] {
+            assert!(matches!(Transform::rotate_axis(Vec3::Y, angle), Err(GeometryError::NonFinite(_))));
+        }
+    }
     use crate::testutil::{close, close3, uniform};
     use crate::{Cuboid, Instance, Intersect, Sphere};
     use std::f32::consts::FRAC_PI_2;

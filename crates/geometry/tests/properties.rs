@@ -3,10 +3,11 @@
 
 mod common;
 
-use common::{Case, cases, f_world};
+use common::{Case, TRI, cases, f_world};
 use prism_geometry::glam::Vec3;
 use prism_geometry::{
-    Cone, Cuboid, Cylinder, Hit, Instance, Intersect, Ray, Shape, Shear, Sphere, Transform,
+    Aabb, Cone, Cuboid, Cylinder, Hit, Instance, Intersect, Plane, Ray, Shape, Shear, Sphere, Transform,
+    TriangleMesh,
 };
 use proptest::prelude::*;
 
@@ -341,4 +342,67 @@ proptest! {
             prop_assert!(again.is_none(), "{solid:?}: re-hit {:?} from {:?} along {}", again, hit, d);
         }
     }
+}
+
+/// A ray along a direction that is not finite (a component `±∞` or `NaN`),
+/// or with a `NaN` end to its interval, meets no shape (bare, instanced,
+/// a mesh, a box), wherever the shape lies: along and against the ray,
+/// and to its side. Such a ray met planes, disks, boxes and triangles
+/// behind its origin at `t = −0` (or with a `NaN` point), and a `NaN`
+/// `t_min` let triangles and boxes accept hits behind it.
+#[test]
+fn rays_with_non_finite_directions_or_nan_intervals_meet_nothing() {
+    let shapes: Vec<(String, Box<dyn Intersect>)> = cases()
+        .into_iter()
+        .flat_map(|c| {
+            let bare: Box<dyn Intersect> = Box::new(c.shape);
+            let placed = Transform::translate(Vec3::new(0.3, -0.2, 0.1)).unwrap();
+            let inst: Box<dyn Intersect> = Box::new(Instance::new(c.shape, placed));
+            [(c.name.to_string(), bare), (format!("{} instance", c.name), inst)]
+        })
+        .chain(std::iter::once((
+            "plane".to_string(),
+            Box::new(Plane::new(Vec3::ZERO, Vec3::new(0.2, 1.0, -0.3)).unwrap()) as Box<dyn Intersect>,
+        )))
+        .collect();
+    let bad_dirs = [
+        Vec3::new(0.0, 0.0, f32::INFINITY),
+        Vec3::new(0.0, f32::NEG_INFINITY, 0.0),
+        Vec3::new(1.0, f32::INFINITY, -1.0),
+        Vec3::new(f32::NAN, 0.0, 1.0),
+        Vec3::splat(f32::INFINITY),
+    ];
+    let origins =
+        [Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 5.0, 0.0), Vec3::ZERO, Vec3::new(0.1, -4.0, -3.0)];
+    for (name, s) in &shapes {
+        for o in origins {
+            for d in bad_dirs {
+                let ray = Ray::new(o, d);
+                assert!(s.intersect_t(&ray).is_none(), "{name}: from {o} along {d}");
+                assert!(s.intersect(&ray).is_none(), "{name}: from {o} along {d}");
+                assert!(s.intersect_side(&ray).is_none(), "{name}: from {o} along {d}");
+            }
+            // Toward the shape and away from it, with a `NaN` end.
+            for d in [Vec3::NEG_Z, Vec3::Z, Vec3::NEG_Y, Vec3::Y] {
+                for (t0, t1) in [(f32::NAN, f32::INFINITY), (0.0, f32::NAN), (f32::NAN, f32::NAN)] {
+                    let ray = Ray::with_interval(o, d, t0, t1);
+                    assert!(s.intersect_t(&ray).is_none(), "{name}: from {o} along {d}, [{t0}, {t1}]");
+                    assert!(s.intersect(&ray).is_none(), "{name}: from {o} along {d}, [{t0}, {t1}]");
+                }
+            }
+        }
+    }
+    // With finite directions and intervals the same rays meet shapes: the
+    // cases above are not vacuous.
+    let near = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z);
+    assert!(shapes.iter().filter(|(_, s)| s.intersect_t(&near).is_some()).count() >= 10);
+    // A box, and a mesh, behind the ray's origin.
+    let behind = Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -4.0));
+    let tri = TriangleMesh::new(TRI.to_vec(), None, None, vec![[0, 1, 2]]).unwrap();
+    for (t0, t1) in [(f32::NAN, f32::INFINITY), (0.0, f32::NAN)] {
+        assert!(behind.intersect_ray(&Ray::with_interval(Vec3::ZERO, Vec3::Z, t0, t1)).is_none());
+        assert!(tri.intersect_t(&Ray::with_interval(Vec3::new(0.0, 0.0, 9.0), Vec3::Z, t0, t1)).is_none());
+    }
+    assert!(behind.intersect_ray(&Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, f32::INFINITY))).is_none());
+    assert!(behind.intersect_ray(&Ray::new(Vec3::ZERO, Vec3::NEG_Z)).is_some());
 }

@@ -64,7 +64,9 @@ impl Cone {
         let (r, h) = (self.0.radius, self.0.height);
         let k = r / h;
         let k2 = k * k;
-        if beyond_caps(o, d, h) {
+        // A direction that is not finite meets nothing (its caps' `t`
+        // would be `±0` wherever the solid lies).
+        if beyond_caps(o, d, h) || !d.is_finite() {
             return None;
         }
         let mut best: Option<(f32, Part)> = None;

@@ -80,6 +80,11 @@ impl Cuboid {
     /// `t` and the face it lies on.
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<(f32, usize, bool)> {
+        // A direction that is not finite meets nothing (its slabs would
+        // start at `t = ±0` wherever the box lies).
+        if !ray.dir.is_finite() {
+            return None;
+        }
         // Slab test remembering which face bounds the interval on each side.
         let mut t_near = f32::NEG_INFINITY;
         let mut t_far = f32::INFINITY;

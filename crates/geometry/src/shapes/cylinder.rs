@@ -60,7 +60,9 @@ impl Cylinder {
         let o = ray.origin - self.0.base;
         let d = ray.dir;
         let (r, h) = (self.0.radius, self.0.height);
-        if beyond_caps(o, d, h) {
+        // A direction that is not finite meets nothing (its caps' `t`
+        // would be `±0` wherever the solid lies).
+        if beyond_caps(o, d, h) || !d.is_finite() {
             return None;
         }
         let mut best: Option<(f32, Part)> = None;

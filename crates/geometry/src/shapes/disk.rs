@@ -59,7 +59,8 @@ impl Disk {
     #[inline]
     fn solve(&self, ray: &Ray) -> Option<(f32, Vec3, f32)> {
         let denom = ray.dir.dot(self.normal);
-        if denom == 0.0 {
+        // Parallel, or a direction that is not finite (`±∞` or `NaN`).
+        if denom == 0.0 || !denom.is_finite() {
             return None;
         }
         let t = (self.center - ray.origin).dot(self.normal) / denom;
@@ -69,7 +70,8 @@ impl Disk {
         let rel = ray.at(t) - self.center;
         let rel = rel - self.normal * rel.dot(self.normal);
         let r2 = rel.length_squared();
-        if r2 > self.radius * self.radius {
+        // Written so that a `NaN` offset misses.
+        if !(r2 <= self.radius * self.radius) {
             return None;
         }
         Some((t, rel, r2))

@@ -77,7 +77,9 @@ impl Intersect for Plane {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
         let denom = ray.dir.dot(self.normal);
-        if denom == 0.0 {
+        // Parallel, or a direction that is not finite (`±∞` or `NaN`),
+        // whose `t` would be `±0` wherever the plane lies.
+        if denom == 0.0 || !denom.is_finite() {
             return None;
         }
         let t = (self.point - ray.origin).dot(self.normal) / denom;

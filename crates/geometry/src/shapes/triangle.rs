@@ -125,10 +125,25 @@ fn unsure(x: f32) -> bool {
 }
 
 /// `[t_min, t_max]` narrowed to finite bounds: the interval test then also
-/// rejects an infinite or `NaN` `t`, at no cost per triangle.
+/// rejects an infinite or `NaN` `t`, at no cost per triangle. An interval
+/// with a `NaN` end holds no `t`, as in [`Ray::contains`].
 #[inline(always)]
 fn finite_interval(t_min: f32, t_max: f32) -> (f32, f32) {
+    if t_min.is_nan() || t_max.is_nan() {
+        return EMPTY_INTERVAL;
+    }
     (t_min.max(f32::MIN), t_max.min(f32::MAX))
+}
+
+/// An interval that no `t` passes.
+const EMPTY_INTERVAL: (f32, f32) = (f32::MAX, f32::MIN);
+
+/// The interval the triangle test accepts for `ray`: [`finite_interval`],
+/// empty where the direction is not finite (whose shear would be `0` or
+/// `NaN`, meeting triangles behind the origin at `t = −0`).
+#[inline(always)]
+fn ray_interval(ray: &Ray) -> (f32, f32) {
+    if ray.dir.is_finite() { finite_interval(ray.t_min, ray.t_max) } else { EMPTY_INTERVAL }
 }
 
 /// The axes `[kx, ky, kz]` of a ray whose dominant axis is `kz`, at index
@@ -160,7 +175,7 @@ impl TriangleRay {
         let [sx, sy, sz, _] = (Vec4::new(d[kx], d[ky], 1.0, 1.0) / Vec4::splat(dz)).to_array();
         let o = ray.origin.to_array();
         let origin = [o[kx], o[ky], o[kz]];
-        let (t_min, t_max) = finite_interval(ray.t_min, ray.t_max);
+        let (t_min, t_max) = ray_interval(ray);
         Self { origin, k: [kx, ky, kz], shear: [sx, sy, sz], t_min, t_max }
     }
 
@@ -835,7 +850,7 @@ impl<const N: usize> PacketRays<N> {
                 o[a][i] = ro[a];
                 d[a][i] = rd[a];
             }
-            (t0[i], t1[i]) = finite_interval(r.t_min, r.t_max);
+            (t0[i], t1[i]) = ray_interval(r);
         }
         if let Some(offset) = offset {
             let offset = offset.to_array();
