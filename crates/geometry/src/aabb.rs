@@ -59,7 +59,8 @@ impl Aabb {
         self.min.is_finite() && self.max.is_finite()
     }
 
-    /// Centre of the box.
+    /// Centre of the box (`NaN` for [`Aabb::EMPTY`] and other empty boxes'
+    /// infinite corners: check [`Aabb::is_empty`] first).
     #[inline]
     #[must_use]
     pub fn center(&self) -> Vec3 {

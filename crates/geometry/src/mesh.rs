@@ -119,6 +119,9 @@ impl TriangleMesh {
     }
 
     /// Corners of face `f`.
+    ///
+    /// # Panics
+    /// If `f` is not below [`TriangleMesh::len`].
     #[inline]
     #[must_use]
     pub fn triangle(&self, f: usize) -> [Vec3; 3] {
@@ -130,6 +133,9 @@ impl TriangleMesh {
     /// edges' cross product is not zero. (Not its squared length, which
     /// underflows to 0 for edges under about 1e-11: a model in such units
     /// would lose every face.)
+    ///
+    /// # Panics
+    /// If `f` is not below [`TriangleMesh::len`].
     #[must_use]
     pub fn face_has_area(&self, f: usize) -> bool {
         let [a, b, c] = self.triangle(f);
@@ -313,6 +319,9 @@ impl TriangleMesh {
 
     /// The full hit record for face `f` hit at `t` with barycentrics
     /// `(b1, b2)` by a ray with direction `dir`.
+    ///
+    /// # Panics
+    /// If `f` is not below [`TriangleMesh::len`].
     #[must_use]
     pub fn hit(&self, f: usize, t: f32, b1: f32, b2: f32, dir: Vec3) -> Hit {
         let [ia, ib, ic] = self.indices[f].map(|i| i as usize);
