@@ -346,6 +346,20 @@ impl Session {
     /// Presses `q` and checks the viewer exits cleanly.
     fn quit(mut self) {
         self.key("q");
+        self.exits_cleanly();
+    }
+
+    /// Presses `s` and `q` at once, and checks that the viewer exits
+    /// cleanly having finished the snapshot (not cut it off, its
+    /// temporary file left); returns the saved file.
+    fn save_and_quit(mut self) -> PathBuf {
+        xdotool(&self.display, &["key", "--delay", "0", "s", "q"]).expect("xdotool key s q");
+        self.exits_cleanly();
+        let saved = self.wait_out("the last saved path", |l| l.starts_with("saved "));
+        PathBuf::from(saved.trim_start_matches("saved "))
+    }
+
+    fn exits_cleanly(&mut self) {
         let viewer = self.guard.0.last_mut().unwrap();
         let status = loop {
             if let Some(s) = viewer.try_wait().unwrap() {
@@ -472,15 +486,26 @@ fn reload_in_a_real_window_keeps_the_last_good_scene() {
     }
     let after = rgb(&session.save());
     assert_eq!(after, green, "the last good scene stays");
-    session.quit();
+    let last = session.save_and_quit();
+    assert_eq!(rgb(&last), green, "a snapshot asked for as the viewer quits is written whole");
+    let hidden: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "temporary files left: {hidden:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn a_display_no_server_answers_at_is_named() {
     // A display number no test starts a server on.
+    // A save folder to make: not made by a run that opens no window.
+    let dir = temp_dir("no-server");
+    let snaps = dir.join("snaps/a");
     let out = Command::new(BIN)
-        .args(["view", "scenes/seed.toml"])
+        .args(["view", "scenes/seed.toml", "--save-dir"])
+        .arg(&snaps)
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
         .env("DISPLAY", ":7391")
         .output()
@@ -489,4 +514,6 @@ fn a_display_no_server_answers_at_is_named() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("cannot open a window: no X server answers at DISPLAY=:7391"), "{err}");
     assert!(!err.contains("set DISPLAY") && !err.contains("panicked"), "{err}");
+    assert!(!dir.join("snaps").exists(), "the save folder was made");
+    let _ = std::fs::remove_dir_all(&dir);
 }

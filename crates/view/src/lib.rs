@@ -224,24 +224,25 @@ pub fn run_with_loader(opts: ViewOptions, loader: Arc<SceneLoader>) -> Result<()
         save_dir_usable(dir)?;
     }
     check_display()?;
-    if let Some(dir) = &opts.save_dir {
-        save_dir_ready(dir)?;
-    }
+    // The window makes the save folder once it is open.
     window::run(opts, loader, setup)
 }
 
-/// Checks, creating nothing, that `dir` (where `s` saves snapshots) is a
-/// directory or could be one: it and the folders above it that exist are
-/// directories. So a bad `--save-dir` is found before the window opens
-/// rather than at the first snapshot.
+/// Checks, leaving nothing behind, that `dir` (where `s` saves snapshots)
+/// is a directory or could be one, and that a file can be made there: it
+/// and the folders above it that exist are directories, and the deepest
+/// that exists takes a new file (a probe, made and removed at once). So a
+/// bad `--save-dir` is found before the window opens rather than at the
+/// first snapshot.
 ///
 /// # Errors
-/// [`ViewError::SaveDir`] naming the file in the way.
+/// [`ViewError::SaveDir`] naming the file in the way, or why no file can
+/// be made.
 pub fn save_dir_usable(dir: &Path) -> Result<(), ViewError> {
     let mut at = Some(dir);
     while let Some(p) = at.filter(|p| !p.as_os_str().is_empty()) {
         match std::fs::metadata(p) {
-            Ok(m) if m.is_dir() => return Ok(()),
+            Ok(m) if m.is_dir() => return writable_dir(dir, p),
             Ok(_) => {
                 let what = if p == dir { "it".to_owned() } else { p.display().to_string() };
                 return Err(ViewError::SaveDir {
@@ -253,6 +254,23 @@ pub fn save_dir_usable(dir: &Path) -> Result<(), ViewError> {
         }
     }
     Ok(())
+}
+
+/// Whether a file can be made in `existing`, the deepest folder of the
+/// save folder `dir` that exists.
+fn writable_dir(dir: &Path, existing: &Path) -> Result<(), ViewError> {
+    let probe = existing.join(format!(".prism-view-check-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            // Best effort: the probe is empty and named for this process.
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(ViewError::SaveDir {
+            path: dir.to_path_buf(),
+            reason: format!("no file can be created in {} ({e})", existing.display()),
+        }),
+    }
 }
 
 /// Makes `dir` if it is missing, as `prism render` makes an output's
@@ -301,9 +319,18 @@ mod tests {
         assert!(e.ends_with("f: it is a file, not a directory"), "{e}");
         let e = save_dir_usable(&file.join("sub")).unwrap_err().to_string();
         assert!(e.ends_with(&format!("{} is a file, not a directory", file.display())), "{e}");
-        // The check alone makes nothing.
+        // The check alone makes nothing (its probe is gone).
         save_dir_usable(&tmp.path().join("c/d")).unwrap();
         assert!(!tmp.path().join("c").exists());
+        let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left.len(), 2, "{left:?}");
+        // A folder no file can be made in (even by root), as `prism
+        // render` refuses an output there.
+        #[cfg(target_os = "linux")]
+        {
+            let e = save_dir_usable(Path::new("/proc/prism-snapshots")).unwrap_err().to_string();
+            assert!(e.contains("no file can be created in /proc"), "{e}");
+        }
     }
 
     #[test]

@@ -99,13 +99,30 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
     if opts.overrides.fog == Some(true) && !state.fog_available() {
         state.set_message(Some("this scene has no fog".into()));
     }
-    let name = opts.scene.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    // A scene read from standard input is read once: no reload, and its
+    // snapshots are named as `prism render` names its image.
+    let from_stdin = prism_scene::is_stdin_path(&opts.scene);
+    let name = if from_stdin {
+        "stdin".to_owned()
+    } else {
+        opts.scene.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+    };
     let save_dir = opts.save_dir.clone().unwrap_or_else(|| PathBuf::from("."));
     let verbose = opts.verbose;
+    if state.settings().antialias.adaptive.is_some() {
+        let why = "adaptive sampling is not used by the viewer (its passes take one sample each); `prism render` applies it";
+        errln!("prism view: {why}");
+        state.set_message(Some("adaptive sampling is not used here".into()));
+    }
 
     let mut title = state.title(&name);
     let mut window = Window::new(&title, w as usize, h as usize, WindowOptions::default())
         .map_err(|e| window_error(&e))?;
+    // Made once the window is open: a run that cannot open one leaves no
+    // folder behind.
+    if let Some(dir) = &opts.save_dir {
+        crate::save_dir_ready(dir)?;
+    }
     window.set_target_fps(0);
     let keys = KeyQueue::default();
     window.set_input_callback(Box::new(keys.clone()));
@@ -119,6 +136,8 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
     let mut reloading = false;
     let mut drag: Option<(f32, f32)> = None;
     let mut next_save = 1u32;
+    // Snapshots being written, which the viewer waits for before it exits.
+    let mut saving = 0usize;
     let mut first_frame_logged = false;
     let mut render_dead = false;
     let mut have_image = false;
@@ -161,8 +180,12 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
                     let (path, n) = crate::next_snapshot_path(&save_dir, &name, next_save);
                     next_save = n + 1;
                     spawn_save(path, w, h, buffer.clone(), events_tx.clone());
+                    saving += 1;
                 }
                 Outcome::Reload if reloading => {}
+                Outcome::Reload if from_stdin => {
+                    state.set_message(Some("a scene read from standard input cannot be reloaded".into()));
+                }
                 Outcome::Reload => {
                     reloading = true;
                     state.set_message(Some("reloading...".into()));
@@ -179,13 +202,9 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
         // Results of saves and reloads.
         while let Ok(ev) = events.try_recv() {
             match ev {
-                Event::Saved(Ok(path)) => {
-                    outln!("saved {}", path.display());
-                    state.set_message(Some(format!("saved {}", path.display())));
-                }
-                Event::Saved(Err(e)) => {
-                    errln!("prism view: {e}");
-                    state.set_message(Some(e.to_string()));
+                Event::Saved(result) => {
+                    saving = saving.saturating_sub(1);
+                    state.set_message(Some(saved(result)));
                 }
                 Event::Loaded(result) => {
                     reloading = false;
@@ -277,7 +296,38 @@ pub(crate) fn run(opts: ViewOptions, loader: Arc<SceneLoader>, setup: SceneSetup
             std::thread::sleep(IDLE_TICK);
         }
     }
+    // Snapshots asked for just before quitting are finished (and said),
+    // not cut off with their temporary files left behind.
+    while saving > 0 {
+        match events.recv_timeout(SAVE_WAIT) {
+            Ok(Event::Saved(result)) => {
+                saving -= 1;
+                saved(result);
+            }
+            Ok(Event::Loaded(_)) => {}
+            Err(_) => break,
+        }
+    }
     Ok(())
+}
+
+/// How long the viewer waits, when it is closed, for a snapshot being
+/// written.
+const SAVE_WAIT: Duration = Duration::from_secs(60);
+
+/// Reports a finished snapshot (or why it failed) on the terminal; the
+/// same words for the window's title.
+fn saved(result: Result<PathBuf, ViewError>) -> String {
+    match result {
+        Ok(path) => {
+            outln!("saved {}", path.display());
+            format!("saved {}", path.display())
+        }
+        Err(e) => {
+            errln!("prism view: {e}");
+            e.to_string()
+        }
+    }
 }
 
 fn spawn_save(path: PathBuf, w: u32, h: u32, pixels: Vec<u32>, tx: Sender<Event>) {
