@@ -77,13 +77,14 @@ impl Intersect for Plane {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
         let denom = ray.dir.dot(self.normal);
-        // Parallel, or a direction that is not finite (`±∞` or `NaN`),
-        // whose `t` would be `±0` wherever the plane lies.
-        if denom == 0.0 || !denom.is_finite() {
+        if denom == 0.0 {
             return None;
         }
         let t = (self.point - ray.origin).dot(self.normal) / denom;
-        ray.contains(t).then_some(t)
+        // A direction that is not finite (`±∞`; `NaN` gives a `NaN` `t`)
+        // divides to `t = ±0` wherever the plane lies: refused, the test
+        // made on such a `t` alone (every query tests the floor).
+        (ray.contains(t) && (t != 0.0 || denom.is_finite())).then_some(t)
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
