@@ -349,7 +349,7 @@ impl TriangleMesh {
     /// Closest face hit by `ray` by testing every face: `(face, t, b1, b2)`.
     #[must_use]
     pub fn intersect_brute_force(&self, ray: &Ray) -> Option<(usize, f32, f32, f32)> {
-        let mut tr = TriangleRay::new(ray);
+        let mut tr = TriangleRay::checked(ray)?;
         let mut best = None;
         for f in 0..self.len() {
             if let Some((t, b1, b2)) = tr.intersect(&self.triangle(f)) {

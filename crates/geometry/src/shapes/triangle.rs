@@ -54,11 +54,11 @@ impl Triangle {
 impl Intersect for Triangle {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
-        TriangleRay::new(ray).intersect(&self.v).map(|(t, _, _)| t)
+        TriangleRay::checked(ray)?.intersect(&self.v).map(|(t, _, _)| t)
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let (t, b1, b2) = TriangleRay::new(ray).intersect(&self.v)?;
+        let (t, b1, b2) = TriangleRay::checked(ray)?.intersect(&self.v)?;
         let b0 = 1.0 - b1 - b2;
         let p = b0 * self.v[0] + b1 * self.v[1] + b2 * self.v[2];
         Some(Hit::new(t, p, self.normal(), Vec2::new(b1, b2), ray.dir))
@@ -125,25 +125,10 @@ fn unsure(x: f32) -> bool {
 }
 
 /// `[t_min, t_max]` narrowed to finite bounds: the interval test then also
-/// rejects an infinite or `NaN` `t`, at no cost per triangle. An interval
-/// with a `NaN` end holds no `t`, as in [`Ray::contains`].
+/// rejects an infinite or `NaN` `t`, at no cost per triangle.
 #[inline(always)]
 fn finite_interval(t_min: f32, t_max: f32) -> (f32, f32) {
-    if t_min.is_nan() || t_max.is_nan() {
-        return EMPTY_INTERVAL;
-    }
     (t_min.max(f32::MIN), t_max.min(f32::MAX))
-}
-
-/// An interval that no `t` passes.
-const EMPTY_INTERVAL: (f32, f32) = (f32::MAX, f32::MIN);
-
-/// The interval the triangle test accepts for `ray`: [`finite_interval`],
-/// empty where the direction is not finite (whose shear would be `0` or
-/// `NaN`, meeting triangles behind the origin at `t = −0`).
-#[inline(always)]
-fn ray_interval(ray: &Ray) -> (f32, f32) {
-    if ray.dir.is_finite() { finite_interval(ray.t_min, ray.t_max) } else { EMPTY_INTERVAL }
 }
 
 /// The axes `[kx, ky, kz]` of a ray whose dominant axis is `kz`, at index
@@ -153,8 +138,21 @@ fn ray_interval(ray: &Ray) -> (f32, f32) {
 const AXES: [[usize; 3]; 6] = [[1, 2, 0], [2, 1, 0], [2, 0, 1], [0, 2, 1], [0, 1, 2], [1, 0, 2]];
 
 impl TriangleRay {
-    /// Prepares `ray` (its direction must be non-zero; a zero or non-finite
-    /// direction hits nothing).
+    /// [`TriangleRay::new`] for a ray that can meet something: `None` along
+    /// a non-finite direction (whose shear would be `0` or `NaN`, meeting
+    /// triangles behind the origin at `t = −0`) or within an interval with
+    /// a `NaN` end. [`Triangle`] and [`crate::TriangleMesh`] use it.
+    #[inline]
+    #[must_use]
+    pub fn checked(ray: &Ray) -> Option<Self> {
+        let usable = ray.dir.is_finite() && !ray.t_min.is_nan() && !ray.t_max.is_nan();
+        usable.then(|| Self::new(ray))
+    }
+
+    /// Prepares `ray`. A zero direction hits nothing; a direction that is
+    /// not finite, or an interval with a `NaN` end, is the caller's to
+    /// refuse (the walks of prism-bvh refuse such rays when a query
+    /// starts, once; [`TriangleRay::checked`] does it for one ray).
     #[inline(always)]
     #[must_use]
     pub fn new(ray: &Ray) -> Self {
@@ -175,7 +173,7 @@ impl TriangleRay {
         let [sx, sy, sz, _] = (Vec4::new(d[kx], d[ky], 1.0, 1.0) / Vec4::splat(dz)).to_array();
         let o = ray.origin.to_array();
         let origin = [o[kx], o[ky], o[kz]];
-        let (t_min, t_max) = ray_interval(ray);
+        let (t_min, t_max) = finite_interval(ray.t_min, ray.t_max);
         Self { origin, k: [kx, ky, kz], shear: [sx, sy, sz], t_min, t_max }
     }
 
@@ -850,7 +848,7 @@ impl<const N: usize> PacketRays<N> {
                 o[a][i] = ro[a];
                 d[a][i] = rd[a];
             }
-            (t0[i], t1[i]) = ray_interval(r);
+            (t0[i], t1[i]) = finite_interval(r.t_min, r.t_max);
         }
         if let Some(offset) = offset {
             let offset = offset.to_array();
