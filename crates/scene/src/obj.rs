@@ -695,7 +695,7 @@ fn precheck(text: &str) -> Result<Prechecked, (usize, String)> {
                         let idx: i64 = part.parse().map_err(|_| {
                             (line_no, format!("face corner `{c}`: `{part}` is not an integer index"))
                         })?;
-                        let resolved = if idx < 0 { count + idx + 1 } else { idx };
+                        let resolved = resolve_index(idx, count);
                         if idx == 0 {
                             return Err((
                                 line_no,
@@ -733,6 +733,12 @@ fn precheck(text: &str) -> Result<Prechecked, (usize, String)> {
     }
     let corners = (with_vt && without_vt).then(|| FaceCorners::of(text));
     Ok(Prechecked { mtllibs, corners })
+}
+
+/// An OBJ index as written (`idx`; negative: relative to the `count`
+/// elements of its kind defined before its line), counted from 1.
+fn resolve_index(idx: i64, count: i64) -> i64 {
+    if idx < 0 { count + idx + 1 } else { idx }
 }
 
 /// The material libraries an `mtllib` line's `name` (the rest of its
@@ -790,7 +796,7 @@ impl FaceCorners {
                         let mut key = [0_i64; 3];
                         for (k, part) in corner.split('/').enumerate().take(3) {
                             let idx: i64 = part.parse().unwrap_or(0);
-                            key[k] = if idx < 0 { counts[k] + idx + 1 } else { idx };
+                            key[k] = resolve_index(idx, counts[k]);
                         }
                         keys.push(key);
                     }

@@ -71,16 +71,15 @@ pub(crate) fn fix_obj(text: &str) -> (Cow<'_, str>, Vec<String>) {
 /// with a comment: a `\` at the end of a name or a comment ends a Windows
 /// path.
 fn join_continued(text: &str) -> Cow<'_, str> {
-    // Whether `line` goes on on the next; `joining`: it is itself the
-    // continuation of a statement.
-    let continued = |line: &str, joining: bool| {
-        let body = line.trim_end_matches(['\n', '\r']).trim_end();
+    // Whether a line (`body`, its end trimmed) goes on on the next;
+    // `joining`: it is itself the continuation of a statement.
+    let continued = |body: &str, joining: bool| {
         let key = body.split_whitespace().next().unwrap_or("");
         body.ends_with('\\')
             && !body.contains('#')
             && (joining || matches!(key, "v" | "vt" | "vn" | "vp" | "f" | "l" | "p"))
     };
-    if !text.split_inclusive('\n').any(|l| continued(l, false)) {
+    if !text.lines().any(|l| continued(l.trim_end(), false)) {
         return Cow::Borrowed(text);
     }
     let mut out = String::with_capacity(text.len());
@@ -90,7 +89,7 @@ fn join_continued(text: &str) -> Cow<'_, str> {
         let ending = &line[line.trim_end_matches(['\n', '\r']).len()..];
         let body = line[..line.len() - ending.len()].trim_end();
         let (body, more) = match body.strip_suffix('\\') {
-            Some(b) if continued(line, joining) => (b, true),
+            Some(b) if continued(body, joining) => (b, true),
             _ => (body, false),
         };
         if joining {
