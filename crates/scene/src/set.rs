@@ -23,17 +23,23 @@ use toml_edit::{Document, Item, Key, Table, Value};
 /// The flag, in messages.
 const FLAG: &str = "--set";
 
-/// One edit: where a set's value went in the edited text.
-#[derive(Clone, Debug)]
-struct Edit {
-    /// The set as given (`KEY=VALUE`).
-    set: String,
-    /// 1-based line in the edited text.
-    line: usize,
-    /// Whole lines inserted from `line` on (0: a value replaced on `line`).
-    lines: usize,
-    /// For a replaced value: the 1-based column where it starts.
-    column: usize,
+/// Where a stretch of the edited text came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Origin {
+    /// The file's own text, from this byte of it on.
+    File(usize),
+    /// The text set number `i` wrote (its key and value, or its value).
+    Set(usize),
+    /// The header (`[fog]`) of a table the file lacks, written by set
+    /// number `i` for its key.
+    Made(usize),
+}
+
+/// A stretch of the edited text: its length in bytes, and where it came from.
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    len: usize,
+    origin: Origin,
 }
 
 /// The scene text with every set applied.
@@ -41,7 +47,17 @@ struct Edit {
 pub(crate) struct Edited {
     /// The edited text.
     pub text: String,
-    edits: Vec<Edit>,
+    /// The file as written.
+    file_text: String,
+    /// The sets as given (`KEY=VALUE`), in order.
+    sets: Vec<String>,
+    /// Where each stretch of `text` came from, in order: their lengths add
+    /// up to `text.len()`. A set's text stays its own until a later set
+    /// replaces it; every byte of the file that no set replaced keeps its
+    /// offset in the file, so a place maps back exactly whatever the sets
+    /// did around it (a value over several lines replaced by one line, a
+    /// value on a line that another value follows).
+    pieces: Vec<Piece>,
 }
 
 /// Applies `sets` (each `KEY=VALUE`) to the scene `text`, in order.
@@ -52,7 +68,9 @@ pub(crate) struct Edited {
 /// index past the end, or a whole table replaced by a value.
 /// [`SceneError::Syntax`] when `text` itself is not TOML (at its place).
 pub(crate) fn apply(text: &str, sets: &[String], file: &Path) -> Result<Edited, SceneError> {
-    let mut edited = Edited { text: text.to_owned(), edits: Vec::new() };
+    let pieces =
+        if text.is_empty() { Vec::new() } else { vec![Piece { len: text.len(), origin: Origin::File(0) }] };
+    let mut edited = Edited { text: text.to_owned(), file_text: text.to_owned(), sets: Vec::new(), pieces };
     for set in sets {
         edited.apply_one(set, file)?;
     }
@@ -115,111 +133,148 @@ impl Edited {
         })?;
         let target = locate(doc.as_table(), &keys, set, "", &[])?;
         let text = &self.text;
-        let line_of = |offset: usize| crate::error::line_col(text, offset);
-        let (new_text, edit) = match target {
-            Target::Replace(span) => {
-                let (line, column) = line_of(span.start);
-                let t = format!("{}{repr}{}", &text[..span.start], &text[span.end..]);
-                (t, Edit { set: set.to_owned(), line, lines: 0, column })
-            }
+        let i = self.sets.len();
+        let set_piece = |len: usize| Piece { len, origin: Origin::Set(i) };
+        // The edited text's bytes `range` give way to `inserted`, made of
+        // these pieces.
+        let (range, inserted, pieces) = match target {
+            Target::Replace(span) => (span, repr.clone(), vec![set_piece(repr.len())]),
             Target::Line(header, key) => {
                 // On the line after the table's header (the top of the file for the top level).
                 let at = text[header..].find('\n').map_or(text.len(), |i| header + i + 1);
                 let lead =
                     if at == text.len() && !text.is_empty() && !text.ends_with('\n') { "\n" } else { "" };
-                let (line, _) = line_of(at);
-                let line = if lead.is_empty() { line } else { line + 1 };
-                let t = format!("{}{lead}{key} = {repr}\n{}", &text[..at], &text[at..]);
-                (t, Edit { set: set.to_owned(), line, lines: 1, column: 1 })
+                let line = format!("{lead}{key} = {repr}\n");
+                let n = line.len();
+                (at..at, line, vec![set_piece(n)])
             }
             Target::Top(key) => {
-                let t = format!("{key} = {repr}\n{text}");
-                (t, Edit { set: set.to_owned(), line: 1, lines: 1, column: 1 })
+                let line = format!("{key} = {repr}\n");
+                let n = line.len();
+                (0..0, line, vec![set_piece(n)])
             }
             Target::Inline { close, key, last } => {
                 // At the closing brace itself, which is never in a comment
                 // (a line break or comment before it stays as it is), with
                 // a comma unless the table is empty or ends with one.
-                let (line, column) = line_of(close);
                 let comma = last.is_some_and(|end| !has_comma(text.get(end..close).unwrap_or_default()));
                 let sep = if comma { ", " } else { " " };
-                let t = format!("{}{sep}{key} = {repr} {}", &text[..close], &text[close..]);
-                (t, Edit { set: set.to_owned(), line, lines: 0, column })
+                let part = format!("{sep}{key} = {repr} ");
+                let n = part.len();
+                (close..close, part, vec![set_piece(n)])
             }
             Target::NewTable(table, key) => {
                 let sep = if text.is_empty() || text.ends_with('\n') { "" } else { "\n" };
-                let (line, _) = line_of(text.len());
-                let line = if sep.is_empty() { line } else { line + 1 };
-                let t = format!("{text}{sep}[{table}]\n{key} = {repr}\n");
-                (t, Edit { set: set.to_owned(), line, lines: 2, column: 1 })
+                let header = format!("{sep}[{table}]\n");
+                let line = format!("{key} = {repr}\n");
+                let pieces =
+                    vec![Piece { len: header.len(), origin: Origin::Made(i) }, set_piece(line.len())];
+                let end = text.len();
+                (end..end, header + &line, pieces)
             }
         };
-        if edit.lines > 0 {
-            for e in &mut self.edits {
-                if e.line >= edit.line {
-                    e.line += edit.lines;
-                } else if edit.line < e.line + e.lines {
-                    // Inserted inside an earlier set's lines (a key added
-                    // under the table an earlier set created): that set's
-                    // lines now span the new ones too (the later set is
-                    // matched first, `remap`).
-                    e.lines += edit.lines;
-                }
-            }
-        }
+        let new_text = format!("{}{inserted}{}", &text[..range.start], &text[range.end..]);
         still_toml(set, &new_text)?;
         self.text = new_text;
-        self.edits.push(edit);
+        self.splice(range, pieces);
+        self.sets.push(set.to_owned());
         Ok(())
+    }
+
+    /// The pieces give way to `inserted` over the edited text's bytes
+    /// `range` (as the text did).
+    fn splice(&mut self, range: Range<usize>, inserted: Vec<Piece>) {
+        let total = self.pieces.iter().map(|p| p.len).sum();
+        let mut pieces = cut(&self.pieces, 0..range.start);
+        pieces.extend(inserted.into_iter().filter(|p| p.len > 0));
+        pieces.extend(cut(&self.pieces, range.end..total));
+        self.pieces = pieces;
+    }
+
+    /// Where byte `at` of the edited text came from (the end of the text
+    /// is the end of the file), with its offset in the file for the file's
+    /// own text.
+    fn origin(&self, at: usize) -> Origin {
+        let mut start = 0;
+        for p in &self.pieces {
+            if at < start + p.len {
+                return match p.origin {
+                    Origin::File(o) => Origin::File(o + (at - start)),
+                    other => other,
+                };
+            }
+            start += p.len;
+        }
+        Origin::File(self.file_text.len())
+    }
+
+    /// The sets whose text lies in (or meets) the edited text's bytes
+    /// `range`, by number, each once, in order.
+    fn sets_in(&self, range: &Range<usize>) -> Vec<usize> {
+        let mut start = 0;
+        let mut found = Vec::new();
+        for p in &self.pieces {
+            let end = start + p.len;
+            if let Origin::Set(i) = p.origin
+                && start < range.end.max(range.start + 1)
+                && range.start < end
+                && !found.contains(&i)
+            {
+                found.push(i);
+            }
+            start = end;
+        }
+        found.sort_unstable();
+        found
     }
 
     /// `e` (from the edited text) in the terms of the file as written: a
     /// problem at a set value names the flag and the set; any other
-    /// place's line is the file's own.
+    /// place's line and column are the file's own.
     pub(crate) fn remap(&self, e: SceneError, file: &Path) -> SceneError {
         // An asset's own place stays; where the scene names it is mapped.
         if let SceneError::Asset { location, message, mut referenced_at } = e {
             return match self.place(&referenced_at, file) {
                 Some(Place::Set(set)) => flag_error(set, format!("{location}: {message}")),
-                Some(Place::Line(line) | Place::Table(line, _)) => {
+                Some(Place::Made(sets)) => made_error(&sets, format!("{location}: {message}")),
+                Some(Place::Line(line, column) | Place::Table(line, column, _)) => {
                     referenced_at.line = Some(line);
+                    referenced_at.column = referenced_at.column.map(|_| column);
                     SceneError::Asset { location, message, referenced_at }
                 }
                 None => SceneError::Asset { location, message, referenced_at },
             };
         }
         let Some(place) = e.location().and_then(|l| self.place(l, file)) else { return e };
+        let message = |e: &SceneError| match e {
+            SceneError::Syntax { message, .. } | SceneError::Invalid { message, .. } => message.clone(),
+            SceneError::Read { what, path, reason, .. } => {
+                format!("cannot read {what} {}: {reason}", path.display())
+            }
+            other => other.to_string(),
+        };
         let mut e = e;
         match place {
-            Place::Set(set) => {
-                let message = match &e {
-                    SceneError::Syntax { message, .. } | SceneError::Invalid { message, .. } => {
-                        message.clone()
-                    }
-                    SceneError::Read { what, path, reason, .. } => {
-                        format!("cannot read {what} {}: {reason}", path.display())
-                    }
-                    other => other.to_string(),
-                };
-                return flag_error(set, message);
-            }
-            Place::Line(line) => {
+            Place::Set(set) => return flag_error(set, message(&e)),
+            Place::Made(sets) => return made_error(&sets, message(&e)),
+            Place::Line(line, column) => {
                 if let SceneError::Syntax { location, .. }
                 | SceneError::Invalid { location, .. }
                 | SceneError::Read { location, .. } = &mut e
                 {
                     location.line = Some(line);
+                    location.column = location.column.map(|_| column);
                 }
             }
-            Place::Table(line, sets) => {
+            Place::Table(line, column, sets) => {
                 if let SceneError::Syntax { location, message } | SceneError::Invalid { location, message } =
                     &mut e
                 {
                     location.line = Some(line);
+                    location.column = location.column.map(|_| column);
                     let sets: Vec<String> = sets.iter().map(|s| format!("{FLAG} {s}")).collect();
                     let values = if sets.len() == 1 { "a value" } else { "values" };
-                    message
-                        .push_str(&format!(" (this table holds {values} given by {})", sets.join(" and ")));
+                    message.push_str(&format!(" (this table holds {values} given by {})", and_list(&sets)));
                 }
             }
         }
@@ -228,59 +283,103 @@ impl Edited {
 
     /// What place `loc` of the edited text is in the file's terms: a set
     /// (at its value, or in an array or inline table starting at `loc`
-    /// that holds it) or the file's own line; `None` for a place in
-    /// another file or without a line.
+    /// that holds it), the header of a table sets made, or the file's own
+    /// line and column; `None` for a place in another file or without a
+    /// line.
     fn place(&self, loc: &Location, file: &Path) -> Option<Place<'_>> {
         if loc.file != file {
             return None;
         }
         let line = loc.line?;
-        let column = loc.column.unwrap_or(1);
+        let at = offset_of(&self.text, line, loc.column.unwrap_or(1))?;
         // The array or inline table that starts where the error points, if
         // one does: an error about the whole value (`position` must be
         // three finite numbers) is about a set that changed a part of it.
-        let at = offset_of(&self.text, line, column);
-        let whole = at.and_then(|a| value_end(&self.text, a).map(|end| a..end));
-        for edit in self.edits.iter().rev() {
-            let hit = if edit.lines == 0 {
-                (line == edit.line && column >= edit.column)
-                    || whole.as_ref().is_some_and(|w| {
-                        offset_of(&self.text, edit.line, edit.column).is_some_and(|o| w.contains(&o))
-                    })
-            } else {
-                (edit.line..edit.line + edit.lines).contains(&line)
-            };
-            if hit {
-                return Some(Place::Set(&edit.set));
-            }
+        if let Some(end) = value_end(&self.text, at)
+            && let Some(&i) = self.sets_in(&(at..end)).last()
+        {
+            return Some(Place::Set(&self.sets[i]));
         }
-        let shift: usize = self.edits.iter().filter(|d| d.lines > 0 && d.line < line).map(|d| d.lines).sum();
-        let own = line - shift.min(line - 1);
+        let own = match self.origin(at) {
+            Origin::Set(i) => return Some(Place::Set(&self.sets[i])),
+            Origin::Made(_) => return Some(Place::Made(self.table_sets(line))),
+            Origin::File(o) => crate::error::line_col(&self.file_text, o),
+        };
         // A problem with a whole table (a camera's up along its view, a
         // mesh without `path`), told at its header: the sets that changed
         // a value in that table take part in it.
-        if !self.edits.is_empty() {
-            let headers = crate::scan::header_lines(&self.text);
-            if headers.binary_search(&line).is_ok() {
-                let end = headers.iter().copied().find(|&h| h > line).unwrap_or(usize::MAX);
-                // Each key's last set: an earlier one of the same key was
-                // replaced by it.
-                let key = |set: &str| set.split_once('=').map_or(set, |(k, _)| k).trim().to_owned();
-                let inside: Vec<&Edit> =
-                    self.edits.iter().filter(|e| e.line > line && e.line < end).collect();
-                let mut sets: Vec<&str> = Vec::new();
-                for (k, edit) in inside.iter().enumerate() {
-                    let replaced = inside[k + 1..].iter().any(|later| key(&later.set) == key(&edit.set));
-                    if !replaced && !sets.contains(&edit.set.as_str()) {
-                        sets.push(&edit.set);
-                    }
-                }
-                if !sets.is_empty() {
-                    return Some(Place::Table(own, sets));
-                }
+        let sets = self.table_sets(line);
+        if sets.is_empty() { Some(Place::Line(own.0, own.1)) } else { Some(Place::Table(own.0, own.1, sets)) }
+    }
+
+    /// The sets that wrote a value in the table whose header is on `line`
+    /// of the edited text (none if no header is there), each key's last
+    /// set only (an earlier one of the same key was replaced by it).
+    fn table_sets(&self, line: usize) -> Vec<&str> {
+        let headers = crate::scan::header_lines(&self.text);
+        if self.sets.is_empty() || headers.binary_search(&line).is_err() {
+            return Vec::new();
+        }
+        let start = offset_of(&self.text, line + 1, 1).unwrap_or(self.text.len());
+        let end = headers
+            .iter()
+            .find(|&&h| h > line)
+            .and_then(|&h| offset_of(&self.text, h, 1))
+            .unwrap_or(self.text.len());
+        let key = |set: &str| set.split_once('=').map_or(set, |(k, _)| k).trim().to_owned();
+        let inside = self.sets_in(&(start..end));
+        let mut sets: Vec<&str> = Vec::new();
+        for (k, &i) in inside.iter().enumerate() {
+            let set = self.sets[i].as_str();
+            let replaced = inside[k + 1..].iter().any(|&later| key(&self.sets[later]) == key(set));
+            if !replaced && !sets.contains(&set) {
+                sets.push(set);
             }
         }
-        Some(Place::Line(own))
+        sets
+    }
+}
+
+/// The pieces of `pieces` over the bytes `range` of the text they make.
+fn cut(pieces: &[Piece], range: Range<usize>) -> Vec<Piece> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for p in pieces {
+        let end = start + p.len;
+        let (a, b) = (start.max(range.start), end.min(range.end));
+        if a < b {
+            let origin = match p.origin {
+                Origin::File(o) => Origin::File(o + (a - start)),
+                other => other,
+            };
+            out.push(Piece { len: b - a, origin });
+        }
+        start = end;
+    }
+    out
+}
+
+/// `items` joined as "a", "a and b", "a, b and c".
+fn and_list(items: &[String]) -> String {
+    match items.split_last() {
+        None => String::new(),
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+    }
+}
+
+/// A problem of a whole table that sets made (the file has no such table):
+/// every set in it is named, as no one of them alone is at fault.
+fn made_error(sets: &[&str], message: String) -> SceneError {
+    match sets {
+        [set] => flag_error(set, message),
+        _ => {
+            let sets: Vec<String> = sets.iter().map(|s| format!("{FLAG} {s}")).collect();
+            SceneError::Option {
+                flag: FLAG,
+                message: format!("{message} (in a table made by {})", and_list(&sets)),
+            }
+        }
     }
 }
 
@@ -288,11 +387,13 @@ impl Edited {
 enum Place<'a> {
     /// At or in the value of this set (`KEY=VALUE` as given).
     Set(&'a str),
-    /// The file's own line.
-    Line(usize),
-    /// The file's own line of a table's header, the table holding values
-    /// of these sets.
-    Table(usize, Vec<&'a str>),
+    /// At the header of a table that the file lacks, made by these sets.
+    Made(Vec<&'a str>),
+    /// The file's own line and column.
+    Line(usize, usize),
+    /// The file's own line and column of a table's header, the table
+    /// holding values of these sets.
+    Table(usize, usize, Vec<&'a str>),
 }
 
 impl Edited {
@@ -346,13 +447,14 @@ fn toml_integer_digits(value: &str) -> bool {
 }
 
 /// The byte offset of 1-based `line` and `column` (in characters) in
-/// `text`, if there is such a place.
+/// `text`, if there is such a line (a column past its end is its end).
 fn offset_of(text: &str, line: usize, column: usize) -> Option<usize> {
     let start =
         if line == 1 { 0 } else { text.match_indices('\n').nth(line.checked_sub(2)?).map(|(i, _)| i + 1)? };
     let rest = &text[start..];
     let end = rest.find('\n').unwrap_or(rest.len());
-    rest[..end].char_indices().nth(column.checked_sub(1)?).map(|(i, _)| start + i)
+    let column = column.checked_sub(1)?;
+    Some(start + rest[..end].char_indices().nth(column).map_or(end, |(i, _)| i))
 }
 
 /// `keys` as a dotted key, each part quoted where TOML needs it.

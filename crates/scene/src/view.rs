@@ -122,9 +122,11 @@ pub(crate) fn camera(
                     "the camera position {position} and the look-at point {look_at} must differ"
                 ),
             },
+            // Told at the camera's table, as it is about two of its keys
+            // (a `--set` of either is named there).
             None => SceneError::Invalid {
-                location: ctx.place(file.map(|d| d.look_at.span()).as_ref()),
-                message: "camera look_at must differ from the camera position".into(),
+                location: ctx.place(table.as_ref().or(file.map(|d| d.look_at.span()).as_ref())),
+                message: format!("camera look_at {look_at} must differ from the camera position {position}"),
             },
         });
     };

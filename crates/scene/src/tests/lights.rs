@@ -207,8 +207,8 @@ fn bad_cameras_are_refused_at_their_key() {
         ),
         (
             "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 1]\n",
-            "look_at must differ",
-            Some("look_at = [0, 0, 1]"),
+            "look_at [0, 0, 1] must differ from the camera position [0, 0, 1]",
+            Some("[[cameras]]"),
         ),
         (
             "[[cameras]]\nname = \"a\"\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nup = [0, 0, 0]\n",
@@ -226,7 +226,7 @@ fn bad_cameras_are_refused_at_their_key() {
     let bad_first = format!("{BASE}{CAMERAS}").replace("look_at = [0, 1, 0]", "look_at = [0, 2, 10]");
     for chosen in [None, Some("top")] {
         let err = with_camera(&bad_first, chosen).unwrap_err().to_string();
-        assert!(err.contains("look_at must differ"), "{chosen:?}: {err}");
+        assert!(err.contains("must differ from the camera position"), "{chosen:?}: {err}");
     }
     // The file's first camera is checked like the others.
     let text = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\naperture = -1");

@@ -379,3 +379,86 @@ fn sets_add_keys_to_inline_tables_with_a_trailing_comma_or_line_breaks() {
     let err = set_err(&text, &["objects.1.material=x", "objects.1.radius=2"]);
     assert!(err.starts_with("--set: objects.1.material=x: unknown material `x`"), "{err}");
 }
+
+/// A set that replaces a value written over several lines by one line
+/// leaves every later place at the file's own line; so does one whose
+/// value is shorter or longer than the file's on a line that goes on.
+#[test]
+fn places_after_a_replaced_value_keep_the_files_line_and_column() {
+    let text = scene()
+        .replace("position = [0, 2, 10]", "position = [\n  0,\n  2,\n  10,\n]")
+        .replace("radius = 1", "radius = -1")
+        .replace("color = [0.8, 0.1, 0.1]", "color = [255, 0, 0]");
+    let plain = with_sets(&text, &[]).unwrap_err().to_string();
+    assert!(plain.starts_with(&format!("{}: ", place(&text, "-1"))), "{plain}");
+    for sets in [
+        &["camera.position=[0, 2, 7]"][..],
+        &["camera.position.2=7"],
+        &["camera.position=[0, 2, 7]", "render.spp=3"],
+    ] {
+        assert_eq!(set_err(&text, sets), plain, "{sets:?}");
+    }
+    // A warning after it, too.
+    let good = text.replace("radius = -1", "radius = 1");
+    let warning = with_sets(&good, &[]).unwrap().warnings;
+    assert_eq!(with_sets(&good, &["camera.position=[0, 2, 7]"]).unwrap().warnings, warning);
+    // One line of inline tables: a problem after a set value on its line
+    // is the file's, at its own column.
+    let inline = "camera = { position = [0, 0, 5], look_at = [0, 0, 0], fov = 400 }\n";
+    let plain = set_err(inline, &[]);
+    assert!(plain.starts_with(&format!("{}: camera fov", place(inline, "400"))), "{plain}");
+    for set in ["camera.position=[0,0,6]", "camera.position=[0, 0, 6.123456789]", "camera.position.2=6.5"] {
+        assert_eq!(set_err(inline, &[set]), plain, "{set}");
+    }
+    let objects = "camera = { position = [0, 0, 5], look_at = [0, 0, 0] }\n\
+                   objects = [ { type = \"sphere\", radius = 1 }, { type = \"sphere\", radius = -1 } ]\n";
+    let plain = set_err(objects, &[]);
+    assert!(plain.starts_with(&format!("{}: ", place(objects, "-1"))), "{plain}");
+    assert_eq!(set_err(objects, &["objects.0.radius=2"]), plain);
+    // The set's own value is still the set's.
+    let err = set_err(objects, &["objects.1.radius=-3"]);
+    assert!(
+        err.starts_with("--set: objects.1.radius=-3: sphere radius must be greater than 0, got -3"),
+        "{err}"
+    );
+}
+
+/// A camera whose position a set moves onto its look-at point names the
+/// set, as one whose look-at point a set moves does.
+#[test]
+fn a_camera_position_set_onto_its_look_at_names_the_set() {
+    let text = scene();
+    let err = set_err(&text, &["camera.position=[0, 1, 0]"]);
+    assert!(
+        err.starts_with(&format!(
+            "{}: camera look_at [0, 1, 0] must differ from the camera position [0, 1, 0]",
+            place(&text, "[camera]")
+        )),
+        "{err}"
+    );
+    assert!(err.ends_with(" (this table holds a value given by --set camera.position=[0, 1, 0])"), "{err}");
+    let err = set_err(&text, &["camera.look_at=[0, 2, 10]"]);
+    assert!(err.ends_with(" (this table holds a value given by --set camera.look_at=[0, 2, 10])"), "{err}");
+}
+
+/// A problem of a whole table that sets made names every set in it, not
+/// the first alone.
+#[test]
+fn a_problem_of_a_table_sets_made_names_its_sets() {
+    let text = scene();
+    let sets = [
+        "materials.glassy.specular=1",
+        "materials.glassy.reflectivity=0.8",
+        "materials.glassy.transparency=0.8",
+    ];
+    let err = set_err(&text, &sets);
+    assert_eq!(
+        err,
+        "--set: reflectivity + transparency + transmission must not exceed 1, got 1.6 (in a table made by \
+         --set materials.glassy.specular=1, --set materials.glassy.reflectivity=0.8 and \
+         --set materials.glassy.transparency=0.8)"
+    );
+    // One set's value is still that set's problem.
+    let err = set_err(&text, &["materials.glassy.specular=-1", "materials.glassy.reflectivity=0.5"]);
+    assert!(err.starts_with("--set: materials.glassy.specular=-1: "), "{err}");
+}
