@@ -83,7 +83,12 @@ impl Ray {
     }
 
     /// A shadow ray from the surface point `point` toward `target`: unit
-    /// direction, `t_max` is the distance to `target`.
+    /// direction, `t_max` the distance to `target` less about the offset
+    /// that a ray leaving a surface at `target` would start from (a few
+    /// hundred ULPs of its largest coordinate, as [`offset_ray_origin`]
+    /// gives), so that a surface through `target` itself (a light set
+    /// flush into a ceiling) does not block it, as one through `point`
+    /// does not.
     #[inline]
     #[must_use]
     pub fn spawn_to(point: Vec3, geo_normal: Vec3, target: Vec3) -> Self {
@@ -100,7 +105,7 @@ impl Ray {
         let to = target - origin;
         let dist = to.length();
         let dir = if dist > 0.0 { to / dist } else { n };
-        Self { origin, dir, t_min: 0.0, t_max: dist }
+        Self { origin, dir, t_min: 0.0, t_max: (dist - end_offset(target, scale)).max(0.0) }
     }
 }
 
@@ -110,6 +115,15 @@ const INT_SCALE: f32 = 256.0;
 const ORIGIN_BAND: f32 = 1.0 / 32.0;
 /// Fixed offset used near the origin.
 const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+
+/// How far short of `target` a ray to it stops ([`Ray::spawn_to`]): about
+/// the offset [`offset_ray_origin_scaled`] gives a ray leaving a surface
+/// there, `INT_SCALE` to twice as many ULPs of its largest coordinate, or
+/// the fixed offset near the origin.
+#[inline]
+fn end_offset(target: Vec3, scale: f32) -> f32 {
+    (target.abs().max_element() * (INT_SCALE * f32::EPSILON)).max(FLOAT_SCALE * scale)
+}
 
 /// Moves `p` off a surface along `n` (the side the new ray leaves from) by a
 /// few hundred ULPs per coordinate, the method of Wächter & Binder, "A Fast
@@ -225,7 +239,17 @@ mod tests {
         assert!(inward.origin.x < 1.0);
         let shadow = Ray::spawn_to(p, Vec3::X, Vec3::new(5.0, 3.0, 0.0));
         assert!((shadow.dir.length() - 1.0).abs() < 1e-6);
-        assert!((shadow.at(shadow.t_max) - Vec3::new(5.0, 3.0, 0.0)).length() < 1e-5);
+        // It stops short of the target by the far end's offset: a surface
+        // through the target (a light in a ceiling) lies past `t_max`.
+        let target = Vec3::new(5.0, 3.0, 0.0);
+        let gap = (shadow.at(shadow.t_max) - target).length();
+        assert!(gap > 1e-5 && gap < 1e-3, "{gap}");
+        assert!(shadow.t_max < (target - shadow.origin).length());
+        let far = Vec3::new(5.0, 3.0, 0.0) * 1e6;
+        let gap = (Ray::spawn_to(p, Vec3::X, far).at(Ray::spawn_to(p, Vec3::X, far).t_max) - far).length();
+        assert!(gap > 1e-5 * 1e6 && gap < 1e-3 * 1e6, "{gap}");
+        // A target at the point itself: an empty interval.
+        assert_eq!(Ray::spawn_to(p, Vec3::X, p).t_max, 0.0);
         assert!(shadow.origin.x > 1.0);
         let behind = Ray::spawn_to(p, Vec3::X, Vec3::new(-5.0, 0.0, 0.0));
         assert!(behind.origin.x < 1.0);

@@ -252,15 +252,16 @@ impl Light {
         }
     }
 
-    /// Where the ray `ray` meets this light, if it does before `t_max`, and
-    /// the radiance it sees there: `color · intensity` on an emitting side,
-    /// black on the back of a one-sided light. Only area lights have a
-    /// surface to meet.
+    /// Where the ray `ray` meets this light, if it does before or at
+    /// `t_max`, and the radiance it sees there: `color · intensity` on an
+    /// emitting side, black on the back of a one-sided light. Only area
+    /// lights have a surface to meet. A light at the same distance as a
+    /// surface (`t_max` its hit: a light flush with a ceiling) is seen.
     #[must_use]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec3)> {
         let LightKind::Area(a) = self.kind else { return None };
         let (t, facing) = a.shape.intersect(ray)?;
-        if !(t > ray.t_min && t < t_max) {
+        if !(t > ray.t_min && t <= t_max) {
             return None;
         }
         Some((t, if facing || a.two_sided { self.radiance() } else { Vec3::ZERO }))

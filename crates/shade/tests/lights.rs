@@ -323,3 +323,42 @@ fn an_area_light_seen_against_the_background_covers_its_pixels() {
     assert_eq!(rgba.color.pixels[centre], Vec3::splat(2.0));
     assert_eq!((rgba.alpha[0], rgba.color.pixels[0]), (0.0, Vec3::ZERO), "a corner sees only background");
 }
+
+/// A light set flush into a ceiling (a Cornell box's lamp): the ceiling,
+/// which holds every sample point, blocks none of its light, and the
+/// camera sees the lamp, not the ceiling, where they meet; the same for a
+/// point light on a surface.
+#[test]
+fn a_light_flush_with_a_surface_is_not_blocked_by_it() {
+    let h = 3.0f32;
+    let quad = area(
+        AreaShape::Quad {
+            corner: Vec3::new(-1.0, h, -1.0),
+            edge_u: Vec3::new(2.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0),
+        },
+        64,
+        1.0,
+    );
+    let ceiling = || (Plane::new(Vec3::new(0.0, h, 0.0), Vec3::NEG_Y).expect("ok").into(), I, lambert());
+    let slab = || {
+        let b = prism_geometry::Cuboid::new(Vec3::new(-10.0, h, -10.0), Vec3::new(10.0, h + 1.0, 10.0));
+        (b.expect("ok").into(), I, lambert())
+    };
+    for p in [Vec3::ZERO, Vec3::new(0.7, 0.0, -0.4), Vec3::new(2.5, 0.0, 1.0)] {
+        let open = seen_at(vec![floor()], vec![quad], p).x;
+        assert!(open > 0.01, "{open}");
+        for (name, roof) in [("plane", ceiling()), ("cuboid", slab())] {
+            let got = seen_at(vec![floor(), roof], vec![quad], p).x;
+            assert!(rel(got, open) < 1e-4, "{name} at {p}: {got} vs {open} without it");
+        }
+        let lamp = point(Vec3::new(0.2, h, 0.1), Falloff::InverseSquare, 5.0);
+        let open = seen_at(vec![floor()], vec![lamp], p).x;
+        let got = seen_at(vec![floor(), ceiling()], vec![lamp], p).x;
+        assert!(rel(got, open) < 1e-5, "point light at {p}: {got} vs {open}");
+    }
+    // Looking up at the lamp through the room: the lamp, not the ceiling.
+    let cam = camera(Vec3::new(0.3, 1.0, 0.2), Vec3::new(0.3, h, 0.2), Vec3::Z, 5.0, 1, 1);
+    let s = scene_lit(vec![floor(), ceiling()], vec![quad], cam);
+    assert_close(px(&render(&s, 1, 0), 0, 0), quad.radiance(), 1e-6);
+}
