@@ -230,6 +230,20 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
             };
             let offset = d.offset.as_ref().map_or(Ok(Vec2::ZERO), |o| pair(o, "offset"))?;
             let tint = ctx.opt_color(d.tint.as_ref(), "texture tint", Vec3::ONE)?;
+            // A tint above 1 makes the brighter texels reflect more light
+            // than reaches them, as a `color` above 1 does.
+            if let Some(t) = d.tint.as_ref()
+                && tint.max_element() > 1.0
+                && !crate::check::looks_8bit(&t.get_ref().0)
+            {
+                ctx.note(
+                    &t.span(),
+                    &format!(
+                        "texture tint {tint} is above 1: texels brighter than {} reflect more light than reaches them (components are 0–1)",
+                        1.0 / tint.max_element()
+                    ),
+                );
+            }
             Ok(Texture::Image { image, mapping, scale, offset, tint })
         }
     }

@@ -575,6 +575,18 @@ fn missing(
     prefix: &[String],
 ) -> Result<Target, SceneError> {
     let (last, table) = keys.split_last().ok_or_else(|| flag_error(set, "empty key"))?;
+    // No key of the format is a number: one last is an index into a list
+    // that is not there (`objects.0.center.1=2` where the sphere has no
+    // `center`), which a new table `center = { 1 = 2 }` would not be.
+    if !table.is_empty() && !last.is_empty() && last.bytes().all(|b| b.is_ascii_digit()) {
+        let at = join(here, &dotted(table));
+        return Err(flag_error(
+            set,
+            format!(
+                "`{at}` is not in the scene, so it has no entry {last}; set the whole list (such as {at}=[…])"
+            ),
+        ));
+    }
     let key = Key::new(last.as_str()).to_string();
     if t.is_dotted() {
         // A table made by dotted keys (`camera.position = …`): the key

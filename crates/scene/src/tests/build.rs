@@ -215,3 +215,33 @@ fn an_image_texture_scale_of_zero_is_refused_at_its_place() {
     );
     build(&text, &res).unwrap();
 }
+
+/// A texture's `tint` above 1 warns as a surface colour above 1 does (the
+/// brighter texels reflect more light than reaches them); 0–1 does not.
+#[test]
+fn an_image_texture_tint_above_1_warns() {
+    let res = resources();
+    let with = |tint: &str| {
+        let text = format!(
+            "{BASE}[materials.wood]\ntexture = {{ type = \"image\", path = \"mem/wood.png\", tint = {tint} }}\n"
+        );
+        let notes = std::cell::RefCell::new(Vec::new());
+        let file_name = Path::new("mem.toml");
+        let file = SceneFile::parse(&text, file_name).unwrap();
+        let ctx = Ctx::new(file_name, &text).noting(&notes);
+        build_scene(ctx, &file, &res, &LoadOptions::default()).unwrap();
+        let warnings = notes.into_inner();
+        (text, warnings)
+    };
+    let (text, w) = with("[2, 2, 1]");
+    let (line, column) = line_col(&text, text.find("[2, 2, 1]").unwrap());
+    assert_eq!(
+        w,
+        [format!(
+            "mem.toml:{line}:{column}: texture tint [2, 2, 1] is above 1: texels brighter than 0.5 reflect more light than reaches them (components are 0–1)"
+        )]
+    );
+    for tint in ["[1, 1, 1]", "[0.5, 0.2, 1]"] {
+        assert_eq!(with(tint).1, Vec::<String>::new(), "{tint}");
+    }
+}

@@ -107,6 +107,12 @@ fn problems_in_a_set_name_the_flag() {
         (&["render.spp.x=1"], "`render.spp` is a number, not a table"),
         (&["objects.1.radios=1"], "unknown key `radios` in a sphere; did you mean `radius`?"),
         (&["fog.start=1"], "--set: fog.start=1: linear fog needs `end`"),
+        // An index into a list the scene does not have.
+        (
+            &["objects.0.center.1=2"],
+            "--set: objects.0.center.1=2: `objects.0.center` is not in the scene, so it has no entry 1; set the whole list (such as objects.0.center=[…])",
+        ),
+        (&["fog.color.0=1"], "`fog.color` is not in the scene, so it has no entry 0"),
         // A part of an array set: the error about the whole array is the set's.
         (
             &["camera.position.1=nan"],
