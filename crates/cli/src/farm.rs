@@ -168,6 +168,14 @@ fn slurm_literal(p: &Path) -> String {
     p.to_string_lossy().replace('%', "%%")
 }
 
+/// `arg` as the argument of an `#SBATCH` directive: quoted as for the
+/// shell ([`sh`]), and each backslash doubled, since sbatch's directive
+/// parser takes a backslash as an escape even inside quotes (`w\x` would
+/// reach Slurm as `wx`).
+fn sbatch_arg(arg: &str) -> String {
+    sh(&arg.replace('\\', r"\\"))
+}
+
 /// Refuses a path with a line break (`\n` or `\r`), named `what` (the flag
 /// or argument it came from). The job scripts hold paths on `#SBATCH`
 /// comment lines, where no quoting can keep a line break: the rest of the
@@ -213,8 +221,8 @@ fn tasks_script(job: &Job, command: &str) -> String {
     let mut s = String::from("#!/bin/bash\n");
     let _ = writeln!(s, "#SBATCH --job-name=prism-{}", if job.tiles { "tiles" } else { "frames" });
     let _ = writeln!(s, "#SBATCH --array=0-{}", job.count - 1);
-    let _ = writeln!(s, "#SBATCH --output={}", sh(&format!("{}/logs/task-%a.log", slurm_literal(w))));
-    let _ = writeln!(s, "#SBATCH --chdir={}", sh(&w.to_string_lossy()));
+    let _ = writeln!(s, "#SBATCH --output={}", sbatch_arg(&format!("{}/logs/task-%a.log", slurm_literal(w))));
+    let _ = writeln!(s, "#SBATCH --chdir={}", sbatch_arg(&w.to_string_lossy()));
     let _ = writeln!(s, "# The task index: Slurm's array index (or a Kubernetes Indexed Job's).");
     let _ = writeln!(s, "i=${{{}:-${}}}", INDEX_VARIABLES[0], INDEX_VARIABLES[1]);
     let _ = writeln!(s, "{command}");
@@ -227,8 +235,8 @@ fn tasks_script(job: &Job, command: &str) -> String {
 fn merge_script(job: &Job, prism: &str, image_flags: &[String]) -> String {
     let w = &job.work;
     let mut s = String::from("#!/bin/bash\n#SBATCH --job-name=prism-merge\n");
-    let _ = writeln!(s, "#SBATCH --output={}", sh(&format!("{}/logs/merge.log", slurm_literal(w))));
-    let _ = writeln!(s, "#SBATCH --chdir={}", sh(&w.to_string_lossy()));
+    let _ = writeln!(s, "#SBATCH --output={}", sbatch_arg(&format!("{}/logs/merge.log", slurm_literal(w))));
+    let _ = writeln!(s, "#SBATCH --chdir={}", sbatch_arg(&w.to_string_lossy()));
     let tiles: Vec<String> = job.tile_files.iter().map(|t| sh(&t.to_string_lossy())).collect();
     let _ = writeln!(
         s,
@@ -349,6 +357,13 @@ fn slurm(a: &SlurmArgs) -> Result<()> {
     // (or the first frame) goes, and the work directory, can be written.
     let first = if tiles { job.output.clone() } else { crate::frames::frame_path(&job.output, 0, count) };
     crate::writable::check_writable(&first, Output::Image)?;
+    // A later frame's name taken by an input or a folder would fail only
+    // its own task, on the cluster.
+    if !tiles {
+        for f in crate::frames::existing_frames(&job.output, count) {
+            check_not_an_input(&f, &loaded.inputs)?;
+        }
+    }
     let scripts = crate::writable::check_writable(&job.work.join("tasks.sbatch"), Output::Scripts);
     match &a.work_dir {
         Some(_) => scripts.context("--work-dir")?,
@@ -626,6 +641,52 @@ mod tests {
         assert_eq!(sh(""), "''");
         assert_eq!(sh("$HOME"), "'$HOME'");
         assert_eq!(slurm_literal(Path::new("/w/50%j.farm")), "/w/50%%j.farm");
+    }
+
+    /// sbatch's reading of one `#SBATCH` argument (`_get_argument` in its
+    /// `opt.c`): a backslash escapes the next character anywhere, even
+    /// inside quotes; quotes group; an unquoted space or `#` ends it.
+    fn sbatch_reads(line: &str) -> String {
+        let (mut out, mut quote, mut escape) = (String::new(), None, false);
+        for c in line.chars() {
+            if escape {
+                escape = false;
+            } else if c == '\\' {
+                escape = true;
+                continue;
+            } else if let Some(q) = quote {
+                if c == q {
+                    quote = None;
+                    continue;
+                }
+            } else if c == '"' || c == '\'' {
+                quote = Some(c);
+                continue;
+            } else if c.is_whitespace() || c == '#' {
+                break;
+            }
+            out.push(c);
+        }
+        out
+    }
+
+    #[test]
+    fn sbatch_directives_keep_every_byte_of_a_path() {
+        for p in [r"/w/a\x", r"/w/it's \ here", "/w/plain", r"/w/\\two", "/w/#hash", "/w/\"q\""] {
+            assert_eq!(sbatch_reads(&sbatch_arg(p)), p, "{}", sbatch_arg(p));
+        }
+        let job = Job {
+            tiles: true,
+            count: 2,
+            work: PathBuf::from(r"/w/a\x"),
+            output: PathBuf::from("/w/o.png"),
+            tile_files: Vec::new(),
+        };
+        let script = tasks_script(&job, "true");
+        let chdir = script.lines().find_map(|l| l.strip_prefix("#SBATCH --chdir=")).unwrap();
+        assert_eq!(sbatch_reads(chdir), r"/w/a\x");
+        let output = script.lines().find_map(|l| l.strip_prefix("#SBATCH --output=")).unwrap();
+        assert_eq!(sbatch_reads(output), r"/w/a\x/logs/task-%a.log");
     }
 
     #[test]

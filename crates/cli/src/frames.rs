@@ -65,6 +65,30 @@ pub fn frame_path(output: &Path, index: u32, count: u32) -> PathBuf {
     output.with_file_name(format!("{stem}.{index:0digits$}{ext}"))
 }
 
+/// The frames of a `count`-frame turntable written to `output` whose
+/// names exist already (an input of the render, a folder, an earlier
+/// run's frame), found by one listing of the output's folder whatever
+/// `count` is: the names a check must see before any frame is rendered
+/// or submitted.
+pub fn existing_frames(output: &Path, count: u32) -> Vec<PathBuf> {
+    let dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    let digits = count.saturating_sub(1).to_string().len().max(4);
+    let stem = output.file_stem().map(|s| format!("{}.", s.to_string_lossy())).unwrap_or_default();
+    let ext = output.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|e| {
+            let name = e.ok()?.file_name().into_string().ok()?;
+            let number = name.strip_prefix(&stem)?.strip_suffix(&ext)?;
+            let index: u64 = number.parse().ok().filter(|_| number.len() == digits)?;
+            (number.bytes().all(|b| b.is_ascii_digit()) && index < u64::from(count))
+                .then(|| output.with_file_name(&name))
+        })
+        .collect();
+    found.sort();
+    found
+}
+
 /// The renders to make: `(settings, output)` for each frame asked for, or
 /// the one render of `settings` to `output` without `--frames`.
 ///
@@ -134,6 +158,34 @@ mod tests {
     fn frame_names_and_plans() {
         assert_eq!(frame_path(Path::new("out/t.png"), 7, 3), Path::new("out/t.0007.png"));
         assert_eq!(frame_path(Path::new("t.exr"), 12, 20_000), Path::new("t.00012.exr"));
+    }
+
+    #[test]
+    fn existing_frames_are_the_sequences_names_found_in_its_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("t.png");
+        for name in [
+            "t.0000.png",
+            "t.0002.png",
+            "t.0003.png",
+            "t.002.png",
+            "t.00001.png",
+            "t.0001.exr",
+            "u.0001.png",
+            "t.000a.png",
+        ] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        std::fs::create_dir(dir.path().join("t.0001.png")).unwrap();
+        let found = existing_frames(&out, 3);
+        let names: Vec<_> =
+            found.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
+        assert_eq!(names, ["t.0000.png", "t.0001.png", "t.0002.png"]);
+        assert!(found.iter().all(|p| p.parent() == Some(dir.path())));
+        // Each found name is the frame's own path.
+        assert_eq!(found[1], frame_path(&out, 1, 3));
+        assert!(existing_frames(&dir.path().join("none/t.png"), 3).is_empty());
+        assert_eq!(existing_frames(&out, u32::MAX).len(), 0, "ten digits for 2^32 frames");
         let cam = Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, 2, 2).unwrap();
         let settings = RenderSettings {
             camera: cam,

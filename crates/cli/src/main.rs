@@ -457,13 +457,20 @@ fn render_frames(
         ));
     }
     let several = frames.len() > 1;
-    for (k, (settings, frame_output)) in frames.iter().enumerate() {
+    // Every frame's files are checked before the first is rendered: a
+    // name taken by an input of this render or by a folder stops the
+    // sequence before it writes any of it.
+    let mut files = Vec::with_capacity(frames.len());
+    for (_, frame_output) in &frames {
         overwrite::check_not_an_input(frame_output, &loaded.inputs)?;
         let plan = plan.for_output(frame_output.clone());
-        let mut written = plan.other_files(aovs)?;
+        let written = plan.other_files(aovs)?;
         for f in &written {
             overwrite::check_not_an_input(f, &loaded.inputs)?;
         }
+        files.push((plan, written));
+    }
+    for (k, ((settings, frame_output), (plan, mut written))) in frames.iter().zip(files).enumerate() {
         if let Some(s) = args.stats_file() {
             written.push(frame_output.clone());
             overwrite::check_stats_apart(s, &written)?;

@@ -295,6 +295,20 @@ fn turntable_frames_orbit_the_camera() {
     let frame = rgb8(&d.join("turn.0001.png"));
     let differ = moved.iter().zip(&frame).filter(|(a, b)| a.abs_diff(**b) > 2).count();
     assert!(differ * 100 < moved.len(), "{differ} of {} values differ", moved.len());
+    // A later frame's name taken by an input of the render (its texture)
+    // stops the turntable before any frame is written.
+    fs::copy(d.join("turn.0001.png"), d.join("tex.0002.png")).unwrap();
+    let textured =
+        GOOD.replace("color = [0.8, 0.1, 0.1]", "texture = { type = \"image\", path = \"tex.0002.png\" }");
+    fs::write(d.join("b.toml"), textured).unwrap();
+    let e = fails(d, &["render", "b.toml", "-q", "--frames", "3", "-o", "tex.png"]);
+    assert!(e.contains("tex.0002.png: refusing to write the image over an input of this command"), "{e}");
+    assert!(!d.join("tex.0000.png").exists() && !d.join("tex.0001.png").exists());
+    let e = fails(
+        d,
+        &["farm", "slurm", "b.toml", "--frames", "3", "-o", "tex.png", "--dry-run", "--no-shared-check"],
+    );
+    assert!(e.contains("tex.0002.png: refusing to write the image over an input of this command"), "{e}");
     let e = fails(d, &["render", "a.toml", "--frames", "3", "--frame", "3", "-o", "x.png"]);
     assert!(e.contains("--frame: frame 3 does not exist; --frames 3 numbers them 0 to 2"), "{e}");
     let e = fails(d, &["render", "a.toml", "--frame", "1", "-o", "x.png"]);
@@ -486,6 +500,17 @@ fn a_dry_run_checks_what_a_real_run_would_write() {
     );
     assert!(e.contains("t.0000.png: the output is a directory"), "{e}");
     fs::remove_dir(d.join("t.0000.png")).unwrap();
+    // So is every later one, whatever the count (found by listing the
+    // folder, not by trying each name), as its task would fail on it.
+    for (frames, name) in [("2", "t.0001.png"), ("4000000000", "t.3999999999.png")] {
+        fs::create_dir(d.join(name)).unwrap();
+        let e = fails(
+            d,
+            &["farm", "slurm", "a.toml", "--frames", frames, "-o", "t.png", "--dry-run", "--no-shared-check"],
+        );
+        assert!(e.contains(&format!("{name}: the output is a directory")), "{e}");
+        fs::remove_dir(d.join(name)).unwrap();
+    }
     // A real run with no sbatch to run writes nothing.
     let empty = d.join("empty-bin");
     fs::create_dir(&empty).unwrap();

@@ -406,7 +406,7 @@ fn cases() -> Vec<Case> {
     let s = with("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nup = [0, 0, -3]");
     v.push(Case::new("up parallel to the view", s.clone(), at(&s, "[0, 0, -3]"), "parallel"));
     let s = with("look_at = [0, 1, 0]", "look_at = [0, 1, 5]");
-    v.push(Case::new("camera looks at itself", s.clone(), on(&s, "look_at"), "look_at"));
+    v.push(Case::new("camera looks at itself", s.clone(), at(&s, "[camera]"), "look_at"));
     let s = with("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nfov = 180");
     v.push(Case::new("fov of 180 degrees", s.clone(), at(&s, "180"), "between 0 and 180"));
     let s = format!("{GOOD}[fog]\nstart = 10\nend = 2\n");
