@@ -163,15 +163,20 @@ fn sh(s: &str) -> String {
 }
 
 /// `p` as a part of a Slurm file name pattern (`--output`), where `%`
-/// starts a replacement (`%j`, `%a`) and `%%` is a `%`.
+/// starts a replacement (`%j`, `%a`) and `%%` is a `%`. A name with a
+/// backslash is no pattern to Slurm (nothing is replaced, `%a` stays as
+/// written) and loses its single backslashes, so each is doubled there
+/// (and doubled again on the `#SBATCH` line, [`sbatch_arg`]: checked
+/// against Slurm 22.05).
 fn slurm_literal(p: &Path) -> String {
-    p.to_string_lossy().replace('%', "%%")
+    let p = p.to_string_lossy();
+    if p.contains('\\') { p.replace('\\', r"\\") } else { p.replace('%', "%%") }
 }
 
 /// `arg` as the argument of an `#SBATCH` directive: quoted as for the
 /// shell ([`sh`]), and each backslash doubled, since sbatch's directive
-/// parser takes a backslash as an escape even inside quotes (`w\x` would
-/// reach Slurm as `wx`).
+/// parser takes a backslash as an escape even inside quotes (`--chdir`
+/// of `w\x` reached Slurm as `wx`, and no task ran).
 fn sbatch_arg(arg: &str) -> String {
     sh(&arg.replace('\\', r"\\"))
 }
@@ -686,7 +691,11 @@ mod tests {
         let chdir = script.lines().find_map(|l| l.strip_prefix("#SBATCH --chdir=")).unwrap();
         assert_eq!(sbatch_reads(chdir), r"/w/a\x");
         let output = script.lines().find_map(|l| l.strip_prefix("#SBATCH --output=")).unwrap();
-        assert_eq!(sbatch_reads(output), r"/w/a\x/logs/task-%a.log");
+        // Slurm's file name then loses one backslash of each pair (and
+        // takes `%a` as written: every task logs to one file).
+        assert_eq!(sbatch_reads(output), r"/w/a\\x/logs/task-%a.log");
+        assert_eq!(slurm_literal(Path::new("/w/50%j.farm")), "/w/50%%j.farm");
+        assert_eq!(slurm_literal(Path::new(r"/w/5%\j")), r"/w/5%\\j");
     }
 
     #[test]
