@@ -21,12 +21,15 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
     let i = &loaded.info;
     let mut s = String::new();
     let _ = writeln!(s, "scene      {}", prism_scene::scene_name(path));
+    let aa = &loaded.settings.antialias;
+    let adaptive = aa.adaptive.map_or_else(String::new, |t| format!(", adaptive {}", trim(t)));
     let _ = writeln!(
         s,
-        "image      {}×{}, {} spp, max depth {}, min contribution {}",
+        "image      {}×{}, {} spp, {} filter{adaptive}, max depth {}, min contribution {}",
         i.width,
         i.height,
         i.spp,
+        aa.filter.name(),
         i.max_depth,
         trim(i.min_contribution)
     );
@@ -174,6 +177,8 @@ pub fn to_json(loaded: &LoadedScene, path: &Path) -> serde_json::Value {
             "width": i.width,
             "height": i.height,
             "spp": i.spp,
+            "filter": loaded.settings.antialias.filter.name(),
+            "adaptive": loaded.settings.antialias.adaptive.map(num),
             "max_depth": i.max_depth,
             "min_contribution": num(i.min_contribution),
         },

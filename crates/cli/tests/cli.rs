@@ -81,9 +81,14 @@ fn info_describes_the_scene() {
         "materials  2: red, (default)",
         "lights     1",
         "bounds     (-1, 0, -1) to (1, 2, 1)",
+        "image      32×18, 1 spp, box filter, max depth",
     ] {
         assert!(s.contains(words), "{words:?} not in\n{s}");
     }
+    let scene = GOOD.replace("spp = 1", "spp = 16\nfilter = \"blackman-harris\"\nadaptive = 0.05");
+    fs::write(dir.path().join("a.toml"), scene).unwrap();
+    let s = text(&prism(dir.path(), &["info", "a.toml"]).stdout);
+    assert!(s.contains("image      32×18, 16 spp, blackman-harris filter, adaptive 0.05, max depth"), "{s}");
 }
 
 #[test]

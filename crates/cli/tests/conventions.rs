@@ -96,6 +96,17 @@ fn info_json_holds_the_scene_in_numbers() {
     let j = json(&out.stdout);
     assert_eq!(j["image"]["width"], 64);
     assert_eq!(j["image"]["height"], 36);
+    assert_eq!(
+        (&j["image"]["filter"], &j["image"]["adaptive"]),
+        (&serde_json::json!("box"), &serde_json::Value::Null)
+    );
+    // The pixel filter and adaptive threshold a render would use, from the flags or the scene.
+    let out = prism(dir.path(), &["info", "s.toml", "--json", "--filter", "gaussian", "--adaptive", "0.05"]);
+    let f = json(&out.stdout);
+    assert_eq!(
+        (&f["image"]["filter"], &f["image"]["adaptive"]),
+        (&serde_json::json!("gaussian"), &serde_json::json!(0.05))
+    );
     assert_eq!(j["objects"], 2);
     assert_eq!(j["objects_by_kind"]["sphere"], 1);
     assert_eq!(j["materials"], serde_json::json!(["red", "(default)"]));

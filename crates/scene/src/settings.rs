@@ -245,7 +245,8 @@ fn image_size(
 }
 
 /// The override (checked, its error naming `flag`), else the file's value
-/// (checked, its error at its span), else `default`.
+/// (checked, its error at its span), else `default` (checked, its error naming
+/// the file).
 fn choose(
     ctx: &Ctx,
     over: Option<u32>,
@@ -257,7 +258,10 @@ fn choose(
     match (over, file) {
         (Some(v), _) => check(u64::from(v)).map_err(|message| SceneError::Option { flag, message }),
         (None, Some((v, span))) => check(v).map_err(|m| ctx.invalid(&span, m)),
-        (None, None) => Ok(default),
+        // The default meets the limits too (`--max-spp 1` with a scene
+        // that sets no `spp`).
+        (None, None) => check(u64::from(default))
+            .map_err(|m| ctx.invalid_file(format!("{m}; it is the default, as the scene sets none"))),
     }
 }
 

@@ -166,6 +166,27 @@ fn an_obj_without_materials_is_grey_and_errors_point_into_it() {
         LoadOptions { limits: Limits { max_side: 100, ..Limits::default() }, ..LoadOptions::default() };
     let err = load_path(&tri, &opts).unwrap_err().to_string();
     assert!(err.starts_with(&format!("{}: image width 640", tri.display())), "{err}");
+    // So does the samples limit to the default 4 spp, for an OBJ file and
+    // a scene that sets no `spp`; a flag or a value in range loads.
+    let opts = LoadOptions { limits: Limits { max_spp: 2, ..Limits::default() }, ..LoadOptions::default() };
+    let err = load_path(&tri, &opts).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        format!(
+            "{}: spp 4 is over the limit of 2 samples per pixel (raise it with --max-spp); it is the default, as the scene sets none",
+            tri.display()
+        )
+    );
+    let no_spp = BASE.replace("spp = 2\n", "");
+    assert_ne!(no_spp, BASE);
+    let err = parse_scene_str_with(&no_spp, Path::new("."), Path::new("test.toml"), &opts).unwrap_err();
+    assert!(err.to_string().starts_with("test.toml: spp 4 is over the limit of 2"), "{err}");
+    let flag = LoadOptions { overrides: Overrides { spp: Some(2), ..Overrides::default() }, ..opts.clone() };
+    assert_eq!(load_path(&tri, &flag).unwrap().settings.spp, 2);
+    assert_eq!(
+        parse_scene_str_with(BASE, Path::new("."), Path::new("test.toml"), &opts).unwrap().settings.spp,
+        2
+    );
 }
 
 #[test]
