@@ -334,7 +334,9 @@ impl TriangleMesh {
         let geo_normal = crate::unit_or_extreme(cross).unwrap_or(Vec3::Y);
         let normal = match &self.normals {
             Some(ns) => {
-                let n = (b0 * ns[ia] + b1 * ns[ib] + b2 * ns[ic]).normalize_or(geo_normal);
+                // The file's normals need not be unit: one whose squared
+                // length leaves f32's range (`vn 6e19 0 8e19`) still counts.
+                let n = crate::unit_or_extreme(b0 * ns[ia] + b1 * ns[ib] + b2 * ns[ic]).unwrap_or(geo_normal);
                 if n.dot(geo_normal) < 0.0 { -n } else { n }
             }
             None => geo_normal,
@@ -463,6 +465,12 @@ mod tests {
         assert_eq!(h.normal, Vec3::Z);
         assert!(!h.front_face);
         close2(h.uv, Vec2::new(0.5, 0.25), 1e-6);
+        // Normals of any length count, those whose squares leave f32's range too.
+        for scale in [1.0f32, 6e19, 1e30, 1e-30] {
+            let m = quad(Some(vec![Vec3::new(0.6, 0.0, 0.8) * scale; 4]), None);
+            let h = m.intersect(&Ray::new(Vec3::new(0.75, 0.25, 1.0), Vec3::NEG_Z)).unwrap();
+            close3(h.normal, Vec3::new(0.6, 0.0, 0.8), 1e-6);
+        }
     }
 
     #[test]

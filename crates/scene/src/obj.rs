@@ -12,6 +12,7 @@ use crate::error::Location;
 use crate::wild;
 use prism_geometry::TriangleMesh;
 use prism_geometry::glam::{Vec2, Vec3};
+use std::collections::HashMap;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -235,6 +236,7 @@ pub fn load_obj(
     let groups = smoothing_groups(text).filter(|g| g.len() == total);
     let mut next_face = 0;
     let mut out = Vec::with_capacity(cut.len());
+    let mut pending: Vec<Pending> = Vec::with_capacity(cut.len());
     for (model, positions, Cut { triangles: indices, per_face }) in cut {
         let m = model.mesh;
         if m.indices.is_empty() {
@@ -315,11 +317,41 @@ pub fn load_obj(
                 model.name
             ));
         }
-        if let Some((groups, crease)) = computed {
-            mesh = prism_geometry::with_computed_normals(&mesh, groups, crease).map_err(err)?;
+        let computed = computed.map(|(groups, crease)| (groups.map(<[u32]>::to_vec), crease));
+        pending.push(Pending { name: model.name, mesh: Some(mesh), material: m.material_id, computed });
+    }
+    // Normals are computed over the models of one object (`o`/`g` name)
+    // together: tobj cuts an object apart where its material changes, and
+    // that must not crease a smooth surface.
+    let mut objects: HashMap<String, Vec<usize>> = HashMap::new();
+    for (k, p) in pending.iter().enumerate().filter(|(_, p)| p.computed.is_some()) {
+        objects.entry(p.name.clone()).or_default().push(k);
+    }
+    let mut meshes: Vec<Option<TriangleMesh>> = (0..pending.len()).map(|_| None).collect();
+    for k in 0..pending.len() {
+        let Some((_, crease)) = pending[k].computed else {
+            meshes[k] = pending[k].mesh.take();
+            continue;
+        };
+        let name = &pending[k].name;
+        let Some(together) = objects.remove(name) else { continue };
+        let parts: Vec<(&TriangleMesh, Option<&[u32]>)> = together
+            .iter()
+            .filter_map(|&j| {
+                let p = &pending[j];
+                Some((p.mesh.as_ref()?, p.computed.as_ref().and_then(|(g, _)| g.as_deref())))
+            })
+            .collect();
+        let done = normals_together(&parts, crease)
+            .map_err(|e| (Location::file(path), format!("model `{name}`: {e}")))?;
+        for (&j, mesh) in together.iter().zip(done) {
+            meshes[j] = Some(mesh);
         }
+    }
+    for (p, mesh) in pending.iter().zip(meshes) {
+        let Some(mesh) = mesh else { continue };
         let degenerate = mesh.degenerate_count();
-        out.push(ObjModel { mesh: Arc::new(mesh), material: m.material_id, degenerate });
+        out.push(ObjModel { mesh: Arc::new(mesh), material: p.material, degenerate });
     }
     if out.is_empty() {
         return Err((
@@ -381,6 +413,81 @@ pub fn load_obj(
 
 /// The `usemtl` lines of `text` (1-based line, name) whose name is not
 /// one of `names`, the first of each name only.
+/// A model of the OBJ file before its normals are computed.
+struct Pending {
+    /// Its object's name (`o` or `g`), which the models of one object cut
+    /// apart by their materials share.
+    name: String,
+    mesh: Option<TriangleMesh>,
+    material: Option<usize>,
+    /// Normals to compute: the smoothing group of each face, and the
+    /// crease angle.
+    computed: Option<(Option<Vec<u32>>, f32)>,
+}
+
+/// `parts` (meshes, with their faces' smoothing groups) with normals
+/// computed over all of them as one mesh, welded by position across the
+/// parts ([`prism_geometry::with_computed_normals`]), then cut apart again:
+/// each part keeps its faces in order, and its uvs if it has them.
+fn normals_together(
+    parts: &[(&TriangleMesh, Option<&[u32]>)],
+    crease: f32,
+) -> Result<Vec<TriangleMesh>, prism_geometry::GeometryError> {
+    if let [(mesh, groups)] = parts {
+        return Ok(vec![prism_geometry::with_computed_normals(mesh, *groups, crease)?]);
+    }
+    let any_uvs = parts.iter().any(|(m, _)| m.uvs().is_some());
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    let mut indices = Vec::new();
+    let mut groups = Vec::new();
+    let all_groups = parts.iter().all(|(_, g)| g.is_some());
+    for (m, g) in parts {
+        let base = u32::try_from(positions.len())
+            .map_err(|_| prism_geometry::GeometryError::InvalidMesh("too many vertices".into()))?;
+        positions.extend_from_slice(m.positions());
+        match m.uvs() {
+            Some(u) => uvs.extend_from_slice(u),
+            None if any_uvs => uvs.extend(std::iter::repeat_n(Vec2::ZERO, m.positions().len())),
+            None => {}
+        }
+        indices.extend(m.indices().iter().map(|t| t.map(|i| i + base)));
+        if let Some(g) = g {
+            groups.extend_from_slice(g);
+        }
+    }
+    let whole = TriangleMesh::new(positions, None, any_uvs.then_some(uvs), indices)?;
+    let whole = prism_geometry::with_computed_normals(&whole, all_groups.then_some(&groups[..]), crease)?;
+    let normals = whole.normals().unwrap_or_default();
+    let mut out = Vec::with_capacity(parts.len());
+    let mut first = 0;
+    for (m, _) in parts {
+        let faces = &whole.indices()[first..first + m.len()];
+        first += m.len();
+        // The part's vertices, in the order its faces first use them.
+        let mut new_index: HashMap<u32, u32> = HashMap::new();
+        let mut used = Vec::new();
+        let indices: Vec<[u32; 3]> = faces
+            .iter()
+            .map(|t| {
+                t.map(|i| {
+                    *new_index.entry(i).or_insert_with(|| {
+                        used.push(i as usize);
+                        (used.len() - 1) as u32
+                    })
+                })
+            })
+            .collect();
+        let pick = |values: &[Vec3]| used.iter().map(|&i| values[i]).collect::<Vec<_>>();
+        let uvs = match (m.uvs(), whole.uvs()) {
+            (Some(_), Some(u)) => Some(used.iter().map(|&i| u[i]).collect()),
+            _ => None,
+        };
+        out.push(TriangleMesh::new(pick(whole.positions()), Some(pick(normals)), uvs, indices)?);
+    }
+    Ok(out)
+}
+
 fn unknown_usemtl<'t>(text: &'t str, names: &[&str]) -> Vec<(usize, &'t str)> {
     let mut out: Vec<(usize, &str)> = Vec::new();
     for (i, raw) in text.lines().enumerate() {

@@ -174,7 +174,31 @@ fn fix_obj_lines(text: &str) -> (Cow<'_, str>, Vec<String>) {
 /// paths with Windows separators.
 /// Returns the text and the warnings (`line N: ...`).
 pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
-    fix_lines(text, |no, key, rest, full| match key {
+    fix_lines(text, |no, key, rest, full| {
+        // A key prism reads written in another case (`KD`, `Map_Kd`):
+        // MTL keys are case-sensitive, and tobj would pass it by in
+        // silence.
+        let Some(known) = MTL_KEYS.iter().find(|k| **k != key && k.eq_ignore_ascii_case(key)) else {
+            return fix_mtl_line(no, key, rest, full);
+        };
+        let line = if rest.is_empty() { (*known).to_owned() } else { format!("{known} {rest}") };
+        let warning = format!("line {no}: `{key}` read as `{known}` (MTL keys are case-sensitive)");
+        Some(match fix_mtl_line(no, known, rest, &line) {
+            Some((fixed, more)) => {
+                let more = more.map(|m| m.split_once(": ").map_or(m.clone(), |(_, m)| m.to_owned()));
+                (fixed, Some(more.map_or(warning.clone(), |m| format!("{warning}; {m}"))))
+            }
+            None => (line, Some(warning)),
+        })
+    })
+}
+
+/// The MTL keys prism reads (`material::from_mtl`, the texture maps).
+const MTL_KEYS: [&str; 11] = ["newmtl", "Kd", "Ks", "Ke", "Ns", "Ni", "d", "Tr", "Tf", "illum", "map_Kd"];
+
+/// [`fix_mtl`] for one line whose key is as prism reads it.
+fn fix_mtl_line(no: usize, key: &str, rest: &str, full: &str) -> Option<(String, Option<String>)> {
+    match key {
         "Ka" | "Kd" | "Ks" | "Ke" | "Tf" if rest.split_whitespace().count() == 1 => Some((
             format!("{key} {rest} {rest} {rest}"),
             Some(format!(
@@ -199,7 +223,7 @@ pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
             )
         }),
         _ => None,
-    })
+    }
 }
 
 /// Applies `fix(line number, key, rest of the line, trimmed)` to every
@@ -314,5 +338,21 @@ mod tests {
         // The comments cut from values are not worth a warning.
         let lines: Vec<&str> = w.iter().map(|w| &w[..7]).collect();
         assert_eq!(lines, ["line 1:", "line 2:", "line 4:", "line 5:"]);
+    }
+
+    #[test]
+    fn mtl_keys_in_another_case_are_read_with_a_warning() {
+        let (t, w) = fix_mtl("NEWMTL red\nKD 1 0 0\nks 0.5\nMap_Kd a\\b.png\nKa 1 1 1\nKA 1 1 1\nD 0.5\n");
+        assert_eq!(t, "newmtl red\nKd 1 0 0\nKs 0.5 0.5 0.5\nmap_Kd a/b.png\nKa 1 1 1\nKA 1 1 1\nd 0.5\n");
+        assert_eq!(
+            w,
+            [
+                "line 1: `NEWMTL` read as `newmtl` (MTL keys are case-sensitive)",
+                "line 2: `KD` read as `Kd` (MTL keys are case-sensitive)",
+                "line 3: `ks` read as `Ks` (MTL keys are case-sensitive); `Ks 0.5` has one value; read as grey `Ks 0.5 0.5 0.5`",
+                "line 4: `Map_Kd` read as `map_Kd` (MTL keys are case-sensitive); `map_Kd a\\b.png` has Windows separators; read as `a/b.png`",
+                "line 7: `D` read as `d` (MTL keys are case-sensitive)",
+            ]
+        );
     }
 }

@@ -115,3 +115,73 @@ fn smoothing_groups_and_the_crease_angle() {
         assert!(e.contains(words) && e.starts_with("n.toml:"), "{keys}: {e}");
     }
 }
+
+/// A tent of two quads folded 40° at the edge x = 0, the halves in two
+/// materials (tobj cuts them into two models) or in one.
+fn tent(two_materials: bool, uvs: bool) -> String {
+    let mut s = String::from(
+        "mtllib two.mtl\nv -1 -1 0\nv 0 -1 0.36397\nv 0 1 0.36397\nv -1 1 0\nv 1 -1 0\nv 1 1 0\n",
+    );
+    if uvs {
+        s.push_str("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+    }
+    let face = |c: [usize; 4]| {
+        let corners: Vec<String> = c
+            .iter()
+            .enumerate()
+            .map(|(k, v)| if uvs { format!("{v}/{}", k + 1) } else { v.to_string() })
+            .collect();
+        format!("f {}\n", corners.join(" "))
+    };
+    s.push_str("usemtl a\n");
+    s.push_str(&face([1, 2, 3, 4]));
+    if two_materials {
+        s.push_str("usemtl b\n");
+    }
+    s.push_str(&face([2, 5, 6, 3]));
+    s
+}
+
+/// The normals at the fold's positions (x = 0), over all the meshes.
+fn fold_normals(meshes: &[std::sync::Arc<TriangleMesh>]) -> Vec<Vec3> {
+    meshes
+        .iter()
+        .flat_map(|m| {
+            let normals = m.normals().expect("computed").to_vec();
+            m.positions().iter().zip(normals).filter(|(p, _)| p.x == 0.0).map(|(_, n)| n).collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// A material boundary is no crease: the two halves of a smooth tent in
+/// two materials get the normals of the tent in one (a probe found the
+/// fold shaded flat).
+#[test]
+fn a_change_of_material_does_not_crease_computed_normals() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("two.mtl"), "newmtl a\nKd 1 1 1\nnewmtl b\nKd 1 1 1\n").unwrap();
+    for uvs in [false, true] {
+        for keys in ["normals = \"smooth\"", "", "crease_angle = 30"] {
+            let one = dir.path().join("one.obj");
+            let two = dir.path().join("two.obj");
+            fs::write(&one, tent(false, uvs)).unwrap();
+            fs::write(&two, tent(true, uvs)).unwrap();
+            let (single, split) = (meshes_of(&one, keys), meshes_of(&two, keys));
+            assert_eq!((single.len(), split.len()), (1, 2), "{keys}");
+            let (a, b) = (fold_normals(&single), fold_normals(&split));
+            assert_eq!(b.len(), 4, "{keys}: the fold's two positions in each half");
+            let up = Vec3::Z;
+            for n in &b {
+                // The same normal as the one-material tent's at the fold.
+                assert!(a.iter().any(|m| (*m - *n).length() < 1e-6), "{keys} {uvs}: {n} not among {a:?}");
+                if keys == "crease_angle = 30" {
+                    // 40° apart: a crease; each half keeps its own face normal.
+                    assert!(n.dot(up) < 0.99, "{n}");
+                } else {
+                    assert!((n.dot(up) - 1.0).abs() < 1e-6, "{keys} {uvs}: {n} is not the fold's mean (+Z)");
+                }
+            }
+            assert_eq!(split.iter().all(|m| m.uvs().is_some()), uvs);
+        }
+    }
+}
