@@ -68,15 +68,39 @@ impl TriangleMesh {
         }
         let bounds = indices.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(positions[i as usize]));
         let closed = is_closed_surface(&positions, &indices);
-        Ok(Self { positions, normals, uvs, indices, bounds, closed })
+        let mut mesh = Self { positions, normals, uvs, indices, bounds, closed };
+        mesh.closed = closed && mesh.shells_enclose_volume();
+        Ok(mesh)
+    }
+
+    /// Whether every shell of the mesh encloses a volume: not a sheet
+    /// whose two sides are faces of their own (a double-sided card, each
+    /// face paired with its reverse), which the edge test takes for a
+    /// closed surface. A shell counts where its volume is above a
+    /// millionth of its area times its box's diagonal (a slab thinner than
+    /// about 3·10⁻⁶ of its width does not; a cube's ratio is 0.096), far
+    /// above the volume's rounding.
+    fn shells_enclose_volume(&self) -> bool {
+        self.shells().iter().all(|faces| {
+            let volume = self.volume_of(faces.iter().copied()).abs();
+            let (mut area, mut bounds) = (0.0f64, Aabb::EMPTY);
+            for &f in faces {
+                let [a, b, c] = self.triangle(f);
+                area += 0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length();
+                bounds = bounds.grow(a).grow(b).grow(c);
+            }
+            let diagonal = (bounds.max - bounds.min).as_dvec3().length();
+            volume > 1e-6 * area * diagonal
+        })
     }
 
     /// Whether the mesh bounds a solid: it has faces, and with vertices
     /// taken by position (so that copies split at uv or normal seams count
     /// as one), every edge of a face is shared by exactly one other face,
-    /// which runs it the other way (watertight and consistently oriented).
-    /// Faces with two corners at one position are ignored. Decided once,
-    /// at construction.
+    /// which runs it the other way (watertight and consistently oriented),
+    /// and each of its shells encloses a volume (a double-sided sheet, each
+    /// face paired with its reverse, bounds none). Faces with two corners
+    /// at one position are ignored. Decided once, at construction.
     #[must_use]
     pub fn is_closed(&self) -> bool {
         self.closed
@@ -544,9 +568,22 @@ mod tests {
         // A face used twice: an edge shared by three faces.
         let mut doubled = idx.clone();
         doubled.push(idx[0]);
-        assert!(!TriangleMesh::new(p, None, None, doubled).unwrap().is_closed());
+        assert!(!TriangleMesh::new(p.clone(), None, None, doubled).unwrap().is_closed());
         // A flat quad and an empty mesh are open.
         assert!(!quad(None, None).is_closed());
+        // A double-sided card (each face and its reverse, in either order,
+        // or cut along either diagonal) bounds no solid; a thin slab does.
+        let q = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        for faces in [
+            vec![[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]],
+            vec![[0, 3, 2], [0, 2, 1], [0, 1, 2], [0, 2, 3]],
+        ] {
+            let mut card = TriangleMesh::new(q.clone(), None, None, faces).unwrap();
+            assert!(!card.is_closed());
+            assert_eq!(card.orient_shells(), 0);
+        }
+        let slab: Vec<Vec3> = p.iter().map(|v| *v * Vec3::new(1.0, 1.0, 1e-3)).collect();
+        assert!(TriangleMesh::new(slab, None, None, idx.clone()).unwrap().is_closed());
         assert!(!TriangleMesh::new(Vec::new(), None, None, Vec::new()).unwrap().is_closed());
     }
 
