@@ -26,11 +26,26 @@
 //! stderr. See docs/benchmarks.md.
 
 use crate::{cargo, project_root, run_checked};
+
+/// `cargo xtask bench --help`'s own part.
+const USAGE: &str = "\
+cargo xtask bench                     both: BVH benchmark, then the seed render
+cargo xtask bench [BVH ARGS…]         acceleration-structure benchmark (prism-bench)
+cargo xtask bench --vs-peers [--rounds 2] [--threads 1,2] [--reps 3] [--scenes bunny,kitchen,grid]
+                  [--embree-robust]   prism beside Embree and POV-Ray (docs/benchmarks.md)
+cargo xtask bench --scene SCENE [--threads 1,2] [--reps 5] [--width 1280] [--height 720] [--spp 4]
+                                      render benchmark (release `prism render`)
+";
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 use std::time::Instant;
 
 pub fn run(args: &[String]) -> Result<()> {
+    if args.iter().any(|a| a == "--help" || a == "-h") {
+        // This module's own usage, then prism-bench's (the BVH arguments).
+        eprintln!("{USAGE}\nThe BVH benchmark's own arguments (prism-bench --help):");
+        return bvh(&["--help".to_owned()]);
+    }
     if args.iter().any(|a| a == "--vs-peers") {
         return crate::peers::run(args);
     }
@@ -85,12 +100,11 @@ fn render(args: &[String]) -> Result<()> {
     let out_dir = std::env::temp_dir().join(format!("prism-bench-{}", std::process::id()));
     std::fs::create_dir_all(&out_dir)?;
     let out = out_dir.join("bench.png");
+    let timed = time_renders(&exe, &root, &scene, &out, [width, height, spp], &threads, reps);
+    // The folder goes whether the renders worked or not.
+    let _ = std::fs::remove_dir_all(&out_dir);
     let mut rows = Vec::new();
-    for &n in &threads {
-        let mut runs = Vec::new();
-        for _ in 0..reps {
-            runs.push(render_once(&exe, &root, &scene, &out, [width, height, spp], n)?);
-        }
+    for (&n, runs) in threads.iter().zip(timed?) {
         let median = |f: fn(&Run) -> f64| {
             let mut v: Vec<f64> = runs.iter().map(f).collect();
             v.sort_by(f64::total_cmp);
@@ -104,13 +118,28 @@ fn render(args: &[String]) -> Result<()> {
         );
         rows.push((n, render_s, process_s, rays, mrays));
     }
-    let _ = std::fs::remove_dir_all(&out_dir);
     eprintln!("\nrender {scene} {width}x{height}, {spp} spp, median of {reps}");
     eprintln!("{:>7} {:>10} {:>11} {:>10} {:>9}", "threads", "render s", "process s", "M rays", "Mrays/s");
     for (n, render_s, process_s, rays, mrays) in rows {
         eprintln!("{n:>7} {render_s:>10.2} {process_s:>11.3} {:>10.2} {mrays:>9.2}", rays / 1e6);
     }
     Ok(())
+}
+
+/// `reps` renders of `scene` for each thread count of `threads`.
+fn time_renders(
+    exe: &Path,
+    root: &Path,
+    scene: &str,
+    out: &Path,
+    size: [u32; 3],
+    threads: &[usize],
+    reps: usize,
+) -> Result<Vec<Vec<Run>>> {
+    threads
+        .iter()
+        .map(|&n| (0..reps).map(|_| render_once(exe, root, scene, out, size, n)).collect())
+        .collect()
 }
 
 /// One render's figures: its closing line and the process's wall time.

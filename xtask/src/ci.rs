@@ -9,7 +9,18 @@ use crate::{cargo, fuzz, run_checked};
 use anyhow::Result;
 use std::time::Instant;
 
-pub fn run(_args: &[String]) -> Result<()> {
+pub fn run(args: &[String]) -> Result<()> {
+    match args {
+        [] => {}
+        _ if crate::wants_help(args) => {
+            eprintln!(
+                "cargo xtask ci: fmt --check, clippy -D warnings, every test (with tidy), the docs, the fuzz build and the\n\
+                 geometry crate's publish dry run: what CI runs (.ci/run). It takes no arguments."
+            );
+            return Ok(());
+        }
+        _ => anyhow::bail!("cargo xtask ci takes no arguments, got {args:?} (see cargo xtask ci --help)"),
+    }
     let start = Instant::now();
     let step =
         |name: &str, t: Instant| eprintln!("xtask ci: {name} passed ({:.0} s)", t.elapsed().as_secs_f64());

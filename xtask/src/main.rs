@@ -63,6 +63,10 @@ fn run() -> Result<()> {
     let mut args = std::env::args().skip(1);
     let cmd = args.next();
     let rest: Vec<String> = args.collect();
+    // Paths the user gives are theirs, relative to where cargo ran
+    // (`cargo xtask` works from any folder of the workspace); the commands
+    // themselves run from the root.
+    let _ = INVOKED.set(std::env::current_dir()?);
     std::env::set_current_dir(project_root())?;
     match cmd.as_deref() {
         Some("ci") => ci::run(&rest),
@@ -91,13 +95,36 @@ fn print_help() {
          render [SCENE] [ARGS…]  build prism (release) and render SCENE (default scenes/seed.toml)\n  \
          assets [--check]        regenerate (or check) the generated files under assets/\n  \
          bench [ARGS…]           BVH and render benchmarks (release); see docs/benchmarks.md\n  \
-         bless                   re-render the golden reference images after an intended change\n  \
+         bless [SCENE…]          re-render the golden reference images (all, or these) after an intended change\n  \
          fuzz [TARGET] [--seconds N]  run the cargo-fuzz targets (scene, obj, texture); see docs/fuzzing.md\n  \
          man [DIR]               write the man pages of prism (clap_mangen) into DIR (default target/man)\n  \
          rmse A.png B.png        RMSE of two images (sRGB values in [0, 1]), whole and by thirds\n  \
                                  [--diff OUT.png] [--worst-rows N]: the difference ×8; the rows with most error\n  \
          ci                      fmt --check, clippy -D warnings, tests (with tidy), docs, fuzz build: what CI runs\n"
     );
+}
+
+/// The folder `cargo xtask` was run from.
+static INVOKED: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+
+/// `path` as the user gave it, relative to the folder `cargo xtask` was
+/// run from (the root before [`run`] knows it).
+pub fn user_path(path: impl AsRef<Path>) -> PathBuf {
+    let path = path.as_ref();
+    match INVOKED.get() {
+        Some(dir) if path.is_relative() => dir.join(path),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// The folder `cargo xtask` was run from.
+pub fn invoked_dir() -> PathBuf {
+    INVOKED.get().cloned().unwrap_or_else(project_root)
+}
+
+/// Whether `args` ask for help (`-h`, `--help`).
+pub fn wants_help(args: &[String]) -> bool {
+    args.iter().any(|a| a == "-h" || a == "--help")
 }
 
 /// The workspace root, found from this crate's manifest directory.

@@ -29,7 +29,7 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!(usage);
     }
     let load = |p: &String| -> Result<image::RgbImage> {
-        Ok(image::open(p).with_context(|| format!("cannot read {p}"))?.to_rgb8())
+        Ok(image::open(crate::user_path(p)).with_context(|| format!("cannot read {p}"))?.to_rgb8())
     };
     let (a, b) = (load(a)?, load(b)?);
     if a.dimensions() != b.dimensions() {
@@ -39,7 +39,7 @@ pub fn run(args: &[String]) -> Result<()> {
     if let Some(out) = diff {
         let d: Vec<u8> =
             a.as_raw().iter().zip(b.as_raw()).map(|(&x, &y)| x.abs_diff(y).saturating_mul(8)).collect();
-        image::save_buffer(out, &d, w, h, image::ExtendedColorType::Rgb8)
+        image::save_buffer(crate::user_path(out), &d, w, h, image::ExtendedColorType::Rgb8)
             .with_context(|| format!("cannot write {out}"))?;
     }
     let row = |y: u32| (y * w * 3) as usize;
