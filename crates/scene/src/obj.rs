@@ -411,8 +411,6 @@ pub fn load_obj(
     })
 }
 
-/// The `usemtl` lines of `text` (1-based line, name) whose name is not
-/// one of `names`, the first of each name only.
 /// A model of the OBJ file before its normals are computed.
 struct Pending {
     /// Its object's name (`o` or `g`), which the models of one object cut
@@ -488,6 +486,8 @@ fn normals_together(
     Ok(out)
 }
 
+/// The `usemtl` lines of `text` (1-based line, name) whose name is not
+/// one of `names`, the first of each name only.
 fn unknown_usemtl<'t>(text: &'t str, names: &[&str]) -> Vec<(usize, &'t str)> {
     let mut out: Vec<(usize, &str)> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
