@@ -16,7 +16,9 @@ pub fn run(args: &[String]) -> Result<()> {
         _ => (shown(root.join("scenes").join("seed.toml")), args),
     };
     run_checked(cargo().args(["build", "--release", "-p", "prism-cli"]))?;
-    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    // Absolute (cargo, run from the root, reads a relative one from there):
+    // prism runs in the user's folder.
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), |t| root.join(t));
     let bin = target.join("release").join(format!("prism{}", std::env::consts::EXE_SUFFIX));
 
     let mut cmd = Command::new(&bin);

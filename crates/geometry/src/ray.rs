@@ -246,7 +246,8 @@ mod tests {
         assert!(gap > 1e-5 && gap < 1e-3, "{gap}");
         assert!(shadow.t_max < (target - shadow.origin).length());
         let far = Vec3::new(5.0, 3.0, 0.0) * 1e6;
-        let gap = (Ray::spawn_to(p, Vec3::X, far).at(Ray::spawn_to(p, Vec3::X, far).t_max) - far).length();
+        let to_far = Ray::spawn_to(p, Vec3::X, far);
+        let gap = (to_far.at(to_far.t_max) - far).length();
         assert!(gap > 1e-5 * 1e6 && gap < 1e-3 * 1e6, "{gap}");
         // A target at the point itself: an empty interval.
         assert_eq!(Ray::spawn_to(p, Vec3::X, p).t_max, 0.0);

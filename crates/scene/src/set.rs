@@ -30,9 +30,9 @@ enum Origin {
     File(usize),
     /// The text set number `i` wrote (its key and value, or its value).
     Set(usize),
-    /// The header (`[fog]`) of a table the file lacks, written by set
-    /// number `i` for its key.
-    Made(usize),
+    /// The header (`[fog]`) of a table the file lacks, written by a set
+    /// for its key.
+    Made,
 }
 
 /// A stretch of the edited text: its length in bytes, and where it came from.
@@ -167,8 +167,7 @@ impl Edited {
                 let sep = if text.is_empty() || text.ends_with('\n') { "" } else { "\n" };
                 let header = format!("{sep}[{table}]\n");
                 let line = format!("{key} = {repr}\n");
-                let pieces =
-                    vec![Piece { len: header.len(), origin: Origin::Made(i) }, set_piece(line.len())];
+                let pieces = vec![Piece { len: header.len(), origin: Origin::Made }, set_piece(line.len())];
                 let end = text.len();
                 (end..end, header + &line, pieces)
             }
@@ -302,7 +301,7 @@ impl Edited {
         }
         let own = match self.origin(at) {
             Origin::Set(i) => return Some(Place::Set(&self.sets[i])),
-            Origin::Made(_) => return Some(Place::Made(self.table_sets(line))),
+            Origin::Made => return Some(Place::Made(self.table_sets(line))),
             Origin::File(o) => crate::error::line_col(&self.file_text, o),
         };
         // A problem with a whole table (a camera's up along its view, a

@@ -185,7 +185,9 @@ pub(crate) fn fix_mtl(text: &str) -> (Cow<'_, str>, Vec<String>) {
         let warning = format!("line {no}: `{key}` read as `{known}` (MTL keys are case-sensitive)");
         Some(match fix_mtl_line(no, known, rest, &line) {
             Some((fixed, more)) => {
-                let more = more.map(|m| m.split_once(": ").map_or(m.clone(), |(_, m)| m.to_owned()));
+                // One warning for the line: the fix's own without its `line N: `.
+                let prefix = format!("line {no}: ");
+                let more = more.map(|m| m.strip_prefix(&prefix).map_or(m.clone(), str::to_owned));
                 (fixed, Some(more.map_or(warning.clone(), |m| format!("{warning}; {m}"))))
             }
             None => (line, Some(warning)),
