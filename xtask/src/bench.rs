@@ -19,7 +19,8 @@
 //!
 //! The BVH part builds the `prism-bench` binary in release mode and runs it
 //! from the project root with `--data ../shared/data` unless `--data` is
-//! given. Arguments pass through: `--mesh PATH [--grid N]`, `--reps N`,
+//! given. Arguments pass through (`--mesh` and `--data` paths are taken
+//! from the folder `cargo xtask` ran in): `--mesh PATH [--grid N]`, `--reps N`,
 //! `--threads 1,2`, `--quality NAME`, `--width W --height H`, `--queries
 //! primary,primary-packet,incoherent,incoherent-packet,shadow,shadow-packet` (a subset of the
 //! ray sets, e.g. to profile one). JSON lines go to stdout, the table to
@@ -68,13 +69,27 @@ fn bvh(args: &[String]) -> Result<()> {
     if !args.iter().any(|a| a == "--data") {
         cmd.arg("--data").arg(root.join("..").join("shared").join("data"));
     }
-    cmd.args(args);
+    cmd.args(user_paths(args));
     run_checked(&mut cmd)
+}
+
+/// `args` with the values of `--mesh` and `--data` made relative to the
+/// folder `cargo xtask` was run from (prism-bench runs from the root).
+fn user_paths(args: &[String]) -> Vec<std::ffi::OsString> {
+    let mut out = Vec::with_capacity(args.len());
+    let mut path_next = false;
+    for a in args {
+        out.push(if path_next { crate::user_path(a).into_os_string() } else { a.into() });
+        path_next = a == "--mesh" || a == "--data";
+    }
+    out
 }
 
 /// The render benchmark over a scene file (`--scene`, default the seed).
 fn render(args: &[String]) -> Result<()> {
     let root = project_root();
+    // The default is the root's seed (prism runs from the root); a scene
+    // given is the user's path.
     let mut scene = "scenes/seed.toml".to_string();
     let (mut width, mut height, mut spp, mut reps) = (1280u32, 720u32, 4u32, 5usize);
     let mut threads = vec![1usize, 2];
@@ -82,7 +97,7 @@ fn render(args: &[String]) -> Result<()> {
     while let Some(a) = it.next() {
         let mut value = || it.next().with_context(|| format!("{a} needs a value"));
         match a.as_str() {
-            "--scene" => scene = value()?.clone(),
+            "--scene" => scene = crate::user_path(value()?).display().to_string(),
             "--width" => width = value()?.parse().context("--width")?,
             "--height" => height = value()?.parse().context("--height")?,
             "--spp" => spp = value()?.parse().context("--spp")?,
@@ -203,6 +218,20 @@ fn parse_closing_line(text: &str) -> Option<(f64, f64, f64)> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn mesh_and_data_paths_are_the_users() {
+        let args: Vec<String> =
+            ["--mesh", "m.obj", "--grid", "2", "--data", "d"].iter().map(|s| s.to_string()).collect();
+        // As `main` does; the same folder in every test that sets it.
+        let _ = crate::INVOKED.set(std::env::current_dir().unwrap());
+        let dir = crate::invoked_dir();
+        let out = super::user_paths(&args);
+        assert_eq!(out[1], dir.join("m.obj").into_os_string());
+        assert_eq!(out[3], "2");
+        assert_eq!(out[5], dir.join("d").into_os_string());
+        assert_eq!(out[0], "--mesh");
+    }
+
     #[test]
     fn closing_line() {
         let text = "progress\nout/seed.png: 1280×720, 4 spp, 0.47 s, 7.87 M rays, 16.72 M rays/s\n";

@@ -140,7 +140,7 @@ pub fn describe(loaded: &LoadedScene, path: &Path) -> String {
 
 /// `x` as a JSON number with its shortest decimal form (`0.1`, not
 /// `0.10000000149011612`); `null` if not finite.
-fn num(x: f32) -> serde_json::Value {
+pub(crate) fn num(x: f32) -> serde_json::Value {
     x.to_string().parse::<f64>().ok().filter(|v| v.is_finite()).map_or(serde_json::Value::Null, Into::into)
 }
 

@@ -51,7 +51,13 @@ pub fn to_json(
     serde_json::json!({
         "scene": prism_scene::scene_name(scene),
         "outputs": outputs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        "image": { "width": w, "height": h, "spp": loaded.settings.spp },
+        "image": {
+            "width": w,
+            "height": h,
+            "spp": loaded.settings.spp,
+            "filter": loaded.settings.antialias.filter.name(),
+            "adaptive": loaded.settings.antialias.adaptive.map(crate::info::num),
+        },
         "threads": loaded.settings.threads.unwrap_or_else(rayon_threads),
         "seconds": {
             "load": phases.load,

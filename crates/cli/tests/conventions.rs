@@ -147,8 +147,22 @@ fn stats_json_holds_real_figures() {
     // A mirror ball: camera, shadow, secondary and AOV rays all happen.
     let scene = GOOD.replace("color = [0.8, 0.1, 0.1]", "color = [0.8, 0.1, 0.1]\nreflectivity = 0.5");
     fs::write(dir.path().join("s.toml"), scene).unwrap();
-    let args =
-        ["render", "s.toml", "-o", "o.png", "--spp", "2", "--aov", "depth", "--stats-json", "st/s.json"];
+    let args = [
+        "render",
+        "s.toml",
+        "-o",
+        "o.png",
+        "--spp",
+        "2",
+        "--aov",
+        "depth",
+        "--stats-json",
+        "st/s.json",
+        "--filter",
+        "gaussian",
+        "--adaptive",
+        "0.05",
+    ];
     fs::create_dir(dir.path().join("st")).unwrap();
     let out = prism(dir.path(), &args);
     assert!(out.status.success(), "{}", text(&out.stderr));
@@ -156,6 +170,11 @@ fn stats_json_holds_real_figures() {
     let u = |a: &str, b: &str| j[a][b].as_u64().unwrap_or_else(|| panic!("{a}.{b} in {j}"));
     let f = |a: &str, b: &str| j[a][b].as_f64().unwrap_or_else(|| panic!("{a}.{b} in {j}"));
     assert_eq!(u("image", "width") * u("image", "height"), 32 * 18);
+    // The pixel filter and adaptive threshold the render used, as `info --json` has them.
+    assert_eq!(
+        (&j["image"]["filter"], &j["image"]["adaptive"]),
+        (&serde_json::json!("gaussian"), &serde_json::json!(0.05))
+    );
     // One camera ray per sample; the depth pass traces its own.
     assert_eq!(u("rays", "camera"), 32 * 18 * 2);
     assert_eq!(u("rays", "aov"), 32 * 18 * 2);
