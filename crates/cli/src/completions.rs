@@ -5,7 +5,6 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use clap_complete::Shell;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -30,15 +29,7 @@ pub fn script(cmd: &mut clap::Command, shell: Shell) -> Vec<u8> {
 
 /// Prints the completion script for `args.shell` to standard output.
 pub fn completions_command(args: &CompletionsArgs, mut cmd: clap::Command) -> Result<()> {
-    let text = script(&mut cmd, args.shell);
-    let mut stdout = std::io::stdout().lock();
-    match stdout.write_all(&text).and_then(|()| stdout.flush()) {
-        // A reader that stopped early (`prism completions bash | head`) is not an error.
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(e).context("cannot write the completion script")
-        }
-        _ => Ok(()),
-    }
+    crate::write_stdout(&script(&mut cmd, args.shell), "the completion script")
 }
 
 /// Writes one man page per visible command of `cmd` into `args.dir`, and

@@ -42,14 +42,6 @@
 #[macro_use]
 extern crate prism_view;
 
-/// `print!` that never panics, as `outln!`.
-macro_rules! out {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = write!(std::io::stdout().lock(), $($arg)*);
-    }};
-}
-
 mod completions;
 mod env;
 mod farm;
@@ -329,12 +321,27 @@ fn info_command(args: &InfoArgs) -> Result<()> {
     for w in &loaded.warnings {
         errln!("warning: {w}");
     }
-    if args.json {
-        outln!("{:#}", info::to_json(&loaded, &args.scene));
+    let text = if args.json {
+        format!("{:#}\n", info::to_json(&loaded, &args.scene))
     } else {
-        out!("{}", info::describe(&loaded, &args.scene));
+        info::describe(&loaded, &args.scene)
+    };
+    write_stdout(text.as_bytes(), "the description")
+}
+
+/// Writes `bytes`, the command's data (`what`), to standard output. A
+/// reader that stopped early (`prism info s.toml | head`) is not an error;
+/// any other failure (a full disk) is, so that a script does not take a
+/// cut-off file for a whole one.
+fn write_stdout(bytes: &[u8], what: &str) -> Result<()> {
+    use std::io::Write as _;
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_all(bytes).and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(e).with_context(|| format!("cannot write {what} to standard output"))
+        }
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 fn render_command(args: &RenderArgs) -> Result<()> {
@@ -629,8 +636,11 @@ fn render_to(
             std::iter::once(output.as_path()).chain(written.iter().map(PathBuf::as_path)).collect();
         let json = stats::to_json(loaded, &args.scene, &outputs, phases, &stats);
         match args.stats_file() {
-            Some(file) => prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())?,
-            None => outln!("{json:#}"),
+            Some(file) => prism_shade::write_bytes_atomic(file, format!("{json:#}\n").as_bytes())
+                .with_context(|| {
+                    format!("--stats-json: {} was written, but not the statistics", output.display())
+                })?,
+            None => write_stdout(format!("{json:#}\n").as_bytes(), "the statistics (--stats-json -)")?,
         }
     }
     if !args.quiet {

@@ -222,3 +222,45 @@ fn a_closed_standard_output_is_not_a_crash() {
     assert!(out.status.success() && !text(&out.stderr).contains("panicked"), "{}", text(&out.stderr));
     assert!(dir.path().join("img.png").is_file());
 }
+
+#[test]
+fn data_that_cannot_be_written_to_standard_output_is_an_error() {
+    // A full disk under `prism info --json > info.json` must not leave a
+    // cut-off file behind an exit status of 0 (a closed pipe, above, is
+    // not an error: the reader chose to stop).
+    let full = std::path::Path::new("/dev/full");
+    if !full.exists() {
+        return prism_testkit::skip("/dev/full is not on this system");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    let cases: [(&[&str], &str); 4] = [
+        (&["info", "s.toml", "--json"], "cannot write the description to standard output"),
+        (&["info", "s.toml"], "cannot write the description to standard output"),
+        (&["completions", "bash"], "cannot write the completion script to standard output"),
+        (
+            &["render", "s.toml", "-o", "a.png", "-q", "--stats-json", "-"],
+            "cannot write the statistics (--stats-json -) to standard output",
+        ),
+    ];
+    for (args, message) in cases {
+        let out = common::prism_cmd(dir.path())
+            .args(args)
+            .stdout(fs::File::options().write(true).open(full).unwrap())
+            .output()
+            .unwrap();
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(message) && err.contains("No space left"), "{args:?}: {err}");
+    }
+    // The statistics file fails after the image is written: both said.
+    let out = prism(dir.path(), &["render", "s.toml", "-o", "b.png", "-q", "--stats-json", "/dev/full"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr)
+            .contains("--stats-json: b.png was written, but not the statistics: cannot write /dev/full"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(dir.path().join("b.png").is_file());
+}
