@@ -582,7 +582,9 @@ fn render_to(
         b.finish_and_clear();
     }
     if stats.cancelled {
-        let write = || plan.write_image(&image, alpha.as_deref(), passes.as_ref());
+        // The image alone, as the message says: passes of the rows not
+        // rendered would read "nothing hit" there.
+        let write = || plan.write_image(&image, alpha.as_deref(), None);
         return Err(interrupt.finish(image.height, output, args.partial, write));
     }
     if stats.nonfinite_samples > 0 {

@@ -199,6 +199,29 @@ mod signals {
     }
 
     #[test]
+    fn a_partial_exr_holds_the_image_alone_not_the_passes() {
+        // The passes of rows not rendered would say "nothing hit" (depth
+        // +inf, no object) where the scene has surfaces.
+        let dir = tempfile::tempdir().unwrap();
+        let (mut child, err, seen) = start_to(
+            dir.path(),
+            &endless_scene(),
+            "img.exr",
+            &["--partial", "--aov", "depth,object_id", "--alpha"],
+        );
+        signal(&child, "-INT");
+        let status = wait(&mut child);
+        let err = rest(err, seen);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(err.contains("wrote the partial image to img.exr") && err.contains("no passes"), "{err}");
+        let meta = exr::meta::MetaData::read_from_file(dir.path().join("img.exr"), false).expect("an EXR");
+        let channels: Vec<String> =
+            meta.headers[0].channels.list.iter().map(|c| c.name.to_string()).collect();
+        assert_eq!(channels, ["A", "B", "G", "R"], "{err}");
+        assert_eq!(listing(dir.path()), ["img.exr", "s.toml"], "no pass file and no temporary file");
+    }
+
+    #[test]
     fn sigterm_and_sighup_stop_the_render_as_sigint_does() {
         // What `kill`, `timeout`, Slurm and Kubernetes send, and what a
         // closing terminal sends: the render stops, nothing is written,
