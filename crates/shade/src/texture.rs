@@ -240,7 +240,9 @@ impl ImageTexture {
     /// content, not the extension) and converts it to linear RGB: 8- and
     /// 16-bit images are taken to be sRGB-encoded and decoded with the sRGB
     /// EOTF ([`srgb_to_linear`]); floating-point images (EXR, HDR) are taken as
-    /// already linear. Alpha is ignored; grey images become grey RGB.
+    /// already linear. Alpha is ignored; grey images become grey RGB. An
+    /// Exif orientation (JPEG, PNG) is applied, so that the texture is the
+    /// image as a viewer shows it.
     ///
     /// Images wider or taller than [`MAX_TEXTURE_EDGE`] or with more than
     /// [`MAX_TEXTURE_TEXELS`] texels are refused before their pixels are
@@ -284,7 +286,10 @@ impl ImageTexture {
             let name = format.extensions_str().first().map_or("image".to_owned(), |x| x.to_uppercase());
             err(match &e {
                 // Plain words first; the decoder's own after them.
-                image::ImageError::Decoding(_) => format!("the {name} data is corrupt or cut short ({e})"),
+                // (Some decoders end their text in a line break.)
+                image::ImageError::Decoding(_) => {
+                    format!("the {name} data is corrupt or cut short ({})", e.to_string().trim_end())
+                }
                 image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
                     format!("the {name} data is cut short: the file ends before the image does")
                 }
@@ -310,7 +315,10 @@ impl ImageTexture {
                 _ => e.to_string(),
             })
         };
-        let decoder = reader.into_decoder().map_err(decoding)?;
+        let mut decoder = reader.into_decoder().map_err(decoding)?;
+        // The Exif orientation (phone photos are stored sideways with one):
+        // the texture is the image as a viewer shows it.
+        let orientation = image::ImageDecoder::orientation(&mut decoder).map_err(decoding)?;
         let (width, height) = image::ImageDecoder::dimensions(&decoder);
         if u64::from(width) * u64::from(height) > MAX_TEXTURE_TEXELS {
             return Err(err(format!(
@@ -319,7 +327,9 @@ impl ImageTexture {
         }
         let cost = TextureCost::new(width, height, image::ImageDecoder::total_bytes(&decoder));
         check(&cost).map_err(err)?;
-        let decoded = image::DynamicImage::from_decoder(decoder).map_err(decoding)?;
+        let mut decoded = image::DynamicImage::from_decoder(decoder).map_err(decoding)?;
+        decoded.apply_orientation(orientation);
+        let (width, height) = (decoded.width(), decoded.height());
         let texels = linear_texels(&decoded).map_err(|e| err(e.to_string()))?;
         drop(decoded);
         Self::from_linear(width, height, texels, wrap).map_err(|e| err(e.to_string()))
@@ -487,6 +497,52 @@ mod tests {
             for (g, w) in got.iter().zip(&want) {
                 assert!((*g - *w).abs().max_element() <= 1e-6, "{:?}: {g} against {w}", d.color());
             }
+        }
+    }
+
+    /// An Exif block (big-endian TIFF) holding the orientation tag alone.
+    fn exif_orientation(value: u16) -> Vec<u8> {
+        let mut e = b"MM\0\x2a\0\0\0\x08\0\x01".to_vec();
+        e.extend_from_slice(&[0x01, 0x12, 0, 3, 0, 0, 0, 1]); // tag 0x0112, SHORT, one
+        e.extend_from_slice(&value.to_be_bytes());
+        e.extend_from_slice(&[0, 0, 0, 0, 0, 0]); // padding; no next IFD
+        e
+    }
+
+    #[test]
+    fn an_exif_orientation_is_applied_as_a_viewer_does() {
+        // Stored 16×8, red left and blue right, with "turn 90° clockwise to
+        // show" (6): shown 8×16, red on top. Also "mirror left to right" (2).
+        use image::ImageEncoder as _;
+        let stored = image::RgbImage::from_fn(16, 8, |x, _| {
+            if x < 8 { image::Rgb([255, 0, 0]) } else { image::Rgb([0, 0, 255]) }
+        });
+        let red = Vec3::new(1.0, 0.0, 0.0);
+        let blue = Vec3::new(0.0, 0.0, 1.0);
+        for (name, tag, size, top_left, bottom_right) in [
+            ("o6.png", 6, (8, 16), red, blue),
+            ("o6.jpg", 6, (8, 16), red, blue),
+            ("o2.png", 2, (16, 8), blue, red),
+            ("o1.png", 1, (16, 8), red, blue),
+        ] {
+            let path = temp(name);
+            let mut bytes = Vec::new();
+            if name.ends_with(".png") {
+                let mut enc = image::codecs::png::PngEncoder::new(&mut bytes);
+                enc.set_exif_metadata(exif_orientation(tag)).unwrap();
+                enc.write_image(&stored, 16, 8, image::ExtendedColorType::Rgb8).unwrap();
+            } else {
+                let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 100);
+                enc.set_exif_metadata(exif_orientation(tag)).unwrap();
+                enc.write_image(&stored, 16, 8, image::ExtendedColorType::Rgb8).unwrap();
+            }
+            std::fs::write(&path, bytes).unwrap();
+            let t = ImageTexture::load(&path, Wrap::Clamp).unwrap();
+            assert_eq!((t.width(), t.height()), size, "{name}");
+            // Texel centres a quarter in from the corners (v = 0 is the top).
+            let near = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 0.05;
+            let (tl, br) = (t.sample(Vec2::splat(0.25)), t.sample(Vec2::splat(0.75)));
+            assert!(near(tl, top_left) && near(br, bottom_right), "{name}: {tl} {br}");
         }
     }
 
@@ -695,6 +751,21 @@ mod tests {
             let _ = std::fs::remove_file(&path);
             r
         };
+        // A JPEG cut in half: the decoder's own text ends in a line break,
+        // which the message must not carry.
+        let half_jpeg = temp("half.jpg");
+        let mut jpg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new(&mut jpg)
+            .encode(&[90u8; 16 * 16 * 3], 16, 16, image::ExtendedColorType::Rgb8)
+            .expect("encodes");
+        std::fs::write(&half_jpeg, &jpg[..jpg.len() / 2]).expect("can write");
+        match ImageTexture::load(&half_jpeg, Wrap::Clamp) {
+            Err(ShadeError::Texture { reason, .. }) => {
+                assert!(reason.starts_with("the JPG data is") && !reason.contains('\n'), "{reason:?}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let _ = std::fs::remove_file(&half_jpeg);
         let h = huge(100_000, 100_000);
         let widest = huge(i32::MAX as u32, 16_384);
         let beyond = huge(u32::MAX, u32::MAX);
