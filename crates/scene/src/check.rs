@@ -135,7 +135,7 @@ impl<'a> Ctx<'a> {
     /// The colour `c` written at `span`, checked; components that look
     /// like 8-bit values get a warning.
     pub fn color_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
-        let v = self.rgb_at(span, c, what)?;
+        let v = self.bounded(span, c, self.rgb_at(span, c, what)?, what)?;
         if looks_8bit(&c.0) {
             let [r, g, b] = c.0.map(|x| x as u8);
             self.note(
@@ -190,7 +190,7 @@ impl<'a> Ctx<'a> {
     /// a warning where it is almost surely 8-bit values written for 0–1
     /// ones ([`light_looks_8bit`]).
     pub fn light_rgb(&self, c: &Spanned<Color>, what: &str) -> Result<Vec3> {
-        let v = self.rgb(c, what)?;
+        let v = self.bounded(&c.span(), c.get_ref(), self.rgb(c, what)?, what)?;
         if light_looks_8bit(&c.get_ref().0) {
             let [r, g, b] = c.get_ref().0.map(|x| x as u8);
             self.note(
@@ -201,6 +201,21 @@ impl<'a> Ctx<'a> {
             );
         }
         Ok(v)
+    }
+
+    /// `v`, a colour that light or a pixel carries (written `c`), if no
+    /// component is above [`MAX_COLOR`] (as an MTL file's `Ke`).
+    fn bounded(&self, span: &Range<usize>, c: &Color, v: Vec3, what: &str) -> Result<Vec3> {
+        if v.max_element() <= MAX_COLOR {
+            return Ok(v);
+        }
+        Err(self.invalid(
+            span,
+            format!(
+                "{what} {:?} must be at most 1e30 in each component (a pixel's sum of its samples must stay finite)",
+                c.0
+            ),
+        ))
     }
 
     fn rgb_at(&self, span: &Range<usize>, c: &Color, what: &str) -> Result<Vec3> {
@@ -225,6 +240,10 @@ impl<'a> Ctx<'a> {
         n.map_or(Ok(default), check)
     }
 }
+
+/// The largest colour component accepted: a pixel sums up to 65 536
+/// samples of it, times a light's intensity, in single precision.
+pub(crate) const MAX_COLOR: f32 = 1e30;
 
 /// Whether a colour looks like 8-bit values written by mistake for 0–1
 /// ones: whole numbers from 0 to 255, at least one of them above 2

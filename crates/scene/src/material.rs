@@ -122,6 +122,12 @@ pub(crate) fn material(ctx: &Ctx, def: &Spanned<MaterialDef>, image: &mut ImageO
     if let Some(a) = &d.absorption {
         // A coefficient per unit length, not a colour: any size is meant.
         m.absorption = ctx.rgb(a, "absorption")?;
+        if m.absorption != Vec3::ZERO && !(m.transmission > 0.0) {
+            ctx.note(
+                &a.span(),
+                "absorption does nothing here: only a solid with transmission (glass) absorbs along its inside (set transmission)",
+            );
+        }
     }
     if let Some(f) = &d.filter_color {
         m.filter_color = Some(ctx.unit_color(f, "filter_color")?);

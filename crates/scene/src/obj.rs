@@ -276,7 +276,7 @@ pub fn load_obj(
                 "{at}: model `{}` has faces without texture coordinates (`vt`) beside faces with them; {}",
                 model.name,
                 if mixed.is_some() {
-                    "their corners get uv (0, 0), the image's bottom-left corner"
+                    "their corners get uv (0, 0), the image's bottom-left corner point (where its four corner texels meet when it repeats)"
                 } else {
                     "its texture coordinates are not used"
                 }
@@ -583,8 +583,9 @@ fn polygon_triangles(indices: &[u32], arities: &[u32], positions: &[Vec3]) -> Cu
     Cut { triangles: out, per_face }
 }
 
-/// The largest emission component (`Ke`) an MTL file may give.
-const MAX_KE: f32 = 1e30;
+/// The largest emission component (`Ke`) an MTL file may give: the
+/// scene file's own bound on colours.
+const MAX_KE: f32 = crate::check::MAX_COLOR;
 
 /// Checks the MTL lines that tobj would panic on or that prism would
 /// refuse later without a line: colours (`Ka`, `Kd`, `Ks`, `Ke`) need

@@ -296,9 +296,22 @@ pub(crate) fn fog(ctx: &Ctx, f: &Spanned<FogDef>) -> Result<(Option<Fog>, bool)>
             };
             let end = ctx.finite(end_n, "fog end")?;
             if !(end > start) {
+                let written = (*end_n.get_ref(), d.start.as_ref().map_or(0.0, |n| *n.get_ref()));
                 return Err(ctx.invalid(
                     &end_n.span(),
-                    format!("fog end ({end}) must be greater than fog start ({start})"),
+                    if written.0 > written.1 {
+                        // Apart as written, equal once rounded.
+                        let text = |v: f64| {
+                            if v == 0.0 || (1e-4..1e16).contains(&v.abs()) { v.to_string() } else { format!("{v:e}") }
+                        };
+                        format!(
+                            "fog end ({}) must be greater than fog start ({}) in single precision, which prism computes in: both are {end} there",
+                            text(written.0),
+                            text(written.1)
+                        )
+                    } else {
+                        format!("fog end ({end}) must be greater than fog start ({start})")
+                    },
                 ));
             }
             match d.measure.as_ref().map(|m| *m.get_ref()) {

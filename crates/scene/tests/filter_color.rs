@@ -154,3 +154,32 @@ fn an_mtl_material_filters_by_its_tf_not_its_kd() {
         assert!(e.contains("Tf") && e.contains("sheet.obj") && e.contains("MTL"), "{bad}: {e}");
     }
 }
+
+#[test]
+fn absorption_without_transmission_is_warned_about() {
+    // A sheet (transparency) or an opaque paint has no inside to absorb
+    // along: the colour a user asked for would silently not appear.
+    for (extra, warned) in [
+        ("", true),
+        ("transparency = 0.9\n", true),
+        ("transmission = 0.9\n", false),
+        ("absorption_zero", false),
+    ] {
+        let absorption = if extra == "absorption_zero" {
+            "absorption = [0, 0, 0]\n"
+        } else {
+            "absorption = [2, 0.1, 2]\n"
+        };
+        let extra = if extra == "absorption_zero" { "" } else { extra };
+        let text = format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+             [materials.g]\n{extra}{absorption}\
+             [[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"g\"\n"
+        );
+        let loaded = parse_scene_str(&text, Path::new("."), Path::new("a.toml")).expect("loads");
+        let line = if extra.is_empty() { "a.toml:5:" } else { "a.toml:6:" };
+        let found =
+            loaded.warnings.iter().any(|w| w.contains(line) && w.contains("absorption does nothing here"));
+        assert_eq!(found, warned, "{extra:?} {absorption:?}: {:?}", loaded.warnings);
+    }
+}

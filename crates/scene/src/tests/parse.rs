@@ -389,7 +389,29 @@ fn bad_cameras_are_refused() {
 fn bad_fog_and_materials_are_refused() {
     refused(&[
         ("[fog]\nstart = 10\nend = 5\n", "fog end (5) must be greater than fog start (10)", None),
+        // Apart as written, equal in single precision: said so.
+        (
+            "[fog]\nstart = 1\nend = 1.00000001\n",
+            "fog end (1.00000001) must be greater than fog start (1) in single precision, which prism computes in: both are 1 there",
+            None,
+        ),
+        (
+            "[fog]\nend = 1e-50\n",
+            "fog end (1e-50) must be greater than fog start (0) in single precision, which prism computes in: both are 0 there",
+            None,
+        ),
         ("[fog]\nmode = \"exponential\"\n", "needs `density`", None),
+        // A pixel sums up to 65 536 samples of such colours.
+        (
+            "[fog]\nend = 10\ncolor = [3e38, 3e38, 3e38]\n",
+            "fog color [3e38, 3e38, 3e38] must be at most 1e30",
+            None,
+        ),
+        (
+            "[materials.m]\ncolor = [1, 2e30, 0]\n",
+            "color [1.0, 2e30, 0.0] must be at most 1e30",
+            Some("[1, 2e30, 0]"),
+        ),
         ("[fog]\nmode = \"exponential\"\ndensity = 0.1\nend = 3\n", "belong to linear fog", None),
         ("[fog]\nmode = \"fuzzy\"\n", "unknown name `fuzzy`", None),
         (
