@@ -74,7 +74,8 @@ fn one_primitive() {
     let h = accel.closest_hit(&Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z)).unwrap();
     assert_eq!((h.object, h.triangle), (0, 0));
     assert!((h.hit.t - 1.0).abs() < 1e-6);
-    assert!((h.hit.uv - prism_geometry::glam::Vec2::new(0.25, 0.25)).length() < 1e-6);
+    // Without uvs: (b1, 1 − b2) from the barycentrics.
+    assert!((h.hit.uv - prism_geometry::glam::Vec2::new(0.25, 0.75)).length() < 1e-6);
 }
 
 #[test]

@@ -9,8 +9,8 @@ use glam::{Vec2, Vec3};
 /// The outward geometric normal of a face follows its counter-clockwise
 /// winding. The shading normal interpolates vertex normals when present
 /// (turned to the geometric normal's side), else equals the geometric one.
-/// uv interpolates vertex uvs when present, else is the barycentric
-/// `(b1, b2)`.
+/// uv interpolates vertex uvs when present, else is `(b1, 1 − b2)` from
+/// the barycentrics, as [`crate::Triangle`]'s.
 ///
 /// Zero-area faces are kept (so that indices stay stable) but never hit.
 /// [`Intersect`] on a mesh tests every face; use `prism-bvh` to accelerate.
@@ -367,7 +367,7 @@ impl TriangleMesh {
         };
         let uv = match &self.uvs {
             Some(uv) => b0 * uv[ia] + b1 * uv[ib] + b2 * uv[ic],
-            None => Vec2::new(b1, b2),
+            None => Vec2::new(b1, 1.0 - b2),
         };
         Hit { t, point, geo_normal, normal, uv, front_face: dir.dot(geo_normal) < 0.0 }
     }
@@ -488,7 +488,8 @@ mod tests {
         let h = m.intersect(&Ray::new(Vec3::new(0.75, 0.25, -1.0), Vec3::Z)).unwrap();
         assert_eq!(h.normal, Vec3::Z);
         assert!(!h.front_face);
-        close2(h.uv, Vec2::new(0.5, 0.25), 1e-6);
+        // Without uvs, (b1, 1 − b2) (b1 = 0.5, b2 = 0.25 on this face).
+        close2(h.uv, Vec2::new(0.5, 0.75), 1e-6);
         // Normals of any length count, those whose squares leave f32's range too.
         for scale in [1.0f32, 6e19, 1e30, 1e-30] {
             let m = quad(Some(vec![Vec3::new(0.6, 0.0, 0.8) * scale; 4]), None);

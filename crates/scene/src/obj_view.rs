@@ -12,8 +12,10 @@ use prism_geometry::glam::Vec3;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ObjView {
-    /// Facing the larger side of the bounding box: `front` if the mesh is
-    /// at least as wide (X) as it is deep (Z), else `right`.
+    /// Facing the larger side of the bounding box: `top` if the mesh is
+    /// flat (less than a quarter as tall (Y) as it is wide and as it is
+    /// deep: a floor plan, a terrain, a coin), else `front` if it is at
+    /// least as wide (X) as it is deep (Z), else `right`.
     #[default]
     Auto,
     /// From +Z, looking down −Z (up +Y).
@@ -81,8 +83,18 @@ impl Framing {
     /// The framing of `view` for a mesh with bounds `bounds`.
     pub fn new(view: ObjView, bounds: Aabb) -> Self {
         let view = match view {
-            ObjView::Auto if !bounds.is_empty() && bounds.extent().z > bounds.extent().x => ObjView::Right,
-            ObjView::Auto => ObjView::Front,
+            ObjView::Auto if bounds.is_empty() => ObjView::Front,
+            ObjView::Auto => {
+                let e = bounds.extent();
+                if 4.0 * e.y < e.x.min(e.z) {
+                    // Seen from the side it would be a line, or nothing.
+                    ObjView::Top
+                } else if e.z > e.x {
+                    ObjView::Right
+                } else {
+                    ObjView::Front
+                }
+            }
             v => v,
         };
         let (toward_eye, up) = match view {
@@ -138,5 +150,14 @@ mod tests {
         let deep = Aabb::new(Vec3::new(-1.0, 0.0, -3.0), Vec3::new(1.0, 1.0, 3.0));
         assert_eq!(Framing::new(ObjView::Auto, wide).toward_eye, Vec3::Z);
         assert_eq!(Framing::new(ObjView::Auto, deep).toward_eye, Vec3::X);
+        // Flat ones are seen from above: a floor (no height at all), and
+        // anything less than a quarter as tall as it is wide and deep (not
+        // a long low one, a bench or a train, whose side shows).
+        let floor = Aabb::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0));
+        let low = Aabb::new(Vec3::new(-3.0, 0.0, -3.0), Vec3::new(3.0, 1.49, 3.0));
+        let not_low = Aabb::new(Vec3::new(-3.0, 0.0, -1.0), Vec3::new(3.0, 0.51, 1.0));
+        assert_eq!(Framing::new(ObjView::Auto, floor).toward_eye, Vec3::Y);
+        assert_eq!(Framing::new(ObjView::Auto, low).toward_eye, Vec3::Y);
+        assert_eq!(Framing::new(ObjView::Auto, not_low).toward_eye, Vec3::Z);
     }
 }

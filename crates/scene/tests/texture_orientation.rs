@@ -151,6 +151,21 @@ fn every_shape_reads_like_the_image_from_outside() {
         let pixels = render_view(d, &wall, "uv", eye.to_array(), centre, y);
         assert_quadrants(what, &pixels, 6);
     }
+    // A triangle without uvs: (b1, 1 − b2), upright with the first corner
+    // at the image's bottom-left, the second along its bottom edge and the
+    // third at its top-left; the image's lower-left half shows. Three
+    // points of the face, by their world position on z = 0.
+    let tri = "type = \"triangle\"\nvertices = [[-1, -1, 0], [1, -1, 0], [-1, 1, 0]]";
+    let pixels = render_view(d, tri, "uv", front, o, y);
+    // Pixels per world unit at the face: fov 30° over SIZE pixels from 6 away.
+    let scale = SIZE as f32 / 2.0 / (6.0 * 15f32.to_radians().tan());
+    for (corner, x, y, want) in
+        [("top-left", -0.7, 0.3, TL), ("bottom-left", -0.7, -0.7, BL), ("bottom-right", 0.3, -0.7, BR)]
+    {
+        let (px, py) = ((SIZE as f32 / 2.0 + x * scale) as u32, (SIZE as f32 / 2.0 - y * scale) as u32);
+        let got = pixels[(py * SIZE + px) as usize];
+        assert!((got - want).abs().max_element() < 0.05, "triangle: {corner} is {got}, want {want}");
+    }
     // A floor plane seen from above, the image's top toward −Z.
     let floor = "type = \"plane\"";
     let pixels = render_view(d, floor, "uv", [0.5, 4.0, 0.5], [0.5, 0.0, 0.5], [0.0, 0.0, -1.0]);

@@ -7,8 +7,11 @@ use glam::{BVec4A, Vec2, Vec3, Vec4};
 /// A single triangle `(v0, v1, v2)`; its outward normal follows the
 /// counter-clockwise winding, `(v1 − v0) × (v2 − v0)` (right-handed).
 ///
-/// uv: the barycentric coordinates `(b1, b2)` of the hit, so that
-/// `p = (1 − b1 − b2)·v0 + b1·v1 + b2·v2`.
+/// uv: `(b1, 1 − b2)`, from the barycentric coordinates of the hit
+/// (`p = (1 − b1 − b2)·v0 + b1·v1 + b2·v2`) read as an OBJ `vt` would be
+/// (`v = 0` is an image's top row): an image stands upright with `v0` at
+/// its bottom-left corner, `v1` along its bottom edge and `v2` at its
+/// top-left corner, as on a quad's lower triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
     /// The three corners.
@@ -61,7 +64,7 @@ impl Intersect for Triangle {
         let (t, b1, b2) = TriangleRay::checked(ray)?.intersect(&self.v)?;
         let b0 = 1.0 - b1 - b2;
         let p = b0 * self.v[0] + b1 * self.v[1] + b2 * self.v[2];
-        Some(Hit::new(t, p, self.normal(), Vec2::new(b1, b2), ray.dir))
+        Some(Hit::new(t, p, self.normal(), Vec2::new(b1, 1.0 - b2), ray.dir))
     }
 
     fn bounds(&self) -> Aabb {
@@ -1079,14 +1082,18 @@ mod tests {
     }
 
     #[test]
-    fn hits_from_both_sides_with_barycentric_uv() {
+    fn hits_from_both_sides_with_upright_uv() {
+        // uv = (b1, 1 − b2): on (0,0,0), (1,0,0), (0,1,0) seen from +Z, u
+        // runs along +X and v = 0 (an image's top row) lies at y = 1.
         let h = tri().intersect(&Ray::new(Vec3::new(0.25, 0.5, 2.0), Vec3::NEG_Z)).unwrap();
         check_hit(&h, 2.0, Vec3::new(0.25, 0.5, 0.0), Vec3::Z, Vec2::new(0.25, 0.5), true);
         let h = tri().intersect(&Ray::new(Vec3::new(0.5, 0.25, -1.0), Vec3::new(0.0, 0.0, 0.5))).unwrap();
-        check_hit(&h, 2.0, Vec3::new(0.5, 0.25, 0.0), Vec3::Z, Vec2::new(0.5, 0.25), false);
+        check_hit(&h, 2.0, Vec3::new(0.5, 0.25, 0.0), Vec3::Z, Vec2::new(0.5, 0.75), false);
         // Oblique.
         let h = tri().intersect(&Ray::new(Vec3::new(1.25, 0.25, 1.0), Vec3::new(-1.0, 0.0, -1.0))).unwrap();
-        check_hit(&h, 1.0, Vec3::new(0.25, 0.25, 0.0), Vec3::Z, Vec2::new(0.25, 0.25), true);
+        check_hit(&h, 1.0, Vec3::new(0.25, 0.25, 0.0), Vec3::Z, Vec2::new(0.25, 0.75), true);
+        let h = tri().intersect(&Ray::new(Vec3::new(0.0, 1.0, 1.0), Vec3::NEG_Z)).unwrap();
+        check_hit(&h, 1.0, Vec3::Y, Vec3::Z, Vec2::ZERO, true);
     }
 
     #[test]
