@@ -32,6 +32,14 @@ pub trait Intersect {
     /// Bounds of the shape ([`Aabb::INFINITE`] for unbounded shapes).
     fn bounds(&self) -> Aabb;
 
+    /// World bounds of the shape placed by `to_world`: by default those
+    /// of [`Intersect::bounds`]'s box ([`Transform::aabb`]), which a
+    /// rotation widens; spheres, disks, cylinders and cones give their
+    /// exact ones (a rotated sphere's box stays its own size).
+    fn bounds_in(&self, to_world: &Transform) -> Aabb {
+        to_world.aabb(&self.bounds())
+    }
+
     /// Whether anything is hit within the ray's interval.
     #[inline]
     fn occludes(&self, ray: &Ray) -> bool {
@@ -148,6 +156,18 @@ impl Intersect for Shape {
             Shape::Triangle(s) => s.bounds(),
         }
     }
+
+    fn bounds_in(&self, to_world: &Transform) -> Aabb {
+        match self {
+            Shape::Sphere(s) => s.bounds_in(to_world),
+            Shape::Plane(s) => s.bounds_in(to_world),
+            Shape::Cuboid(s) => s.bounds_in(to_world),
+            Shape::Cylinder(s) => s.bounds_in(to_world),
+            Shape::Cone(s) => s.bounds_in(to_world),
+            Shape::Disk(s) => s.bounds_in(to_world),
+            Shape::Triangle(s) => s.bounds_in(to_world),
+        }
+    }
 }
 
 macro_rules! impl_from_shape {
@@ -201,7 +221,7 @@ impl<S: Intersect> Intersect for Instance<S> {
     }
 
     fn bounds(&self) -> Aabb {
-        self.transform.aabb(&self.shape.bounds())
+        self.shape.bounds_in(&self.transform)
     }
 }
 
@@ -221,6 +241,92 @@ mod tests {
             Disk::new(Vec3::ZERO, Vec3::Y, 1.0).unwrap().into(),
             Triangle::new([Vec3::ZERO, Vec3::X, Vec3::Y]).unwrap().into(),
         ]
+    }
+
+    /// Points on the surfaces that reach farthest (a sphere's, the
+    /// rims of caps and a cone's apex), in object space.
+    fn extreme_points(s: &Shape) -> Vec<Vec3> {
+        let ring = |c: Vec3, u: Vec3, v: Vec3, r: f32| {
+            (0..720).map(move |k| {
+                let a = k as f32 * std::f32::consts::TAU / 720.0;
+                c + r * (a.cos() * u + a.sin() * v)
+            })
+        };
+        match s {
+            Shape::Sphere(b) => (0..180)
+                .flat_map(|i| {
+                    let lat = (i as f32 + 0.5) / 180.0 * std::f32::consts::PI - std::f32::consts::FRAC_PI_2;
+                    ring(
+                        b.center() + b.radius() * lat.sin() * Vec3::Y,
+                        Vec3::X,
+                        Vec3::Z,
+                        b.radius() * lat.cos(),
+                    )
+                })
+                .collect(),
+            Shape::Cylinder(c) => ring(c.base(), Vec3::X, Vec3::Z, c.radius())
+                .chain(ring(c.base() + c.height() * Vec3::Y, Vec3::X, Vec3::Z, c.radius()))
+                .collect(),
+            Shape::Cone(c) => ring(c.base(), Vec3::X, Vec3::Z, c.radius())
+                .chain(std::iter::once(c.base() + c.height() * Vec3::Y))
+                .collect(),
+            Shape::Disk(d) => {
+                let u = d.normal().any_orthonormal_vector();
+                ring(d.center(), u, d.normal().cross(u), d.radius()).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    #[test]
+    fn round_shapes_placed_by_any_transform_have_their_exact_bounds() {
+        // A rotated sphere's bounds were those of its rotated box, up to
+        // √3 wider (the default fog's end and `prism info` read them).
+        let shapes: [Shape; 4] = [
+            Sphere::new(Vec3::new(1.0, -2.0, 0.5), 1.5).unwrap().into(),
+            Cylinder::new(Vec3::new(0.5, 1.0, -1.0), 0.7, 2.5).unwrap().into(),
+            Cone::new(Vec3::new(-1.0, 0.0, 2.0), 1.2, 3.0).unwrap().into(),
+            Disk::new(Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 2.0) / 3.0, 2.0).unwrap().into(),
+        ];
+        let shear = crate::transform::Shear { xy: 0.4, zx: -0.3, ..Default::default() };
+        let transforms = [
+            Transform::IDENTITY,
+            Transform::rotate_y(45f32.to_radians()),
+            Transform::rotate_axis(Vec3::new(1.0, 2.0, 3.0), 1.0)
+                .unwrap()
+                .then(&Transform::scale(Vec3::new(2.0, 0.5, 1.0)).unwrap())
+                .then(&Transform::shear(shear).unwrap())
+                .then(&Transform::translate(Vec3::new(10.0, -3.0, 4.0)).unwrap()),
+        ];
+        for s in shapes {
+            for t in &transforms {
+                let b = Instance::new(s, *t).bounds();
+                let corners = t.aabb(&s.bounds());
+                let pts: Vec<Vec3> = extreme_points(&s).into_iter().map(|p| t.point(p)).collect();
+                let reach = Aabb::from_points(&pts);
+                let size = reach.extent().max_element();
+                // Every point inside; the bounds no wider than the points'
+                // reach (sampled every half degree) by more than 1e-4 of
+                // the size; never wider than the box's bounds.
+                for p in &pts {
+                    assert!(b.contains(*p, 1e-6 * size), "{} {t:?}: {p} outside {b:?}", s.kind());
+                }
+                let slack = (reach.min - b.min).max(b.max - reach.max).max_element();
+                assert!(slack <= 1e-4 * size, "{} {t:?}: {b:?} against {reach:?}", s.kind());
+                assert!(
+                    b.min.cmpge(corners.min).all() && b.max.cmple(corners.max).all(),
+                    "{} {t:?}: {b:?} wider than {corners:?}",
+                    s.kind()
+                );
+            }
+        }
+        // Rotated a quarter of a turn about Y, a unit sphere's box is its own.
+        let b = Instance::new(Shape::from(Sphere::new(Vec3::ZERO, 1.0).unwrap()), Transform::rotate_y(0.7))
+            .bounds();
+        assert!(
+            (b.max - Vec3::ONE).abs().max_element() < 1e-6 && (b.min + Vec3::ONE).abs().max_element() < 1e-6,
+            "{b:?}"
+        );
     }
 
     #[test]

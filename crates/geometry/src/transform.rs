@@ -309,6 +309,53 @@ impl Transform {
         }
     }
 
+    /// World-space bounds of the object-space ball of `radius` about
+    /// `centre` (an ellipsoid in the world): exact, unlike the bounds of
+    /// its box, which a rotation widens by up to √3. See
+    /// [`Transform::tightest`] for the rounding.
+    #[must_use]
+    pub fn ball_aabb(&self, centre: Vec3, radius: f32) -> Aabb {
+        let rows = self.to_world.matrix3.transpose();
+        let half = radius * Vec3::new(rows.x_axis.length(), rows.y_axis.length(), rows.z_axis.length());
+        self.centred(centre, half)
+    }
+
+    /// World-space bounds of the object-space disk of `radius` about
+    /// `centre` across the unit `normal`: exact (an ellipse in the world;
+    /// along world axis `i`, `radius · √(|row_i|² − (row_i · normal)²)`).
+    #[must_use]
+    pub fn disk_aabb(&self, centre: Vec3, normal: Vec3, radius: f32) -> Aabb {
+        let rows = self.to_world.matrix3.transpose();
+        let across = |r: Vec3A| (r.length_squared() - r.dot(normal.into()).powi(2)).max(0.0).sqrt();
+        let half = radius * Vec3::new(across(rows.x_axis), across(rows.y_axis), across(rows.z_axis));
+        self.centred(centre, half)
+    }
+
+    /// The box of half-extents `half` about the image of `centre`, widened
+    /// by a few units in the last place of its values (the products and
+    /// roots round), or the empty box if anything overflowed.
+    fn centred(&self, centre: Vec3, half: Vec3) -> Aabb {
+        let c = self.point(centre);
+        let pad = 4.0 * f32::EPSILON * (half + c.abs());
+        let b = Aabb::new(c - half - pad, c + half + pad);
+        if b.is_finite() { b } else { Aabb::EMPTY }
+    }
+
+    /// The tighter of `exact` (from [`Transform::ball_aabb`] or
+    /// [`Transform::disk_aabb`], empty where they overflowed) and the
+    /// bounds of `object_box` (the shape's own box): the first is exact
+    /// up to a few units in the last place, the second exact at the box's
+    /// corners, so their overlap holds the shape and is never looser than
+    /// the box's bounds.
+    #[must_use]
+    pub fn tightest(&self, exact: Aabb, object_box: &Aabb) -> Aabb {
+        let corners = self.aabb(object_box);
+        if exact.is_empty() || !corners.is_finite() {
+            return corners;
+        }
+        Aabb::new(exact.min.max(corners.min), exact.max.min(corners.max))
+    }
+
     /// World-space bounds of an object-space box (exact for the box's
     /// corners; infinite boxes stay infinite).
     #[must_use]

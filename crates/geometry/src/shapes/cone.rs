@@ -172,6 +172,18 @@ impl Intersect for Cone {
     fn bounds(&self) -> Aabb {
         self.0.bounds()
     }
+
+    /// The base cap's disk and the apex, each moved out by the side's
+    /// [`super::SEAL`] band (as [`Intersect::bounds`]; the side's radius
+    /// there is `radius · (1 + SEAL)`): the solid is their convex hull.
+    fn bounds_in(&self, to_world: &crate::Transform) -> Aabb {
+        let Upright { base, radius, height } = self.0;
+        let eps = super::SEAL * height;
+        let low = to_world.disk_aabb(base - eps * Vec3::Y, Vec3::Y, radius * (1.0 + super::SEAL));
+        let apex = to_world.ball_aabb(base + (height + eps) * Vec3::Y, 0.0);
+        let exact = if low.is_empty() || apex.is_empty() { Aabb::EMPTY } else { low.union(apex) };
+        to_world.tightest(exact, &self.bounds())
+    }
 }
 
 #[cfg(test)]

@@ -134,6 +134,17 @@ impl Intersect for Cylinder {
     fn bounds(&self) -> Aabb {
         self.0.bounds()
     }
+
+    /// The two caps' disks, each moved out by the side's [`super::SEAL`]
+    /// band (as [`Intersect::bounds`]): the solid is their convex hull.
+    fn bounds_in(&self, to_world: &crate::Transform) -> Aabb {
+        let Upright { base, radius, height } = self.0;
+        let eps = super::SEAL * height;
+        let cap = |y: f32| to_world.disk_aabb(base + y * Vec3::Y, Vec3::Y, radius);
+        let (low, high) = (cap(-eps), cap(height + eps));
+        let exact = if low.is_empty() || high.is_empty() { Aabb::EMPTY } else { low.union(high) };
+        to_world.tightest(exact, &self.bounds())
+    }
 }
 
 #[cfg(test)]

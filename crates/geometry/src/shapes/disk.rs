@@ -105,6 +105,10 @@ impl Intersect for Disk {
         let e = self.radius * (Vec3::ONE - n * n).max(Vec3::ZERO).map(f32::sqrt);
         Aabb::new(self.center - e, self.center + e)
     }
+
+    fn bounds_in(&self, to_world: &crate::Transform) -> Aabb {
+        to_world.tightest(to_world.disk_aabb(self.center, self.normal, self.radius), &self.bounds())
+    }
 }
 
 #[cfg(test)]

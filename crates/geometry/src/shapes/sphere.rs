@@ -159,6 +159,10 @@ impl Intersect for Sphere {
     fn bounds(&self) -> Aabb {
         Aabb::new(self.center - Vec3::splat(self.radius), self.center + Vec3::splat(self.radius))
     }
+
+    fn bounds_in(&self, to_world: &crate::Transform) -> Aabb {
+        to_world.tightest(to_world.ball_aabb(self.center, self.radius), &self.bounds())
+    }
 }
 
 #[cfg(test)]
