@@ -20,10 +20,15 @@ pub struct ManArgs {
     dir: PathBuf,
 }
 
-/// The completion script of `cmd` for `shell`.
+/// The completion script of `cmd` for `shell`, without its hidden
+/// subcommands (`man`; clap_complete would offer them).
 pub fn script(cmd: &mut clap::Command, shell: Shell) -> Vec<u8> {
+    let mut visible = clap::Command::new("prism")
+        .version(env!("CARGO_PKG_VERSION"))
+        .subcommands(cmd.get_subcommands().filter(|s| !s.is_hide_set()).cloned())
+        .args(cmd.get_arguments().filter(|a| !a.is_hide_set()).cloned());
     let mut out = Vec::new();
-    clap_complete::generate(shell, cmd, "prism", &mut out);
+    clap_complete::generate(shell, &mut visible, "prism", &mut out);
     out
 }
 
@@ -64,6 +69,7 @@ mod tests {
     fn cmd() -> clap::Command {
         clap::Command::new("prism")
             .subcommand(clap::Command::new("render").arg(clap::Arg::new("spp").long("spp")))
+            .subcommand(clap::Command::new("secret-pages").hide(true))
     }
 
     #[test]
@@ -71,6 +77,8 @@ mod tests {
         for shell in [Shell::Bash, Shell::Zsh, Shell::Fish] {
             let s = String::from_utf8(script(&mut cmd(), shell)).unwrap();
             assert!(s.contains("render") && s.contains("spp"), "{shell}: {s}");
+            // A hidden subcommand is not offered.
+            assert!(!s.contains("secret"), "{shell}: {s}");
         }
     }
 }

@@ -31,7 +31,10 @@ pub struct ImageArgs {
     #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
     /// Tone mapping for PNG output: clamp (default), reinhard, aces; EXR stays linear.
-    #[arg(long, value_name = "OP", default_value = "clamp", value_parser = parse_tonemap)]
+    #[arg(long, value_name = "OP", default_value = "clamp", hide_possible_values = true, value_parser = prism_scene::Named {
+        parser: parse_tonemap,
+        names: Tonemap::ALL.map(Tonemap::name).to_vec(),
+    })]
     tonemap: Tonemap,
     /// Write each AOV pass to its own file (OUT-stem.PASS.exr, RGB) instead of as layers of one EXR.
     #[arg(long)]

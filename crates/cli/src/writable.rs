@@ -35,10 +35,19 @@ pub fn check_writable(output: &Path, kind: Output) -> Result<()> {
     }
     let probe = dir.join(format!(".prism-write-check-{}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
-        Ok(_) => {
+        Ok(file) => {
+            let refused = another_users_file(&target, dir, &file);
             // Best effort: the probe is empty and named for this process.
             let _ = std::fs::remove_file(&probe);
-            Ok(())
+            match refused {
+                Some(owner) => bail!(
+                    "{shown}: cannot write {what}: {} belongs to another user (uid {owner}) in {}, a shared folder \
+                     (sticky, as /tmp) where only a file's owner may replace it; remove it or choose another name",
+                    target.display(),
+                    dir.display()
+                ),
+                None => Ok(()),
+            }
         }
         Err(e) => {
             let why = match e.kind() {
@@ -50,6 +59,32 @@ pub fn check_writable(output: &Path, kind: Output) -> Result<()> {
             bail!("{shown}: cannot write {what}: no file can be created in {} ({why})", dir.display())
         }
     }
+}
+
+/// The owner of `target`, if it exists and this process (the owner of
+/// `probe`, a file it just made in `dir`) may not replace it: `dir` is
+/// sticky (as /tmp) and neither the file nor the folder is this user's
+/// (the kernel refuses the rename then, after the render).
+#[cfg(unix)]
+fn another_users_file(target: &Path, dir: &Path, probe: &std::fs::File) -> Option<u32> {
+    use std::os::unix::fs::MetadataExt;
+    let me = probe.metadata().ok()?.uid();
+    let folder = std::fs::metadata(dir).ok()?;
+    let file = std::fs::symlink_metadata(target).ok()?;
+    replace_refused(folder.mode(), folder.uid(), file.uid(), me).then_some(file.uid())
+}
+
+#[cfg(not(unix))]
+fn another_users_file(_: &Path, _: &Path, _: &std::fs::File) -> Option<u32> {
+    None
+}
+
+/// [`another_users_file`]'s rule on a folder's mode and owner, a file's
+/// owner and this user: in a sticky folder only the file's owner, the
+/// folder's owner and root may rename over a file.
+#[cfg(unix)]
+fn replace_refused(dir_mode: u32, dir_owner: u32, file_owner: u32, me: u32) -> bool {
+    dir_mode & 0o1000 != 0 && me != 0 && file_owner != me && dir_owner != me
 }
 
 /// The deepest directory on `output`'s path that exists (`.` if none is
@@ -186,6 +221,17 @@ fn available_bytes(_dir: &Path) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn another_users_file_in_a_sticky_folder_cannot_be_replaced() {
+        // /tmp: 0o1777, root's; a file of user 1000 there, and user 1001.
+        assert!(super::replace_refused(0o41777, 0, 1000, 1001));
+        assert!(!super::replace_refused(0o41777, 0, 1001, 1001), "one's own file");
+        assert!(!super::replace_refused(0o41777, 1001, 1000, 1001), "one's own folder");
+        assert!(!super::replace_refused(0o41777, 0, 1000, 0), "root");
+        assert!(!super::replace_refused(0o40777, 0, 1000, 1001), "not sticky");
+    }
 
     #[test]
     fn a_full_disk_is_refused_and_a_tight_one_warned() {

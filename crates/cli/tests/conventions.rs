@@ -52,9 +52,15 @@ fn completions_generate_for_each_shell() {
         assert!(out.status.success(), "{shell}: {}", text(&out.stderr));
         let s = text(&out.stdout);
         assert!(s.contains(marker), "{shell}: no {marker:?} in\n{s}");
-        for word in ["render", "info", "spp", "aov-preview", "stats-json"] {
+        // The values of --filter and --tonemap, not file names.
+        for word in ["render", "info", "spp", "aov-preview", "stats-json", "blackman-harris", "reinhard"] {
             assert!(s.contains(word), "{shell}: {word} missing");
         }
+        // The hidden `man` (behind `cargo xtask man`) is not offered.
+        assert!(
+            !s.contains("Write the man pages") && !s.contains("prism,man)"),
+            "{shell}: the hidden man command is offered"
+        );
         if shell == "bash" {
             // The bash script parses (zsh and fish are not required here).
             let file = dir.path().join("prism.bash");

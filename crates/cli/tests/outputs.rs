@@ -307,6 +307,31 @@ fn outputs_go_through_links_and_into_pipes_and_devices() {
         .unwrap();
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stdout).trim_start().starts_with('{') && text(&out.stdout).contains("\"rays\""));
+    // An EXR, whose writer seeks back to its table of offsets, down a
+    // pipe (a link to standard output): whole files, plain and layered.
+    symlink("/dev/stdout", p.join("piped.exr")).unwrap();
+    for flags in [&[][..], &["--aov", "depth,object_id"]] {
+        let out = common::prism_cmd(p)
+            .args(["render", "s.toml", "-o", "piped.exr", "--quiet"])
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{flags:?}: {}", text(&out.stderr));
+        let exr = {
+            use exr::prelude::*;
+            read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .all_channels()
+                .all_layers()
+                .all_attributes()
+                .from_buffered(std::io::Cursor::new(&out.stdout))
+        }
+        .unwrap_or_else(|e| panic!("{flags:?}: not a whole EXR ({e}), {} bytes", out.stdout.len()));
+        let channels = exr.layer_data[0].channel_data.list.len();
+        assert_eq!(channels, if flags.is_empty() { 3 } else { 5 }, "{flags:?}");
+    }
+    assert!(fs::symlink_metadata(p.join("piped.exr")).unwrap().file_type().is_symlink());
     // A loop of links is refused before the render, and left as it was.
     symlink("loop.png", p.join("loop.png")).unwrap();
     let out = prism(p, &["render", "s.toml", "-o", "loop.png"]);
@@ -319,6 +344,48 @@ fn outputs_go_through_links_and_into_pipes_and_devices() {
     let out = prism(p, &["render", "s.toml", "-o", "d.png", "--stats-json", "d.json"]);
     common::assert_clean_failure("stats through a link", &out);
     assert!(!p.join("d.png").exists());
+}
+
+/// As another user (nobody, through `setpriv`, which needs root): in a
+/// shared sticky folder (as /tmp), a file of someone else's at an output's
+/// name cannot be replaced; that is said before the render, not after it.
+#[cfg(unix)]
+#[test]
+fn another_users_file_in_a_sticky_folder_is_refused_before_the_render() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let dir = scene_dir();
+    let p = dir.path();
+    fs::write(p.join("b.png"), "someone's").unwrap();
+    fs::write(p.join("c.aov.exr"), "someone's").unwrap();
+    if fs::metadata(p.join("b.png")).unwrap().uid() != 0 {
+        return prism_testkit::skip("running as another user needs root (setpriv)");
+    }
+    fs::set_permissions(p, fs::Permissions::from_mode(0o1777)).unwrap();
+    let as_nobody = |args: &[&str]| {
+        std::process::Command::new("setpriv")
+            .current_dir(p)
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups", env!("CARGO_BIN_EXE_prism")])
+            .args(["render", "s.toml", "--threads", "1"])
+            .args(args)
+            .output()
+    };
+    let Ok(out) = as_nobody(&["-o", "b.png"]) else {
+        return prism_testkit::skip("setpriv is not installed (util-linux)");
+    };
+    for (out, name) in [(out, "b.png"), (as_nobody(&["-o", "c.png", "--aov", "depth"]).unwrap(), "c.aov.exr")]
+    {
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(&format!("{name} belongs to another user (uid 0)")) && !err.contains("rendering"),
+            "{name}: {err}"
+        );
+    }
+    // Nothing was written beside them; a new name is written.
+    assert_eq!(listing(p), ["b.png", "c.aov.exr", "s.toml"]);
+    let out = as_nobody(&["-o", "d.png", "-q"]).unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(p.join("d.png").is_file());
 }
 
 #[test]

@@ -71,6 +71,8 @@ mod wild;
 
 pub use error::{Location, SceneError, line_col};
 pub use obj_view::{ObjOptions, ObjView};
+#[cfg(feature = "clap")]
+pub use overrides::Named;
 pub use overrides::{CameraName, Overrides, parse_vec3, whole_number, whole_u32};
 pub use read::inputs_digest;
 pub use settings::fit_size;

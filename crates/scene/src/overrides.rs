@@ -161,9 +161,41 @@ fn whole_numbers_name_what_is_wrong() {
 }
 
 #[cfg(feature = "clap")]
+pub use cli::Named;
+
+#[cfg(feature = "clap")]
 mod cli {
     use super::{CameraName, Overrides, parse_vec3};
+    use clap::builder::{PossibleValue, TypedValueParser};
     use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches, value_parser};
+
+    /// A flag whose values are names (`--filter`, `--tonemap`): `parser`
+    /// decides, with its own message, and `names` are the values shell
+    /// completion offers and `--help` lists.
+    #[derive(Clone)]
+    pub struct Named<P> {
+        /// The parser of a value.
+        pub parser: P,
+        /// The names it accepts.
+        pub names: Vec<&'static str>,
+    }
+
+    impl<P: TypedValueParser> TypedValueParser for Named<P> {
+        type Value = P::Value;
+
+        fn parse_ref(
+            &self,
+            cmd: &Command,
+            arg: Option<&Arg>,
+            value: &std::ffi::OsStr,
+        ) -> Result<Self::Value, clap::Error> {
+            self.parser.parse_ref(cmd, arg, value)
+        }
+
+        fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+            Some(Box::new(self.names.iter().map(|n| PossibleValue::new(*n))))
+        }
+    }
 
     /// A flag's whole number (`--width`, `--spp`, …; [`super::whole_u32`]).
     fn whole_number(s: &str) -> Result<u32, String> {
@@ -244,7 +276,12 @@ mod cli {
                 Arg::new("filter")
                     .long("filter")
                     .value_name("NAME")
-                    .value_parser(|s: &str| s.parse::<prism_shade::PixelFilter>().map_err(|e| e.to_string()))
+                    .value_parser(Named {
+                        parser: |s: &str| s.parse::<prism_shade::PixelFilter>().map_err(|e| e.to_string()),
+                        names: prism_shade::PixelFilter::ALL.map(prism_shade::PixelFilter::name).to_vec(),
+                    })
+                    // Named in the help's own words; completion offers them.
+                    .hide_possible_values(true)
                     .help("Pixel filter: box, gaussian or blackman-harris [default: the scene's, else box]"),
             )
             .arg(

@@ -151,11 +151,44 @@ pub(crate) fn write_atomic(
         OutputTarget::Replace(target) => replace_atomically(path, &target, encode),
         OutputTarget::Into => {
             let io = |source| OutputError::Io { path: path.to_path_buf(), source };
-            let mut w = BufWriter::new(OpenOptions::new().write(true).open(path).map_err(io)?);
+            // An encoder may seek back (EXR writes its table of offsets
+            // last), which a pipe cannot: the file is made whole in an
+            // unnamed temporary file, then copied in order. Nothing is
+            // written into the pipe if the encoding fails.
+            let Some(spool) = spool_file() else {
+                let mut w = BufWriter::new(OpenOptions::new().write(true).open(path).map_err(io)?);
+                encode(&mut w)?;
+                return w.flush().map_err(io);
+            };
+            let mut w = BufWriter::new(spool);
             encode(&mut w)?;
-            w.flush().map_err(io)
+            let mut spool = w.into_inner().map_err(|e| io(e.into_error()))?;
+            spool.seek(std::io::SeekFrom::Start(0)).map_err(io)?;
+            let mut out = OpenOptions::new().write(true).open(path).map_err(io)?;
+            std::io::copy(&mut spool, &mut out).map_err(io)?;
+            out.flush().map_err(io)
         }
     }
+}
+
+/// A new temporary file that no name leads to (made in the system's
+/// temporary folder and unlinked at once, so nothing is left behind
+/// whatever ends the process), if one can be made there.
+#[cfg(unix)]
+fn spool_file() -> Option<File> {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = std::env::temp_dir().join(format!(".prism-spool-{}-{n}", std::process::id()));
+    use std::os::unix::fs::OpenOptionsExt;
+    let file = OpenOptions::new().read(true).write(true).create_new(true).mode(0o600).open(&path).ok()?;
+    std::fs::remove_file(&path).ok()?;
+    Some(file)
+}
+
+/// Elsewhere an open file cannot be unlinked: written directly.
+#[cfg(not(unix))]
+fn spool_file() -> Option<File> {
+    None
 }
 
 /// Where an output path leads ([`output_target`]).
