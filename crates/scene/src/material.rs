@@ -200,6 +200,12 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
                 ));
             };
             let image = image(p, d.wrap())?;
+            if image.had_alpha() {
+                ctx.note(
+                    &p.span(),
+                    "the image has transparent texels, but a texture's alpha is ignored: they show the colour they hold (for a cut-out use geometry, or a material's `transparency`)",
+                );
+            }
             let mapping = match d.mapping.as_ref().map_or(MappingDef::Uv, |m| *m.get_ref()) {
                 MappingDef::Uv => Mapping::Uv,
                 MappingDef::Spherical => Mapping::Spherical,

@@ -188,3 +188,28 @@ fn cylindrical_mapping_covers_the_whole_height() {
     assert!((px(c - 2, 21) - TL).abs().max_element() < 0.05, "near the top: {}", px(c - 2, 21));
     assert!((px(c + 2, 42) - BR).abs().max_element() < 0.05, "near the bottom: {}", px(c + 2, 42));
 }
+
+#[test]
+fn a_texture_with_transparent_texels_is_warned_about() {
+    // Alpha is ignored: a decal's transparent surround shows whatever
+    // colour it holds (often black), which the user is told.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let rgba = |a: u8| {
+        image::RgbaImage::from_fn(4, 4, move |x, _| image::Rgba([200, 10, 10, if x == 0 { a } else { 255 }]))
+    };
+    rgba(0).save(d.join("decal.png")).expect("can write");
+    rgba(255).save(d.join("opaque.png")).expect("can write");
+    for (file, warned) in [("decal.png", true), ("opaque.png", false), ("labels.png", false)] {
+        write_labelled(d);
+        let text = format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+             [materials.m]\ntexture = {{ type = \"image\", path = \"{file}\" }}\n\
+             [[objects]]\ntype = \"sphere\"\nradius = 1\nmaterial = \"m\"\n"
+        );
+        let loaded = parse_scene_str(&text, d, Path::new("t.toml")).expect("scene loads");
+        let found =
+            loaded.warnings.iter().any(|w| w.starts_with("t.toml:5:") && w.contains("alpha is ignored"));
+        assert_eq!(found, warned, "{file}: {:?}", loaded.warnings);
+    }
+}

@@ -216,6 +216,8 @@ pub struct ImageTexture {
     /// Levels 1 onwards, each half the size of the one before.
     mips: Vec<Level>,
     wrap: Wrap,
+    /// The file had texels that were not opaque (their alpha is ignored).
+    translucent: bool,
 }
 
 impl ImageTexture {
@@ -233,14 +235,15 @@ impl ImageTexture {
         }
         let base = Level { width, height, texels };
         let mips = build_pyramid(&base, wrap);
-        Ok(Self { base, mips, wrap })
+        Ok(Self { base, mips, wrap, translucent: false })
     }
 
     /// Loads a PNG, JPEG, BMP, EXR or Radiance HDR file (the format is guessed from the
     /// content, not the extension) and converts it to linear RGB: 8- and
     /// 16-bit images are taken to be sRGB-encoded and decoded with the sRGB
     /// EOTF ([`srgb_to_linear`]); floating-point images (EXR, HDR) are taken as
-    /// already linear. Alpha is ignored; grey images become grey RGB. An
+    /// already linear. Alpha is ignored ([`ImageTexture::had_alpha`] says
+    /// whether it mattered); grey images become grey RGB. An
     /// Exif orientation (JPEG, PNG) is applied, so that the texture is the
     /// image as a viewer shows it.
     ///
@@ -331,8 +334,10 @@ impl ImageTexture {
         decoded.apply_orientation(orientation);
         let (width, height) = (decoded.width(), decoded.height());
         let texels = linear_texels(&decoded).map_err(|e| err(e.to_string()))?;
+        let translucent = has_translucent_texels(&decoded);
         drop(decoded);
-        Self::from_linear(width, height, texels, wrap).map_err(|e| err(e.to_string()))
+        let t = Self::from_linear(width, height, texels, wrap).map_err(|e| err(e.to_string()))?;
+        Ok(Self { translucent, ..t })
     }
 
     /// The bilinearly filtered colour at texture coordinates `uv`: `u` runs
@@ -353,6 +358,14 @@ impl ImageTexture {
     #[must_use]
     pub fn sample_over(&self, uv: Vec2, duv: [Vec2; 2]) -> Vec3 {
         trilinear(&self.base, &self.mips, self.wrap, uv, lod(self.base.width, self.base.height, duv))
+    }
+
+    /// Whether the file had texels that were not fully opaque: their
+    /// alpha is ignored (a texture is a colour; cut-outs need geometry or
+    /// a material's `transparency`), which a scene loader warns about.
+    #[must_use]
+    pub fn had_alpha(&self) -> bool {
+        self.translucent
     }
 
     /// Number of mip-map levels, the full-resolution image included.
@@ -459,6 +472,19 @@ fn linear_texels(decoded: &image::DynamicImage) -> Result<Vec<Vec3>, std::collec
         other => texels.extend(other.to_rgb32f().pixels().map(|p| Vec3::from_array(p.0.map(srgb_to_linear)))),
     }
     Ok(texels)
+}
+
+/// Whether `decoded` has an alpha channel with any texel below opaque.
+fn has_translucent_texels(decoded: &image::DynamicImage) -> bool {
+    use image::DynamicImage as D;
+    match decoded {
+        D::ImageLumaA8(b) => b.pixels().any(|p| p.0[1] < u8::MAX),
+        D::ImageRgba8(b) => b.pixels().any(|p| p.0[3] < u8::MAX),
+        D::ImageLumaA16(b) => b.pixels().any(|p| p.0[1] < u16::MAX),
+        D::ImageRgba16(b) => b.pixels().any(|p| p.0[3] < u16::MAX),
+        D::ImageRgba32F(b) => b.pixels().any(|p| p.0[3] < 1.0),
+        _ => false,
+    }
 }
 
 #[cfg(test)]
