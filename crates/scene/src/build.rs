@@ -618,6 +618,8 @@ fn far_warning(camera: &Camera, lights: &[Light]) -> Option<String> {
     if camera.aperture() > 0.0 {
         let focus = camera.position() + camera.forward() * camera.focus_distance();
         note("the camera's focus point".into(), reach(&[focus]));
+        // Lens points lie up to the aperture away from the eye.
+        note("the camera's lens".into(), reach(&[camera.position()]) + camera.aperture());
     }
     for (k, l) in lights.iter().enumerate() {
         let points = match l.kind {

@@ -127,9 +127,9 @@ fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
         let (own, common) = entry.keys();
         let all: Vec<&str> = own.iter().chain(common.iter()).copied().collect();
         let name = entry.what();
+        let hint = entry_home(word, &all, entry).unwrap_or_else(|| did_you_mean(word, &all));
         return format!(
-            "unknown key `{shown}` in a {name}{} (a {name} takes: {}, plus {})",
-            did_you_mean(word, &all),
+            "unknown key `{shown}` in a {name}{hint} (a {name} takes: {}, plus {})",
             own.join(", "),
             common.join(", ")
         );
@@ -160,25 +160,54 @@ fn unknown(rest: &str, what: &str, entry: Option<Entry>) -> String {
     format!("unknown {what} `{shown}`{hint} (expected one of: {})", expected.join(", "))
 }
 
+/// Where a key that an object or light (`entry`, whose keys are `all`)
+/// does not take belongs, if elsewhere: a material's (`color` on a
+/// sphere, the commonest slip), a `transform` step's, or another table's
+/// ([`home_of`]).
+fn entry_home(word: &str, all: &[&str], entry: Entry) -> Option<String> {
+    if all.contains(&word) {
+        return None;
+    }
+    if matches!(entry, Entry::Object(_)) {
+        if keys_of::<crate::format::MaterialDef>().iter().any(|k| k == word) {
+            return Some(
+                "; it is a key of a material: write it under `[materials.NAME]` and give the object `material = \"NAME\"`"
+                    .to_owned(),
+            );
+        }
+        if crate::format::TRANSFORM_STEPS.contains(&word) {
+            return Some(format!("; it is a step of `transform`: `transform = [{{ {word} = … }}]`"));
+        }
+    }
+    home_of(word, all).map(|table| format!("; it is a key of `{table}`"))
+}
+
+/// The keys of the table type `T`, from the list serde gives for an
+/// unknown one.
+fn keys_of<T: serde::de::DeserializeOwned>() -> Vec<String> {
+    match toml::from_str::<T>("\"\\u0000\" = 0") {
+        Err(e) => backticked(e.message()).into_iter().skip(1).map(str::to_owned).collect(),
+        Ok(_) => Vec::new(),
+    }
+}
+
 /// The table of a scene file other than the one whose keys are
 /// `expected` that takes the key `word`, if one does: `[camera]` for
 /// `fov`. The keys come from the types, through the list serde gives for
 /// an unknown one.
 fn home_of(word: &str, expected: &[&str]) -> Option<&'static str> {
-    fn keys<T: serde::de::DeserializeOwned>() -> Vec<String> {
-        match toml::from_str::<T>("\"\\u0000\" = 0") {
-            Err(e) => backticked(e.message()).into_iter().skip(1).map(str::to_owned).collect(),
-            Ok(_) => Vec::new(),
-        }
-    }
     use crate::format::{CameraDef, FogDef, RenderDef};
     if expected.contains(&word) {
         return None;
     }
-    [("[render]", keys::<RenderDef>()), ("[camera]", keys::<CameraDef>()), ("[fog]", keys::<FogDef>())]
-        .into_iter()
-        .find(|(_, keys)| keys.iter().any(|k| k == word))
-        .map(|(table, _)| table)
+    [
+        ("[render]", keys_of::<RenderDef>()),
+        ("[camera]", keys_of::<CameraDef>()),
+        ("[fog]", keys_of::<FogDef>()),
+    ]
+    .into_iter()
+    .find(|(_, keys)| keys.iter().any(|k| k == word))
+    .map(|(table, _)| table)
 }
 
 /// `word`, cut to its first 60 characters and "…" when it is longer.

@@ -379,6 +379,9 @@ fn lights_and_cameras_too_far_away_are_warned_about() {
     let focus =
         BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\naperture = 0.1\nfocus_distance = 2e19");
     assert!(at(&focus).expect("a warning").contains("the camera's focus point lies more than 1e18"));
+    // A lens wider than that (its points are the rays' origins).
+    let lens = BASE.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\naperture = 1e20");
+    assert!(at(&lens).expect("a warning").contains("the camera's lens lies more than 1e18"));
     let both =
         BASE.replace("position = [5, 8, 5]", "position = [5, 1e19, 5]").replace("[0, 2, 10]", "[0, 2, 3e19]");
     assert!(

@@ -150,6 +150,23 @@ fn unknown_keys_are_rejected_where_they_are() {
         ),
         // A key of another table: where it goes.
         ("[fog]\nspp = 4\n", "unknown key `spp`; it is a key of `[render]`", Some("spp = 4")),
+        // On an object or a light, too: a material's key (the commonest
+        // slip), a transform step, another table's key.
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1\ncolor = [1, 0, 0.5]\n",
+            "unknown key `color` in a sphere; it is a key of a material: write it under `[materials.NAME]` and give the object `material = \"NAME\"`",
+            Some("color = [1, 0, 0.5]"),
+        ),
+        (
+            "[[objects]]\ntype = \"cuboid\"\nsize = 1\nrotate_y = 30\n",
+            "unknown key `rotate_y` in a cuboid; it is a step of `transform`: `transform = [{ rotate_y = … }]`",
+            Some("rotate_y"),
+        ),
+        (
+            "[[lights]]\nposition = [0, 5, 0]\nspp = 16\n",
+            "unknown key `spp` in a point light; it is a key of `[render]`",
+            Some("spp = 16"),
+        ),
         // The default material's name, which `prism info` would list twice.
         (
             "[materials.\"(default)\"]\ncolor = [1, 0, 0]\n",
