@@ -284,6 +284,25 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
     {
         return m;
     }
+    // `[objects]` written for `[[objects]]`, or `[[camera]]` for `[camera]`.
+    let header = at.trim_start();
+    for (name, list) in [
+        ("objects", true),
+        ("lights", true),
+        ("cameras", true),
+        ("camera", false),
+        ("render", false),
+        ("fog", false),
+    ] {
+        if list && message.starts_with("expected an array") && header.starts_with(&format!("[{name}]")) {
+            return format!(
+                "`{name}` is a list: write each entry under its own `[[{name}]]` header (double brackets), not `[{name}]`"
+            );
+        }
+        if !list && message.ends_with("got an array") && header.starts_with(&format!("[[{name}]]")) {
+            return format!("`{name}` is one table: write `[{name}]` (single brackets), not `[[{name}]]`");
+        }
+    }
     if message.starts_with("duplicate key") && !at.is_empty() {
         return format!("duplicate key `{at}`: it is already defined above");
     }

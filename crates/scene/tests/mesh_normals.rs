@@ -185,3 +185,54 @@ fn a_change_of_material_does_not_crease_computed_normals() {
         }
     }
 }
+
+/// A closed latitude–longitude sphere of radius 1: `rings` bands of
+/// `sides` quads (triangle fans at the poles), wound counter-clockwise
+/// seen from outside, without normals (prism computes smooth ones).
+fn globe_obj(sides: usize, rings: usize) -> String {
+    let mut s = String::from("v 0 1 0\n");
+    for r in 1..rings {
+        let lat = std::f32::consts::PI * r as f32 / rings as f32;
+        for k in 0..sides {
+            let lon = std::f32::consts::TAU * k as f32 / sides as f32;
+            s += &format!("v {} {} {}\n", lat.sin() * lon.cos(), lat.cos(), -lat.sin() * lon.sin());
+        }
+    }
+    s += "v 0 -1 0\n";
+    let at = |r: usize, k: usize| 2 + (r - 1) * sides + k % sides;
+    let south = 2 + (rings - 1) * sides;
+    for k in 0..sides {
+        s += &format!("f 1 {} {}\n", at(1, k), at(1, k + 1));
+        for r in 1..rings - 1 {
+            s += &format!("f {} {} {} {}\n", at(r, k), at(r + 1, k), at(r + 1, k + 1), at(r, k + 1));
+        }
+        s += &format!("f {} {south} {}\n", at(rings - 1, k), at(rings - 1, k + 1));
+    }
+    s
+}
+
+/// A convex mirror against a white sky shows only the sky: every pixel is
+/// white. With smooth normals, grazing rays near the outline were
+/// reflected about the shading normal into the mesh and lost there (black
+/// samples), where the analytic sphere had none.
+#[test]
+fn a_smooth_mirror_mesh_reflects_the_sky_up_to_its_outline() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("globe.obj"), globe_obj(32, 16)).unwrap();
+    let text = "[render]\nwidth = 160\nheight = 120\nspp = 16\nbackground = [1, 1, 1]\n\
+                [camera]\nposition = [0.3, 0.4, 3.2]\nlook_at = [0, 0, 0]\nfov = 45\n\
+                [materials.mirror]\ncolor = [1, 1, 1]\nreflectivity = 1\nambient = 0\ndiffuse = 0\nspecular = 0\n\
+                [[objects]]\ntype = \"mesh\"\npath = \"globe.obj\"\nmaterial = \"mirror\"\n";
+    let loaded = parse_scene_str(text, dir.path(), Path::new("m.toml")).expect("loads");
+    assert!(loaded.warnings.iter().all(|w| !w.contains("inside out")), "{:?}", loaded.warnings);
+    let (image, _) =
+        prism_shade::render(&loaded.scene, &loaded.settings, prism_shade::RenderHooks::default());
+    let dark: Vec<(usize, Vec3)> =
+        image.pixels.iter().copied().enumerate().filter(|(_, p)| p.min_element() < 0.999).collect();
+    assert!(
+        dark.is_empty(),
+        "{} pixels darker than the sky, e.g. {:?}",
+        dark.len(),
+        &dark[..dark.len().min(5)]
+    );
+}

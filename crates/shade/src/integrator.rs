@@ -632,10 +632,21 @@ impl<'a> Tracer<'a> {
         // that stays on this side does not (a shading normal can send a
         // refracted ray back, or a reflected one through).
         let tint = |dir: Vec3| if tints && crosses(dir) { filter } else { Vec3::ONE };
+        // At grazing incidence a shading normal (interpolated on a mesh)
+        // can send the reflected ray through the geometric surface. Into a
+        // surface that lets light through, it goes on (tinted, in the
+        // media beyond, as a refracted ray would); into an opaque mirror it
+        // would be lost (black specks on the outline of a smooth mirror
+        // mesh), so there it is mirrored back across the surface's plane,
+        // the direction on this side nearest the intended one.
+        let opaque = mat.transmission == 0.0 && mat.transparency == 0.0;
+        let onto_this_side = |dir: Vec3| {
+            if opaque && crosses(dir) { dir - 2.0 * dir.dot(hit.geo_normal) * hit.geo_normal } else { dir }
+        };
         // Mirror reflection and the dielectric's reflected part share one ray.
         let k_mirror = mat.reflectivity + mat.transmission * fresnel;
         if k_mirror > 0.0 {
-            let dir = reflect(d, n);
+            let dir = onto_this_side(reflect(d, n));
             let k = k_mirror * tint(dir);
             if self.worth(weight * k) {
                 let r = Ray::spawn_scaled(hit.point, hit.geo_normal, dir, self.offset);

@@ -698,3 +698,24 @@ fn nesting_past_the_readers_limit_is_refused_at_its_line() {
     let header = format!("[{}]\nx = 1\n", vec!["a"; 1000].join("."));
     refused(&[(&header, "tables nested too deep for the reader (recursion limit)", Some("[a.a.a"))]);
 }
+
+#[test]
+fn a_list_written_as_one_table_and_a_table_as_a_list_say_how_to_write_them() {
+    let cam = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    let err = parse(&format!("{cam}[objects]\ntype = \"sphere\"\nradius = 1\n")).unwrap_err().to_string();
+    assert!(
+        err.starts_with(
+            "test.toml:4:1: `objects` is a list: write each entry under its own `[[objects]]` header"
+        ),
+        "{err}"
+    );
+    let err = parse(&format!("{cam}[lights]\nposition = [0, 5, 0]\n")).unwrap_err().to_string();
+    assert!(err.contains("`lights` is a list: write each entry under its own `[[lights]]`"), "{err}");
+    let err = parse("[[camera]]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n").unwrap_err().to_string();
+    assert!(
+        err.contains("`camera` is one table: write `[camera]` (single brackets), not `[[camera]]`"),
+        "{err}"
+    );
+    let err = parse(&format!("{cam}[[render]]\nspp = 4\n")).unwrap_err().to_string();
+    assert!(err.contains("`render` is one table: write `[render]`"), "{err}");
+}
