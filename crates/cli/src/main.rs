@@ -324,7 +324,8 @@ fn info_command(args: &InfoArgs) -> Result<()> {
     let text = if args.json {
         format!("{:#}\n", info::to_json(&loaded, &args.scene))
     } else {
-        info::describe(&loaded, &args.scene)
+        // Names as written in the file, escape sequences made harmless.
+        prism_view::printable(&info::describe(&loaded, &args.scene)).into_owned()
     };
     write_stdout(text.as_bytes(), "the description")
 }

@@ -427,3 +427,26 @@ fn samples_that_are_not_finite_are_warned_of() {
     let out = prism(dir.path(), &["render", "s.toml", "-o", "s.png", "--threads", "1", "-q"]);
     assert!(!text(&out.stderr).contains("not finite"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn escape_sequences_in_a_scene_reach_the_terminal_escaped() {
+    // A name in someone else's scene could recolour or clear the terminal
+    // through an error, a warning or `prism info`.
+    let dir = tempfile::tempdir().unwrap();
+    let named = GOOD
+        .replace("[materials.red]", "[materials.\"r\\u001b[2Jed\"]")
+        .replace("material = \"red\"", "material = \"r\\u001b[2Jed\"");
+    fs::write(dir.path().join("named.toml"), &named).unwrap();
+    let unknown = GOOD.replace("material = \"red\"", "material = \"x\\u001b[31my\"");
+    fs::write(dir.path().join("unknown.toml"), &unknown).unwrap();
+    let info = prism(dir.path(), &["info", "named.toml"]);
+    assert!(info.status.success(), "{}", text(&info.stderr));
+    let render = prism(dir.path(), &["render", "unknown.toml", "-o", "u.png"]);
+    assert!(!render.status.success());
+    for (what, bytes, shown) in
+        [("info", &info.stdout, "r\\u{1b}[2Jed"), ("error", &render.stderr, "x\\u{1b}[31my")]
+    {
+        let t = text(bytes);
+        assert!(!t.contains('\u{1b}') && t.contains(shown), "{what}: {t:?}");
+    }
+}

@@ -37,8 +37,30 @@
 macro_rules! errln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+        let _ = writeln!(std::io::stderr().lock(), "{}", $crate::printable(&format!($($arg)*)));
     }};
+}
+
+/// `text` with its control characters other than line breaks and tabs
+/// escaped (`\u{1b}`): a name in a scene file (a material's, a path)
+/// reaches messages as written, and an escape sequence in it would
+/// recolour or clear the user's terminal.
+#[doc(hidden)]
+#[must_use]
+pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(|c| c.is_control() && c != '\n' && c != '\t') {
+        return text.into();
+    }
+    text.chars()
+        .map(|c| {
+            if c.is_control() && c != '\n' && c != '\t' {
+                c.escape_unicode().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect::<String>()
+        .into()
 }
 
 /// `println!` that never panics, as `errln!` (`prism info --json | head`).
@@ -298,6 +320,13 @@ pub fn check_display() -> Result<(), ViewError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn control_characters_are_escaped_but_line_breaks_and_tabs_kept() {
+        assert_eq!(printable("plain\ttext\n"), "plain\ttext\n");
+        assert_eq!(printable("a\u{1b}[31mRED\u{7}"), "a\\u{1b}[31mRED\\u{7}");
+        assert!(matches!(printable("no escapes"), std::borrow::Cow::Borrowed(_)));
+    }
 
     #[test]
     fn scene_errors_name_the_file_once() {
