@@ -174,7 +174,7 @@ impl Intersect for Cone {
     }
 
     /// The base cap's disk and the apex, each moved out by the side's
-    /// [`super::SEAL`] band (as [`Intersect::bounds`]; the side's radius
+    /// `SEAL` band (as [`Intersect::bounds`]; the side's radius
     /// there is `radius · (1 + SEAL)`): the solid is their convex hull.
     fn bounds_in(&self, to_world: &crate::Transform) -> Aabb {
         let Upright { base, radius, height } = self.0;

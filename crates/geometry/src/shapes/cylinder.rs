@@ -135,7 +135,7 @@ impl Intersect for Cylinder {
         self.0.bounds()
     }
 
-    /// The two caps' disks, each moved out by the side's [`super::SEAL`]
+    /// The two caps' disks, each moved out by the side's `SEAL`
     /// band (as [`Intersect::bounds`]): the solid is their convex hull.
     fn bounds_in(&self, to_world: &crate::Transform) -> Aabb {
         let Upright { base, radius, height } = self.0;
