@@ -306,7 +306,19 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
     if message.starts_with("duplicate key") && !at.is_empty() {
         return format!("duplicate key `{at}`: it is already defined above");
     }
-    if !message.starts_with("string values must be quoted") {
+    let quoted = message.starts_with("string values must be quoted");
+    // toml points a bad float at its first odd character (`45deg` at the
+    // `d`): the number before it is read too.
+    let number_start = text[..span.start]
+        .rfind(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | '_')))
+        .map_or(0, |i| i + 1);
+    let from_number = if quoted { at } else { text.get(number_start..).unwrap_or(at) };
+    if (quoted || message.starts_with("invalid float") || message.starts_with("invalid integer"))
+        && let Some(m) = number_with_unit(from_number.trim())
+    {
+        return m;
+    }
+    if !quoted {
         return message;
     }
     let at = at.trim();
@@ -326,6 +338,18 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
         return format!("expected {wanted} after `{first}`");
     }
     format!("`{at}` is not a value: a string must be quoted ({})", toml::Value::String(at.to_owned()))
+}
+
+/// For a number written with a unit (`45°`, `1m`, `30deg`), which toml
+/// reads as an unquoted string or a bad float: "a number takes no unit".
+fn number_with_unit(at: &str) -> Option<String> {
+    let word = at.split(|c: char| c.is_whitespace() || matches!(c, ',' | ']' | '}' | '#')).next()?;
+    let end = word.find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | '_' | 'e' | 'E')))?;
+    let num = word[..end].trim_end_matches(['e', 'E']);
+    let unit = &word[num.len()..];
+    let value = toml::from_str::<toml::Table>(&format!("v = {num}")).ok()?;
+    matches!(value.get("v"), Some(toml::Value::Integer(_) | toml::Value::Float(_)))
+        .then(|| format!("`{word}` is not a value: a number takes no unit (`{unit}`); write `{num}`"))
 }
 
 /// For a name key (`type = 3`) whose value at `span` of `text` is not a

@@ -719,3 +719,18 @@ fn a_list_written_as_one_table_and_a_table_as_a_list_say_how_to_write_them() {
     let err = parse(&format!("{cam}[[render]]\nspp = 4\n")).unwrap_err().to_string();
     assert!(err.contains("`render` is one table: write `[render]`"), "{err}");
 }
+
+#[test]
+fn a_number_with_a_unit_is_told_that_numbers_take_none() {
+    refused(&[
+        (
+            "[[objects]]\ntype = \"sphere\"\nradius = 1m\n",
+            "`1m` is not a value: a number takes no unit (`m`); write `1`",
+            Some("1m"),
+        ),
+        ("[fog]\nend = 30deg\n", "`30deg` is not a value: a number takes no unit (`deg`); write `30`", None),
+        ("[fog]\nend = 30°\n", "`30°` is not a value: a number takes no unit (`°`); write `30`", Some("30°")),
+        // Not a number at all: still "a string must be quoted".
+        ("[fog]\nend = big\n", "`big` is not a value: a string must be quoted", Some("big")),
+    ]);
+}
