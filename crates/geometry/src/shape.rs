@@ -282,16 +282,21 @@ mod tests {
     fn round_shapes_placed_by_any_transform_have_their_exact_bounds() {
         // A rotated sphere's bounds were those of its rotated box, up to
         // √3 wider (the default fog's end and `prism info` read them).
-        let shapes: [Shape; 4] = [
+        let shapes: [Shape; 5] = [
             Sphere::new(Vec3::new(1.0, -2.0, 0.5), 1.5).unwrap().into(),
             Cylinder::new(Vec3::new(0.5, 1.0, -1.0), 0.7, 2.5).unwrap().into(),
             Cone::new(Vec3::new(-1.0, 0.0, 2.0), 1.2, 3.0).unwrap().into(),
             Disk::new(Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, 2.0, 2.0) / 3.0, 2.0).unwrap().into(),
+            // Tilted a thousandth of a degree: its thin extent along Y is
+            // about 3.5e-5, which `√(1 − n_y²)` rounded to 0.
+            Disk::new(Vec3::ZERO, Vec3::new(1.75e-5, 1.0, 0.0), 2.0).unwrap().into(),
         ];
         let shear = crate::transform::Shear { xy: 0.4, zx: -0.3, ..Default::default() };
         let transforms = [
             Transform::IDENTITY,
             Transform::rotate_y(45f32.to_radians()),
+            // A cap's thin extent along an axis it is nearly across.
+            Transform::rotate_x(1e-5),
             Transform::rotate_axis(Vec3::new(1.0, 2.0, 3.0), 1.0)
                 .unwrap()
                 .then(&Transform::scale(Vec3::new(2.0, 0.5, 1.0)).unwrap())

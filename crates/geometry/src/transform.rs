@@ -322,11 +322,15 @@ impl Transform {
 
     /// World-space bounds of the object-space disk of `radius` about
     /// `centre` across the unit `normal`: exact (an ellipse in the world;
-    /// along world axis `i`, `radius · √(|row_i|² − (row_i · normal)²)`).
+    /// along world axis `i`, `radius · |row_i × normal|`, which is
+    /// `radius · √(|row_i|² − (row_i · normal)²)` without its cancellation
+    /// when a row is nearly along the normal: a disk or cylinder turned by
+    /// a hundredth of a degree lost its thin extent there).
     #[must_use]
     pub fn disk_aabb(&self, centre: Vec3, normal: Vec3, radius: f32) -> Aabb {
         let rows = self.to_world.matrix3.transpose();
-        let across = |r: Vec3A| (r.length_squared() - r.dot(normal.into()).powi(2)).max(0.0).sqrt();
+        let n = Vec3A::from(normal);
+        let across = |r: Vec3A| r.cross(n).length();
         let half = radius * Vec3::new(across(rows.x_axis), across(rows.y_axis), across(rows.z_axis));
         self.centred(centre, half)
     }

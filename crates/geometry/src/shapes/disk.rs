@@ -102,7 +102,9 @@ impl Intersect for Disk {
 
     fn bounds(&self) -> Aabb {
         let n = self.normal;
-        let e = self.radius * (Vec3::ONE - n * n).max(Vec3::ZERO).map(f32::sqrt);
+        // Along axis i, √(1 − n_i²) = √(n_j² + n_k²), the second without
+        // the first's cancellation for a normal nearly along the axis.
+        let e = self.radius * Vec3::new(n.y.hypot(n.z), n.x.hypot(n.z), n.x.hypot(n.y));
         Aabb::new(self.center - e, self.center + e)
     }
 
