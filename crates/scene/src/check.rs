@@ -241,6 +241,19 @@ impl<'a> Ctx<'a> {
     }
 }
 
+/// `items` joined as "a", "a and b", "a, b and c" (`last` "and"), or
+/// with "or".
+pub(crate) fn joined<S: AsRef<str>>(items: &[S], last: &str) -> String {
+    match items.split_last() {
+        None => String::new(),
+        Some((end, [])) => end.as_ref().to_owned(),
+        Some((end, rest)) => {
+            let rest: Vec<&str> = rest.iter().map(AsRef::as_ref).collect();
+            format!("{} {last} {}", rest.join(", "), end.as_ref())
+        }
+    }
+}
+
 /// The largest colour component accepted: a pixel sums up to 65 536
 /// samples of it, times a light's intensity, in single precision.
 pub(crate) const MAX_COLOR: f32 = 1e30;

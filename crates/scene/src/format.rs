@@ -20,15 +20,6 @@ pub type Num = Spanned<f64>;
 pub(crate) const TRANSFORM_STEPS: [&str; 9] =
     ["translate", "rotate_x", "rotate_y", "rotate_z", "rotate", "scale", "shear", "shear_angle", "matrix"];
 
-/// `a, b or c`.
-fn and_or(words: &[&str]) -> String {
-    match words.split_last() {
-        Some((last, [])) => (*last).to_owned(),
-        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
-        None => String::new(),
-    }
-}
-
 /// A struct that is written as a table and nothing else. serde's derived
 /// structs also take an array, field by field in declaration order, and
 /// drop the elements past the last field without a word
@@ -266,7 +257,7 @@ fn with_the_text(text: &str, span: std::ops::Range<usize>, message: String) -> S
         );
     }
     if message.starts_with("wanted exactly 1 element") && in_transform() {
-        let step = and_or(&TRANSFORM_STEPS);
+        let step = crate::check::joined(&TRANSFORM_STEPS, "or");
         return if message.ends_with("more than 1 element") {
             "a transform step takes one key; give each step its own table, in order: \
              `transform = [{ scale = 2 }, { translate = [0, 1, 0] }]`"

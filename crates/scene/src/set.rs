@@ -273,7 +273,10 @@ impl Edited {
                     location.column = location.column.map(|_| column);
                     let sets: Vec<String> = sets.iter().map(|s| format!("{FLAG} {s}")).collect();
                     let values = if sets.len() == 1 { "a value" } else { "values" };
-                    message.push_str(&format!(" (this table holds {values} given by {})", and_list(&sets)));
+                    message.push_str(&format!(
+                        " (this table holds {values} given by {})",
+                        crate::check::joined(&sets, "and")
+                    ));
                 }
             }
         }
@@ -358,15 +361,6 @@ fn cut(pieces: &[Piece], range: Range<usize>) -> Vec<Piece> {
     out
 }
 
-/// `items` joined as "a", "a and b", "a, b and c".
-fn and_list(items: &[String]) -> String {
-    match items.split_last() {
-        None => String::new(),
-        Some((last, [])) => last.clone(),
-        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
-    }
-}
-
 /// A problem of a whole table that sets made (the file has no such table):
 /// every set in it is named, as no one of them alone is at fault.
 fn made_error(sets: &[&str], message: String) -> SceneError {
@@ -376,7 +370,7 @@ fn made_error(sets: &[&str], message: String) -> SceneError {
             let sets: Vec<String> = sets.iter().map(|s| format!("{FLAG} {s}")).collect();
             SceneError::Option {
                 flag: FLAG,
-                message: format!("{message} (in a table made by {})", and_list(&sets)),
+                message: format!("{message} (in a table made by {})", crate::check::joined(&sets, "and")),
             }
         }
     }
