@@ -137,6 +137,24 @@ impl Cone {
     }
 }
 
+/// `rel` (relative to the base) moved onto the side along the side's
+/// normal, within `[0, h]` in height. `o + t·d` from an origin far away
+/// (distance D) is off the surface by up to a few ε·D: from a telephoto
+/// camera a hundred times the cone's size away, more than a spawned ray's
+/// offset, and shadow rays met the side they left (black speckles). The
+/// sphere and the cylinder project their points back the same way.
+#[inline]
+fn onto_side(rel: Vec3, r: f32, h: f32) -> Vec3 {
+    let radial = Vec3::new(rel.x, 0.0, rel.z);
+    let rho = radial.length();
+    // In the half-plane of the point's azimuth, the side is the segment
+    // from (ρ, s) = (0, 0) at the apex to (r, h) at the rim, s = h − y: the
+    // point's projection onto that line is `λ·(r, h)`.
+    let lambda = ((rho * r + (h - rel.y) * h) / (r * r + h * h)).clamp(0.0, 1.0);
+    let to_rim = if rho > 0.0 { radial * (lambda * r / rho) } else { Vec3::ZERO };
+    Vec3::new(to_rim.x, h - lambda * h, to_rim.z)
+}
+
 impl Intersect for Cone {
     #[inline]
     fn intersect_t(&self, ray: &Ray) -> Option<f32> {
@@ -152,9 +170,9 @@ impl Intersect for Cone {
         let n = self.part_normal(rel, part);
         let (rel, uv) = match part {
             Part::Side => {
-                let y = rel.y.clamp(0.0, h);
+                let rel = onto_side(rel, r, h);
                 let radial = Vec3::new(rel.x, 0.0, rel.z);
-                (Vec3::new(rel.x, y, rel.z), Vec2::new(azimuth_u(radial), 1.0 - y / h))
+                (rel, Vec2::new(azimuth_u(radial), 1.0 - rel.y / h))
             }
             Part::Bottom | Part::Top => (Vec3::new(rel.x, 0.0, rel.z), cap_uv(rel, r, false)),
         };
@@ -330,6 +348,40 @@ mod tests {
         let h = c.intersect(&Ray::new(Vec3::new(0.0, 1000.9, 1000.0), 1000.0 * d)).unwrap();
         close3(h.point, Vec3::new(0.0, 0.95, 0.05), 1e-3);
         assert!(h.front_face);
+    }
+
+    #[test]
+    fn hits_from_afar_lie_on_the_side() {
+        // A telephoto camera 10³–10⁵ sizes away: `o + t·d` is off by a few
+        // ε·D (6e-4 at D = 1000), far more than the offset a shadow ray
+        // leaves with, which then met the side again (black speckles). The
+        // point is moved back onto the surface, to ε of the cone's size.
+        let c = Cone::new(Vec3::new(0.3, -0.2, 0.1), 0.6, 1.4).unwrap();
+        let (r, h) = (0.6f32, 1.4f32);
+        let off_surface = |p: Vec3| {
+            let rel = p - Vec3::new(0.3, -0.2, 0.1);
+            ((rel.x.hypot(rel.z) * h - (h - rel.y) * r) / r.hypot(h)).abs()
+        };
+        let mut hits = 0;
+        for dist in [1e3f32, 1e4, 1e5] {
+            for i in 0..200 {
+                let (s, co) = (i as f32 * 0.71).sin_cos();
+                let y = 0.05 + 0.9 * ((i * 7) % 13) as f32 / 12.0;
+                let aim = Vec3::new(0.3, -0.2, 0.1) + Vec3::new(s * r * (1.0 - y), y * h, co * r * (1.0 - y));
+                let from = Vec3::new(s + 0.3 * co, 0.6 + 0.4 * ((i % 5) as f32 - 2.0) / 2.0, co - 0.3 * s);
+                let ray = Ray::new(aim + dist * from.normalize(), -from.normalize());
+                let Some(hit) = c.intersect(&ray) else { continue };
+                hits += 1;
+                assert!(
+                    off_surface(hit.point) <= 4.0 * f32::EPSILON * (r + h),
+                    "D {dist}: {} is {} off the side",
+                    hit.point,
+                    off_surface(hit.point)
+                );
+                assert!(hit.point.y >= -0.2 && hit.point.y <= -0.2 + h, "{}", hit.point);
+            }
+        }
+        assert!(hits > 400, "{hits} hits");
     }
 
     #[test]
