@@ -351,17 +351,21 @@ impl AreaShape {
         let (o, d) = (ray.origin, ray.dir);
         match *self {
             Self::Quad { corner, edge_u, edge_v } => {
+                // The unit normal and the area apart: |n|² is the quad's
+                // size to the fourth, which left f32's range for a quad
+                // 1e10 across (or 1e-12), and the light went unseen.
                 let n = edge_u.cross(edge_v);
+                let area = prism_geometry::length(n);
+                let n = n / area;
                 let denom = n.dot(d);
-                if denom == 0.0 {
+                if denom == 0.0 || !n.is_finite() {
                     return None;
                 }
                 let t = n.dot(corner - o) / denom;
                 let q = o + t * d - corner;
                 // Coordinates of q in the (edge_u, edge_v) basis.
-                let nn = n.length_squared();
-                let s = q.cross(edge_v).dot(n) / nn;
-                let r = edge_u.cross(q).dot(n) / nn;
+                let s = q.cross(edge_v).dot(n) / area;
+                let r = edge_u.cross(q).dot(n) / area;
                 ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&r) && t > 0.0).then_some((t, denom < 0.0))
             }
             Self::Disk { center, normal, radius } => {
@@ -541,6 +545,26 @@ mod tests {
         let a = lattice_point(3, 16, sample_seed(Vec3::ZERO, 0, 16));
         let b = lattice_point(3, 16, sample_seed(Vec3::X, 0, 16));
         assert_ne!(a, b);
+    }
+
+    #[test]
+    fn a_quad_is_met_at_every_scale() {
+        // The scene of the format's scale promise (2⁻⁴⁶ to 2⁴³): a quad
+        // 2 wide, 4 above the eye, scaled as a whole. Its squared area
+        // (the scale⁴) left f32's range at 1e10 and 1e-12: no hit at all.
+        for e in -14..=14 {
+            let s = 10f32.powi(e);
+            let quad = AreaShape::Quad {
+                corner: Vec3::new(-1.0, 4.0, -2.0) * s,
+                edge_u: Vec3::new(2.0, 0.0, 0.0) * s,
+                edge_v: Vec3::new(0.0, 0.0, 2.0) * s,
+            };
+            let centre = Ray::new(Vec3::ZERO, Vec3::new(0.0, 4.0, -1.0) * s);
+            let (t, facing) = quad.intersect(&centre).unwrap_or_else(|| panic!("scale {s}: missed"));
+            assert!((t - 1.0).abs() < 1e-5 && facing, "scale {s}: t {t}");
+            let beside = Ray::new(Vec3::ZERO, Vec3::new(1.1, 4.0, -1.0) * s);
+            assert_eq!(quad.intersect(&beside), None, "scale {s}");
+        }
     }
 
     #[test]
