@@ -151,25 +151,40 @@ pub(crate) fn uv_axes(scene: &Scene, origin: Vec3, h: &SceneHit, dp: [Vec3; 2]) 
             let (Some(uvs), Some(idx)) = (mesh.uvs(), mesh.indices().get(h.triangle as usize)) else {
                 return [Vec2::ZERO; 2];
             };
-            let [p0, p1, p2] = mesh.triangle(h.triangle as usize).map(|p| transform.point(p));
+            let p = mesh.triangle(h.triangle as usize).map(|p| transform.point(p));
             let uv = idx.map(|i| uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
-            let (a, b) = (p0 - p2, p1 - p2);
-            let (gaa, gab, gbb) = (a.dot(a), a.dot(b), b.dot(b));
-            let det = gaa * gbb - gab * gab;
-            if !(det.abs() > 0.0) {
-                return [Vec2::ZERO; 2];
-            }
-            dp.map(|e| {
-                // e ≈ α·a + β·b (least squares in the triangle's plane).
-                let (ra, rb) = (a.dot(e), b.dot(e));
-                let alpha = (gbb * ra - gab * rb) / det;
-                let beta = (gaa * rb - gab * ra) / det;
-                let d = alpha * (uv[0] - uv[2]) + beta * (uv[1] - uv[2]);
-                if d.is_finite() { d } else { Vec2::ZERO }
-            })
+            triangle_uv_axes(p, uv, dp)
         }
         None => [Vec2::ZERO; 2],
     }
+}
+
+/// The footprint axes `dp` (world space, in the plane of the triangle `p`)
+/// in the uv that the triangle's corners carry (`uv`): each axis written
+/// as `α·(p0 − p2) + β·(p1 − p2)` (least squares), then the same sum of
+/// the uv differences. Lengths are measured in units of the triangle's
+/// size: the Gram determinant is that size to the fourth, which left f32's
+/// range for a mesh scaled by 1e10 (or 1e-12), and its texture filtering
+/// went off.
+fn triangle_uv_axes(p: [Vec3; 3], uv: [Vec2; 3], dp: [Vec3; 2]) -> [Vec2; 2] {
+    let (a, b) = (p[0] - p[2], p[1] - p[2]);
+    let k = a.abs().max_element().max(b.abs().max_element()).recip();
+    if !(k.is_finite() && k > 0.0) {
+        return [Vec2::ZERO; 2];
+    }
+    let (a, b) = (a * k, b * k);
+    let (gaa, gab, gbb) = (a.dot(a), a.dot(b), b.dot(b));
+    let det = gaa * gbb - gab * gab;
+    if !(det.abs() > 0.0) {
+        return [Vec2::ZERO; 2];
+    }
+    dp.map(|e| {
+        let (ra, rb) = (a.dot(e * k), b.dot(e * k));
+        let alpha = (gbb * ra - gab * rb) / det;
+        let beta = (gaa * rb - gab * ra) / det;
+        let d = alpha * (uv[0] - uv[2]) + beta * (uv[1] - uv[2]);
+        if d.is_finite() { d } else { Vec2::ZERO }
+    })
 }
 
 /// The shorter of two differences (either may be missing); zero if both are.
@@ -227,6 +242,25 @@ mod tests {
         // Flat glass: angles scale by n1/n2.
         let t = c.refract(0.1, 1.0 / 1.5, 0.0);
         assert!((t.spread - 0.01 / 1.5).abs() < 1e-7);
+    }
+
+    #[test]
+    fn a_triangles_uv_axes_do_not_depend_on_its_scale() {
+        // A right triangle whose uv is its position over 4, so that an
+        // axis `e` in its plane maps to `e / 4` in uv, scaled as a whole.
+        let uv = [Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0), Vec2::ZERO];
+        for exp in -14..=14 {
+            let s = 10f32.powi(exp);
+            let p = [Vec3::new(4.0, 0.0, 0.0) * s, Vec3::new(0.0, 4.0, 0.0) * s, Vec3::ZERO];
+            let dp = [Vec3::new(0.02, 0.0, 0.0) * s, Vec3::new(0.01, 0.03, 0.0) * s];
+            let got = triangle_uv_axes(p, uv, dp);
+            for (g, want) in got.iter().zip([Vec2::new(0.005, 0.0), Vec2::new(0.0025, 0.0075)]) {
+                assert!((*g - want).length() < 1e-6, "scale {s}: {g} for {want}");
+            }
+        }
+        // A triangle of no area has no uv axes.
+        let line = [Vec3::ZERO, Vec3::X, 2.0 * Vec3::X];
+        assert_eq!(triangle_uv_axes(line, uv, [Vec3::X; 2]), [Vec2::ZERO; 2]);
     }
 
     #[test]
