@@ -49,7 +49,8 @@ pub fn check_orbit(orbit: f32) -> Result<()> {
 /// If the turned camera is invalid (it cannot be, for a valid `camera`
 /// and finite `orbit`).
 pub fn orbit_camera(camera: &Camera, orbit: f32, index: u32, count: u32) -> Result<Camera> {
-    let angle = (f64::from(orbit) * f64::from(index) / f64::from(count.max(1))).to_radians() as f32;
+    // Within a turn first, in f64: a large orbit's f32 radians are coarse.
+    let angle = ((f64::from(orbit) * f64::from(index) / f64::from(count.max(1))) % 360.0).to_radians() as f32;
     let turn = Quat::from_axis_angle(Vec3::Y, angle);
     let centre = camera.look_at();
     // Projection and lens travel with the camera: frame 0 is the scene's own view.
@@ -152,6 +153,10 @@ mod tests {
             assert!((c.position().y - 2.0).abs() < 1e-6);
         }
         assert_eq!(orbit_camera(&cam, 360.0, 0, 3).unwrap(), cam);
+        // 1e9° is 280°: reduced in f64 before its f32 radians, which are
+        // spaced 2 apart at 1.7e7.
+        let (big, small) = (orbit_camera(&cam, 1e9, 1, 1).unwrap(), orbit_camera(&cam, 280.0, 1, 1).unwrap());
+        assert!((big.position() - small.position()).length() < 1e-5, "{:?}", big.position());
     }
 
     #[test]

@@ -241,6 +241,14 @@ impl<'a> Ctx<'a> {
     }
 }
 
+/// An angle in degrees brought within ±360° (exactly, in f64) before it
+/// becomes an f32: `1e9` degrees is 280°, but its f32 radians (1.7e7,
+/// spaced 2 apart) turned by a random angle. Angles within ±360° are
+/// returned as they are; non-finite ones stay non-finite (NaN).
+pub(crate) fn within_a_turn(degrees: f64) -> f64 {
+    if degrees.abs() > 360.0 { degrees % 360.0 } else { degrees }
+}
+
 /// `items` joined as "a", "a and b", "a, b and c" (`last` "and"), or
 /// with "or".
 pub(crate) fn joined<S: AsRef<str>>(items: &[S], last: &str) -> String {

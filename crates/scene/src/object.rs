@@ -195,10 +195,11 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
             Step::Translate(v) => Transform::translate(vec3_of(v.get_ref()).ok_or_else(|| bad("translate"))?)
                 .map_err(|e| ctx.geometry(&span, e))?,
             Step::RotateX(a) | Step::RotateY(a) | Step::RotateZ(a) => {
-                let a = f(*a.get_ref());
-                if !a.is_finite() {
+                let a = *a.get_ref();
+                if !f(a).is_finite() {
                     return Err(bad("a rotation angle"));
                 }
+                let a = f(crate::check::within_a_turn(a));
                 match step.get_ref() {
                     Step::RotateX(_) => Transform::rotate_x(a.to_radians()),
                     Step::RotateY(_) => Transform::rotate_y(a.to_radians()),
@@ -207,10 +208,11 @@ pub(crate) fn transform(ctx: &Ctx, d: &ObjectDef) -> Result<Transform> {
             }
             Step::Rotate(r) => {
                 let axis = vec3_of(&r.get_ref().axis).ok_or_else(|| bad("a rotation axis"))?;
-                let deg = f(r.get_ref().degrees);
-                if !deg.is_finite() {
+                let deg = r.get_ref().degrees;
+                if !f(deg).is_finite() {
                     return Err(bad("a rotation angle"));
                 }
+                let deg = f(crate::check::within_a_turn(deg));
                 Transform::rotate_axis(axis, deg.to_radians()).map_err(|e| ctx.geometry(&span, e))?
             }
             Step::Scale(s) => {

@@ -255,7 +255,9 @@ pub(crate) fn environment(
     image: &mut dyn FnMut(&Spanned<String>) -> Result<Arc<ImageTexture>>,
 ) -> Result<Option<Environment>> {
     let BackgroundDef::Image(e) = bg else { return Ok(None) };
-    let rotation_deg = ctx.opt_num(e.rotation.as_ref(), 0.0, |n| ctx.finite(n, "background rotation"))?;
+    let rotation_deg = ctx.opt_num(e.rotation.as_ref(), 0.0, |n| {
+        ctx.finite(n, "background rotation").map(|_| crate::check::within_a_turn(*n.get_ref()) as f32)
+    })?;
     Ok(Some(Environment { image: image(&e.image)?, rotation_deg }))
 }
 

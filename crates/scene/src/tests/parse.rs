@@ -2,9 +2,12 @@
 //! error with its line and column.
 
 use super::*;
+use crate::format::SceneFile;
 use prism_bvh::Object;
 use prism_geometry::glam::Vec3;
-use prism_shade::{Aov, FogMode, Texture};
+use prism_shade::{Aov, FogMode, ImageTexture, Texture, Wrap};
+use std::path::Path;
+use std::sync::Arc;
 
 #[test]
 fn a_full_scene_parses() {
@@ -94,6 +97,36 @@ name = "a label"
     assert!((cone.transform.point(Vec3::ZERO) - Vec3::new(4.0, 0.0, 0.0)).length() < 1e-6);
     assert_eq!(loaded.settings.spp, 2);
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+}
+
+#[test]
+fn large_angles_turn_as_their_remainder_in_a_turn() {
+    // 1e9° is 280°; its f32 radians (1.7e7, spaced 2 apart) were not.
+    let cam = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    let turned = |steps: &str| {
+        let text = format!("{cam}[[objects]]\ntype = \"cuboid\"\nsize = 1\ntransform = [{steps}]\n");
+        let loaded = parse(&text).unwrap();
+        let Object::Shape(inst) = &loaded.scene.accel.objects()[0] else { panic!("a shape") };
+        inst.transform.point(Vec3::new(1.0, 0.5, 0.25))
+    };
+    for (big, small) in [
+        ("{ rotate_y = 1e9 }", "{ rotate_y = 280 }"),
+        ("{ rotate_x = -3600045 }", "{ rotate_x = -45 }"),
+        (
+            "{ rotate = { axis = [1, 1, 0], degrees = 7.2e10 } }",
+            "{ rotate = { axis = [1, 1, 0], degrees = 0 } }",
+        ),
+    ] {
+        let (a, b) = (turned(big), turned(small));
+        assert!((a - b).length() < 1e-6, "{big}: {a}, {small}: {b}");
+    }
+    let text = format!("{cam}[render]\nbackground = {{ image = \"sky.png\", rotation = 1e9 }}\n");
+    let file = SceneFile::parse(&text, Path::new("t.toml")).unwrap();
+    let ctx = crate::check::Ctx::new(Path::new("t.toml"), &text);
+    let bg = file.render.as_ref().unwrap().get_ref().background.as_ref().unwrap();
+    let image = Arc::new(ImageTexture::from_linear(1, 1, vec![Vec3::ONE], Wrap::Repeat).unwrap());
+    let env = crate::view::environment(&ctx, bg.get_ref(), &mut |_| Ok(image.clone())).unwrap().unwrap();
+    assert_eq!(env.rotation_deg, 280.0);
 }
 
 #[test]
