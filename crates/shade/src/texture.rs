@@ -290,9 +290,12 @@ impl ImageTexture {
             err(match &e {
                 // Plain words first; the decoder's own after them.
                 // (Some decoders end their text in a line break.)
-                image::ImageError::Decoding(_) => {
-                    format!("the {name} data is corrupt or cut short ({})", e.to_string().trim_end())
-                }
+                image::ImageError::Decoding(_) => match exr_channels_without_rgb(path, format) {
+                    Some(names) => format!(
+                        "the EXR image has no R, G and B channels (its channels: {names}); prism reads RGB or RGBA EXR images"
+                    ),
+                    None => format!("the {name} data is corrupt or cut short ({})", e.to_string().trim_end()),
+                },
                 image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
                     format!("the {name} data is cut short: the file ends before the image does")
                 }
@@ -441,6 +444,27 @@ impl TextureCost {
         let mips = texels / 3 + 64;
         Self { width, height, peak: texels + decoded.max(mips), kept: texels + mips }
     }
+}
+
+/// The channel names of an EXR file none of whose layers has R, G and B
+/// channels (a luminance `Y` image, a depth pass), which the decoder
+/// refuses with "does not contain non-deep rgb channels": the file is not
+/// corrupt, and its channels say what it is. `None` for other formats and
+/// for EXR files with RGB layers or unreadable headers.
+fn exr_channels_without_rgb(path: &Path, format: image::ImageFormat) -> Option<String> {
+    if format != image::ImageFormat::OpenExr {
+        return None;
+    }
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).ok()?;
+    let mut names = Vec::new();
+    for header in &meta.headers {
+        let layer: Vec<String> = header.channels.list.iter().map(|c| c.name.to_string()).collect();
+        if ["R", "G", "B"].iter().all(|rgb| layer.iter().any(|n| n == rgb)) {
+            return None;
+        }
+        names.extend(layer);
+    }
+    Some(if names.is_empty() { "none".to_owned() } else { names.join(", ") })
 }
 
 /// The decoded image's texels in linear RGB, converted straight from its
@@ -730,6 +754,32 @@ mod tests {
             }
         }
         !c
+    }
+
+    #[test]
+    fn an_exr_without_rgb_is_told_by_its_channels_not_called_corrupt() {
+        use crate::exr::{ExrChannel, ExrLayer, LayeredExr, write_layered_exr};
+        let grey = temp("grey.exr");
+        let layer = |channels: Vec<ExrChannel>| LayeredExr {
+            width: 4,
+            height: 2,
+            data_window: crate::PixelBounds::new(0, 4, 0, 2).expect("bounds"),
+            layers: vec![ExrLayer { name: String::new(), channels }],
+            attributes: Default::default(),
+        };
+        write_layered_exr(&grey, &layer(vec![ExrChannel::f32("Y", vec![0.5; 8])])).expect("can write");
+        match ImageTexture::load(&grey, Wrap::Repeat) {
+            Err(ShadeError::Texture { reason, .. }) => assert_eq!(
+                reason,
+                "the EXR image has no R, G and B channels (its channels: Y); prism reads RGB or RGBA EXR images"
+            ),
+            other => panic!("{other:?}"),
+        }
+        // R, G and B load (the same writer, so the test's file is sound).
+        let rgb = ["R", "G", "B"].map(|c| ExrChannel::f32(c, vec![0.25; 8])).to_vec();
+        write_layered_exr(&grey, &layer(rgb)).expect("can write");
+        assert_eq!(ImageTexture::load(&grey, Wrap::Repeat).expect("loads").texel(1, 1), Vec3::splat(0.25));
+        let _ = std::fs::remove_file(&grey);
     }
 
     #[test]
