@@ -241,6 +241,23 @@ impl<'a> Ctx<'a> {
     }
 }
 
+/// Warns, at `span` (where the scene names the image), about texels of a
+/// float image with a negative, infinite or NaN channel: they read as 0,
+/// so a sun stored as +inf would be a black spot.
+pub(crate) fn note_unusable_texels(ctx: &Ctx, span: &Range<usize>, image: &prism_shade::ImageTexture) {
+    let bad = image.unusable_texels();
+    if bad > 0 {
+        let all = u64::from(image.width()) * u64::from(image.height());
+        let have = if bad == 1 { "has" } else { "have" };
+        ctx.note(
+            span,
+            &format!(
+                "{bad} of the image's {all} texels {have} a negative, infinite or NaN channel, which reads as 0 (black)"
+            ),
+        );
+    }
+}
+
 /// An angle in degrees brought within ±360° (exactly, in f64) before it
 /// becomes an f32: `1e9` degrees is 280°, but its f32 radians (1.7e7,
 /// spaced 2 apart) turned by a random angle. Angles within ±360° are

@@ -200,6 +200,7 @@ fn texture(ctx: &Ctx, t: &Spanned<TextureDef>, image: &mut ImageOf) -> Result<Te
                 ));
             };
             let image = image(p, d.wrap())?;
+            crate::check::note_unusable_texels(ctx, &p.span(), &image);
             if image.had_alpha() {
                 ctx.note(
                     &p.span(),

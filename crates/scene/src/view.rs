@@ -258,7 +258,9 @@ pub(crate) fn environment(
     let rotation_deg = ctx.opt_num(e.rotation.as_ref(), 0.0, |n| {
         ctx.finite(n, "background rotation").map(|_| crate::check::within_a_turn(*n.get_ref()) as f32)
     })?;
-    Ok(Some(Environment { image: image(&e.image)?, rotation_deg }))
+    let image = image(&e.image)?;
+    crate::check::note_unusable_texels(ctx, &e.image.span(), &image);
+    Ok(Some(Environment { image, rotation_deg }))
 }
 
 /// The fog of a `[fog]` table, checked: the fog's medium, and whether the

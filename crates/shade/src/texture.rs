@@ -218,6 +218,9 @@ pub struct ImageTexture {
     wrap: Wrap,
     /// The file had texels that were not opaque (their alpha is ignored).
     translucent: bool,
+    /// Texels of a floating-point file (EXR, HDR) with a negative,
+    /// infinite or NaN channel, read as 0 there.
+    unusable: u64,
 }
 
 impl ImageTexture {
@@ -235,7 +238,7 @@ impl ImageTexture {
         }
         let base = Level { width, height, texels };
         let mips = build_pyramid(&base, wrap);
-        Ok(Self { base, mips, wrap, translucent: false })
+        Ok(Self { base, mips, wrap, translucent: false, unusable: 0 })
     }
 
     /// Loads a PNG, JPEG, BMP, EXR or Radiance HDR file (the format is guessed from the
@@ -336,11 +339,11 @@ impl ImageTexture {
         let mut decoded = image::DynamicImage::from_decoder(decoder).map_err(decoding)?;
         decoded.apply_orientation(orientation);
         let (width, height) = (decoded.width(), decoded.height());
-        let texels = linear_texels(&decoded).map_err(|e| err(e.to_string()))?;
+        let (texels, unusable) = linear_texels(&decoded).map_err(|e| err(e.to_string()))?;
         let translucent = has_translucent_texels(&decoded);
         drop(decoded);
         let t = Self::from_linear(width, height, texels, wrap).map_err(|e| err(e.to_string()))?;
-        Ok(Self { translucent, ..t })
+        Ok(Self { translucent, unusable, ..t })
     }
 
     /// The bilinearly filtered colour at texture coordinates `uv`: `u` runs
@@ -369,6 +372,15 @@ impl ImageTexture {
     #[must_use]
     pub fn had_alpha(&self) -> bool {
         self.translucent
+    }
+
+    /// How many texels of a floating-point file (EXR, HDR) had a channel
+    /// that was negative, infinite or NaN: such a channel reads as 0 (a
+    /// NaN or infinity would poison every pixel that filters it), which a
+    /// scene loader warns about.
+    #[must_use]
+    pub fn unusable_texels(&self) -> u64 {
+        self.unusable
     }
 
     /// Number of mip-map levels, the full-resolution image included.
@@ -472,7 +484,11 @@ fn exr_channels_without_rgb(path: &Path, format: image::ImageFormat) -> Option<S
 /// through the sRGB EOTF, floats taken as linear (non-finite or negative
 /// ones as 0). The buffer is reserved fallibly, so a texture too large for
 /// the memory left is an error, not an abort.
-fn linear_texels(decoded: &image::DynamicImage) -> Result<Vec<Vec3>, std::collections::TryReserveError> {
+/// The texels in linear RGB, and how many float texels had a channel that
+/// was negative, infinite or NaN (read as 0).
+fn linear_texels(
+    decoded: &image::DynamicImage,
+) -> Result<(Vec<Vec3>, u64), std::collections::TryReserveError> {
     use image::DynamicImage as D;
     let mut texels = Vec::new();
     texels.try_reserve_exact(decoded.width() as usize * decoded.height() as usize)?;
@@ -480,7 +496,15 @@ fn linear_texels(decoded: &image::DynamicImage) -> Result<Vec<Vec3>, std::collec
     let s8 = |c: &[u8]| Vec3::new(lut8[c[0] as usize], lut8[c[1] as usize], lut8[c[2] as usize]);
     let s16 = |c: [u16; 3]| Vec3::from_array(c.map(|v| srgb_to_linear(f32::from(v) / 65535.0)));
     // Non-finite or negative texels would poison every pixel that sees them.
-    let float = |c: Vec3| if c.is_finite() { c.max(Vec3::ZERO) } else { Vec3::ZERO };
+    let mut unusable = 0u64;
+    let mut float = |c: Vec3| {
+        if c.cmpge(Vec3::ZERO).all() && c.is_finite() {
+            c
+        } else {
+            unusable += 1;
+            Vec3::select(c.cmpge(Vec3::ZERO) & c.is_finite_mask(), c, Vec3::ZERO)
+        }
+    };
     match decoded {
         D::ImageLuma8(b) => texels.extend(b.pixels().map(|p| s8(&[p.0[0]; 3]))),
         D::ImageLumaA8(b) => texels.extend(b.pixels().map(|p| s8(&[p.0[0]; 3]))),
@@ -495,7 +519,7 @@ fn linear_texels(decoded: &image::DynamicImage) -> Result<Vec<Vec3>, std::collec
         // Any other layout a later `image` adds: through its own conversion.
         other => texels.extend(other.to_rgb32f().pixels().map(|p| Vec3::from_array(p.0.map(srgb_to_linear)))),
     }
-    Ok(texels)
+    Ok((texels, unusable))
 }
 
 /// Whether `decoded` has an alpha channel with any texel below opaque.
@@ -542,7 +566,8 @@ mod tests {
                 .pixels()
                 .map(|p| Vec3::from_array(if float { p.0 } else { p.0.map(srgb_to_linear) }))
                 .collect();
-            let got = linear_texels(&d).unwrap();
+            let (got, unusable) = linear_texels(&d).unwrap();
+            assert_eq!(unusable, 0);
             assert_eq!(got.len(), want.len());
             for (g, w) in got.iter().zip(&want) {
                 assert!((*g - *w).abs().max_element() <= 1e-6, "{:?}: {g} against {w}", d.color());

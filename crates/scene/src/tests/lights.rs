@@ -270,6 +270,50 @@ fn background_images_are_built_with_their_rotation_and_refused_when_unreadable()
 }
 
 #[test]
+fn float_texels_that_read_as_black_are_warned_about_where_the_image_is_named() {
+    use prism_shade::{ExrChannel, ExrLayer, LayeredExr, PixelBounds, write_layered_exr};
+    let dir = tempfile::tempdir().unwrap();
+    // Columns 0.5, +inf, −2, −inf in R; G and B fine. (The writer
+    // stores NaN as 0.)
+    let r = [0.5, f32::INFINITY, -2.0, f32::NEG_INFINITY].repeat(2);
+    let exr = LayeredExr {
+        width: 4,
+        height: 2,
+        data_window: PixelBounds::new(0, 4, 0, 2).unwrap(),
+        layers: vec![ExrLayer {
+            name: String::new(),
+            channels: vec![
+                ExrChannel::f32("R", r),
+                ExrChannel::f32("G", vec![0.25; 8]),
+                ExrChannel::f32("B", vec![0.25; 8]),
+            ],
+        }],
+        attributes: Default::default(),
+    };
+    write_layered_exr(&dir.path().join("sky.exr"), &exr).unwrap();
+    let text = BASE.replace("spp = 2", "spp = 2\nbackground = { image = \"sky.exr\" }");
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("t.toml")).unwrap();
+    let line = text.lines().position(|l| l.contains("sky.exr")).unwrap() + 1;
+    let want = "6 of the image's 8 texels have a negative, infinite or NaN channel, which reads as 0 (black)";
+    assert!(
+        loaded.warnings.iter().any(|w| w.starts_with(&format!("t.toml:{line}:")) && w.ends_with(want)),
+        "{:?}",
+        loaded.warnings
+    );
+    // Only the bad channel is 0: the texel keeps its G and B.
+    let env = loaded.scene.environment.expect("an environment");
+    assert_eq!(env.image.texel(1, 0), Vec3::new(0.0, 0.25, 0.25));
+    assert_eq!(env.image.texel(0, 0), Vec3::new(0.5, 0.25, 0.25));
+    // The same file as a texture.
+    let text = BASE.replace(
+        "[materials.red]",
+        "[materials.sky]\ntexture = { type = \"image\", path = \"sky.exr\" }\n\n[materials.red]",
+    );
+    let loaded = parse_scene_str(&text, dir.path(), Path::new("t.toml")).unwrap();
+    assert!(loaded.warnings.iter().any(|w| w.ends_with(want)), "{:?}", loaded.warnings);
+}
+
+#[test]
 fn a_radiance_hdr_background_is_read_linear() {
     let dir = tempfile::tempdir().unwrap();
     // A 4 × 2 Radiance HDR sky, every texel (2, 0.5, 0.25): brighter than 1, linear.
