@@ -10,10 +10,25 @@ fn v(p: Vec3) -> String {
     format!("({}, {}, {})", trim(p.x), trim(p.y), trim(p.z))
 }
 
+/// `x` short: three decimals from 0.001 to a million (more below 1, so
+/// that four significant digits are kept: 0.0012), trailing zeros
+/// dropped; beyond that range in scientific notation (`4e-4`, `1.235e7`),
+/// so that a small intensity does not print as 0.
 fn trim(x: f32) -> String {
-    let s = format!("{x:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
+    let zeros = |s: &str| s.trim_end_matches('0').trim_end_matches('.').to_owned();
+    let a = x.abs();
+    if a == 0.0 || !a.is_finite() {
+        return if a == 0.0 { "0".into() } else { x.to_string() };
+    }
+    if (1e-3..1e6).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).clamp(3, 6) as usize;
+        return zeros(&format!("{x:.decimals$}"));
+    }
+    let s = format!("{x:.3e}");
+    match s.split_once('e') {
+        Some((mantissa, exp)) => format!("{}e{exp}", zeros(mantissa)),
+        None => s,
+    }
 }
 
 /// The description printed by `prism info`.
@@ -269,5 +284,32 @@ fn falloff_text(f: Falloff) -> &'static str {
     match f {
         Falloff::None => "",
         Falloff::InverseSquare => ", inverse-square",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::trim;
+
+    #[test]
+    fn numbers_keep_their_significant_digits() {
+        for (x, want) in [
+            (0.0, "0"),
+            (-0.0, "0"),
+            (1.0, "1"),
+            (-2.5, "-2.5"),
+            (12.345, "12.345"),
+            (0.0012, "0.0012"),
+            (0.5, "0.5"),
+            (1234.5, "1234.5"),
+            // A dim light's intensity printed as "× 0".
+            (0.0004, "4e-4"),
+            (1e-30, "1e-30"),
+            (-3.25e-5, "-3.25e-5"),
+            (12_345_678.0, "1.235e7"),
+            (f32::INFINITY, "inf"),
+        ] {
+            assert_eq!(trim(x), want, "{x}");
+        }
     }
 }
