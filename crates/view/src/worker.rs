@@ -8,7 +8,7 @@
 
 use crate::ViewError;
 use crate::state::{SamplePlan, View};
-use prism_geometry::glam::Vec3;
+use prism_geometry::glam::DVec3;
 use prism_shade::{Image, RenderHooks, RenderSettings, Scene, linear_to_srgb8, render_samples};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -280,7 +280,7 @@ impl Worker {
             passes += 1;
             if acc.samples == 1 || acc.samples >= spp || since.elapsed() >= FRAME_INTERVAL {
                 // `render` scales the sums by this same f32 factor.
-                let pixels = to_pixels(&acc.sum, 1.0 / acc.samples as f32);
+                let pixels = to_pixels(&acc.sum(), 1.0 / acc.samples as f32);
                 let kind = FrameKind::Pass { samples_done: acc.samples, passes };
                 let seconds = since.elapsed().as_secs_f64();
                 self.tx.send(Frame {
@@ -326,8 +326,12 @@ fn adapt_coarse_factor(factor: u32, seconds: f64, finest: u32) -> u32 {
 /// Running per-pixel sums of refinement passes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Accumulator {
-    /// Per-pixel sums of every sample so far.
-    pub sum: Image,
+    width: u32,
+    height: u32,
+    /// Per-pixel sums of every sample so far, in f64 as `render` sums a
+    /// pixel's samples: passes of one sample each, added in order, give
+    /// its sums bit for bit.
+    sums: Vec<DVec3>,
     /// Samples per pixel summed.
     pub samples: u32,
 }
@@ -336,19 +340,27 @@ impl Accumulator {
     /// An empty accumulator for a `w × h` image.
     #[must_use]
     pub fn new(w: u32, h: u32) -> Self {
-        Self {
-            sum: Image { width: w, height: h, pixels: vec![Vec3::ZERO; w as usize * h as usize] },
-            samples: 0,
-        }
+        Self { width: w, height: h, sums: vec![DVec3::ZERO; w as usize * h as usize], samples: 0 }
     }
 
     /// Adds a pass of per-pixel sums; `samples_done` is the number of
     /// samples per pixel summed after it.
     pub fn add(&mut self, pass: &Image, samples_done: u32) {
-        for (a, p) in self.sum.pixels.iter_mut().zip(&pass.pixels) {
-            *a += *p;
+        for (a, p) in self.sums.iter_mut().zip(&pass.pixels) {
+            *a += p.as_dvec3();
         }
         self.samples = samples_done;
+    }
+
+    /// The per-pixel sums so far, rounded to f32 (as `render_samples`
+    /// returns them).
+    #[must_use]
+    pub fn sum(&self) -> Image {
+        Image {
+            width: self.width,
+            height: self.height,
+            pixels: self.sums.iter().map(|p| p.as_vec3()).collect(),
+        }
     }
 
     /// The mean image so far (as `render` returns it once complete).
@@ -356,9 +368,9 @@ impl Accumulator {
     pub fn mean(&self) -> Image {
         let inv = 1.0 / self.samples.max(1) as f32;
         Image {
-            width: self.sum.width,
-            height: self.sum.height,
-            pixels: self.sum.pixels.iter().map(|p| *p * inv).collect(),
+            width: self.width,
+            height: self.height,
+            pixels: self.sums.iter().map(|p| p.as_vec3() * inv).collect(),
         }
     }
 }
