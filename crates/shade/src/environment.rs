@@ -34,6 +34,21 @@ impl Environment {
     #[inline]
     #[must_use]
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        self.radiance_over(dir, 0.0)
+    }
+
+    /// The radiance arriving from around `dir` within a cone `angle`
+    /// radians across (a pixel's ray cone at infinity): the image read
+    /// trilinearly in its mip-map, as image textures are, at the level of
+    /// the cone's extent in texels, so that a detailed sky does not alias
+    /// where a pixel sees many of its texels. Across `u` the cone spans
+    /// `angle / (2π sin θ)` of the width, more near the poles; the level
+    /// takes at most eight times its extent along `v` (within 7° of a
+    /// pole), so that the sky around the zenith is not blurred along `v`
+    /// for the sake of columns that all meet there. `0`: the point.
+    #[inline]
+    #[must_use]
+    pub fn radiance_over(&self, dir: Vec3, angle: f32) -> Vec3 {
         let d = dir.normalize_or(Vec3::Y);
         let u = 0.5 + d.x.atan2(-d.z) / TAU + self.rotation_deg / 360.0;
         // Around the poles, between the first (or last) row's centres and
@@ -41,8 +56,15 @@ impl Environment {
         // filtering across the top edge would mix in the bottom row, the
         // other pole.
         let half = 0.5 / self.image.height() as f32;
-        let v = (d.y.clamp(-1.0, 1.0).acos() / PI).clamp(half, 1.0 - half);
-        self.image.sample(Vec2::new(u - u.floor(), v))
+        let y = d.y.clamp(-1.0, 1.0);
+        let v = (y.acos() / PI).clamp(half, 1.0 - half);
+        let uv = Vec2::new(u - u.floor(), v);
+        if !(angle > 0.0 && angle.is_finite()) {
+            return self.image.sample(uv);
+        }
+        let sin_theta = (1.0 - y * y).max(0.0).sqrt().max(0.125);
+        let du = (angle / (TAU * sin_theta)).min(1.0);
+        self.image.sample_over(uv, [Vec2::new(du, 0.0), Vec2::new(0.0, angle / PI)])
     }
 }
 
@@ -76,6 +98,35 @@ mod tests {
         let r = env(90.0);
         assert!((r.radiance(at(-45.0)) - e.radiance(at(45.0))).length() < 1e-5);
         assert!(e.radiance(Vec3::ZERO).is_finite());
+    }
+
+    #[test]
+    fn a_wide_cone_averages_the_texels_it_covers() {
+        // 256 × 128 texels of one-texel stripes, 0 and 1: a point reads a
+        // stripe, a cone a pixel wide covering ~20 columns their mean.
+        let (w, h) = (256u32, 128u32);
+        let texels = (0..w * h).map(|i| Vec3::splat((i % 2) as f32)).collect();
+        let image = Arc::new(ImageTexture::from_linear(w, h, texels, Wrap::Repeat).unwrap());
+        let e = Environment { image, rotation_deg: 0.0 };
+        let mut far_from_half = 0;
+        for k in 0..64 {
+            let a = k as f32 * 0.097;
+            let d = Vec3::new(a.sin(), 0.3 * (k as f32 * 0.31).sin(), -a.cos());
+            let point = e.radiance(d).x;
+            far_from_half += usize::from((point - 0.5).abs() > 0.2);
+            let wide = e.radiance_over(d, 20.0 * TAU / w as f32).x;
+            assert!((wide - 0.5).abs() < 0.02, "{d}: {wide}");
+            // A cone narrower than a texel is the point.
+            assert!((e.radiance_over(d, 1e-6).x - point).abs() < 1e-4, "{d}");
+        }
+        assert!(far_from_half > 32, "the point lookups see the stripes: {far_from_half}");
+        // A flat image stays itself however wide the cone, at the poles too.
+        let flat =
+            Arc::new(ImageTexture::from_linear(8, 4, vec![Vec3::splat(0.25); 32], Wrap::Repeat).unwrap());
+        let e = Environment { image: flat, rotation_deg: 0.0 };
+        for d in [Vec3::Y, Vec3::NEG_Y, Vec3::new(0.3, 0.2, -1.0)] {
+            assert!((e.radiance_over(d, 0.5) - Vec3::splat(0.25)).abs().max_element() < 1e-6);
+        }
     }
 
     #[test]

@@ -508,7 +508,12 @@ impl<'a> Tracer<'a> {
             return self.fog_blend(l * absorbed(scene, media.innermost(), seg), self.fog_t(path, end));
         }
         let Some(h) = hit else {
-            let sky = scene.environment.as_ref().map_or(scene.background, |e| e.radiance(ray.dir));
+            // The environment over the ray's cone (its width adds nothing
+            // at infinity).
+            let sky = scene
+                .environment
+                .as_ref()
+                .map_or(scene.background, |e| e.radiance_over(ray.dir, cone.spread.abs()));
             return self.fog_blend(sky, self.fog_t(path, f32::INFINITY));
         };
         let seg = h.hit.t * ray.dir.length();
