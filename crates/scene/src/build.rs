@@ -503,6 +503,9 @@ impl<'a> Build<'a> {
         if let Some(w) = far_warning(&camera, &lights) {
             self.warn(&w);
         }
+        if let Some(w) = offset_warning(bounds) {
+            self.warn(&w);
+        }
         let stats = accel.stats();
         let Settings {
             width,
@@ -644,6 +647,36 @@ fn far_warning(camera: &Camera, lights: &[Light]) -> Option<String> {
             if far.len() == 1 { "lies" } else { "lie" }
         )
     })
+}
+
+/// How many times their own size the objects may lie from the origin
+/// before a warning: 32-bit floats there are spaced a ten-thousandth of
+/// that size apart or more. (A scene ten units across renders 1 % of its
+/// pixels differently 1000 from the origin and loses every shadow at 10⁵.)
+const OFFSET_RATIO: f32 = 1000.0;
+
+/// A warning for bounded objects (`bounds`) that lie more than
+/// [`OFFSET_RATIO`] times their extent from the origin, where 32-bit
+/// floats are too coarse for their detail.
+fn offset_warning(bounds: Aabb) -> Option<String> {
+    if bounds.is_empty() {
+        return None;
+    }
+    let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+    let size = (bounds.max - bounds.min).max_element();
+    if !(size > 0.0 && reach.is_finite() && reach > OFFSET_RATIO * size) {
+        return None;
+    }
+    let c = bounds.center();
+    Some(format!(
+        "the objects lie up to {reach:.1e} from the origin but span only {size:.1e}: 32-bit floats there are about \
+         {:.0e} apart, too coarse for the scene's detail, and shadows, reflections and refractions speckle or \
+         vanish; move the scene near the origin (its centre is at ({:.3e}, {:.3e}, {:.3e}))",
+        reach * f32::EPSILON,
+        c.x,
+        c.y,
+        c.z
+    ))
 }
 
 /// The error for an OBJ file whose material library cannot be used, for

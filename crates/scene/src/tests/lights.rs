@@ -392,6 +392,33 @@ fn quad_lights_of_any_representable_area_are_accepted() {
     )]);
 }
 
+/// Objects a thousand times their size or more from the origin are warned
+/// about: 32-bit floats there cannot hold their detail (a scene moved
+/// 10⁵ away lost every shadow, silently).
+#[test]
+fn objects_far_from_the_origin_for_their_size_are_warned_about() {
+    let offset =
+        |loaded: &LoadedScene| loaded.warnings.iter().find(|w| w.contains("the objects lie")).cloned();
+    assert_eq!(offset(&parse(BASE).unwrap()), None);
+    let scene = |x: &str| {
+        format!(
+            "[camera]\nposition = [{x}, 0, 10]\nlook_at = [{x}, 0, 0]\n[[lights]]\nposition = [{x}, 5, 5]\n\
+             [[objects]]\ntype = \"sphere\"\ncenter = [{x}, 0, 0]\nradius = 1\n\
+             [[objects]]\ntype = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\n"
+        )
+    };
+    // 1e5 from the origin, 2 across (the infinite plane does not count).
+    let w = offset(&parse(&scene("1e5")).unwrap()).expect("a warning");
+    assert!(
+        w.starts_with("test.toml: the objects lie up to 1.0e5 from the origin but span only 2.0e0: 32-bit floats there are about 1e-2 apart"),
+        "{w}"
+    );
+    assert!(w.ends_with("(its centre is at (1.000e5, 0.000e0, 0.000e0))"), "{w}");
+    // 1000 sizes away is quiet, and so is a large scene far out.
+    assert_eq!(offset(&parse(&scene("1999")).unwrap()), None);
+    assert_eq!(offset(&parse(&scene("1e5").replace("radius = 1", "radius = 1000")).unwrap()), None);
+}
+
 /// A light, the camera or its focus point more than 1e18 from the origin is
 /// warned about, naming each: past about 1.8e19 from what they light or
 /// see, squared distances overflow and the picture comes out black (the
