@@ -2,7 +2,7 @@
 //! of the build, each error pointing at the value's span in the scene
 //! text (or at the file alone for a value that is not written in it).
 
-use crate::error::{Location, SceneError};
+use crate::error::{Lines, Location, SceneError};
 use crate::format::{Color, Num, V3};
 use prism_geometry::GeometryError;
 use prism_geometry::glam::Vec3;
@@ -20,14 +20,17 @@ pub(crate) type Result<T> = std::result::Result<T, SceneError>;
 pub(crate) struct Ctx<'a> {
     pub file: &'a Path,
     pub text: &'a str,
+    /// The text's lines, counted once for all the places in it.
+    lines: &'a Lines<'a>,
     /// Where checks put warnings about values they accept (colours that
     /// look like 8-bit values), if anywhere.
     notes: Option<&'a RefCell<Vec<String>>>,
 }
 
 impl<'a> Ctx<'a> {
-    pub fn new(file: &'a Path, text: &'a str) -> Self {
-        Self { file, text, notes: None }
+    /// The scene `file`, whose text `lines` holds.
+    pub fn new(file: &'a Path, lines: &'a Lines<'a>) -> Self {
+        Self { file, text: lines.text(), lines, notes: None }
     }
 
     /// This context, putting warnings into `notes`.
@@ -45,7 +48,10 @@ impl<'a> Ctx<'a> {
     /// Where `span` is, or the file alone for `None`.
     pub fn place(&self, span: Option<&Range<usize>>) -> Location {
         match span {
-            Some(span) => Location::at_span(self.file, self.text, span),
+            Some(span) => {
+                let (line, column) = self.lines.line_col(span.start);
+                Location { file: self.file.to_path_buf(), line: Some(line), column: Some(column) }
+            }
             None => Location::file(self.file),
         }
     }

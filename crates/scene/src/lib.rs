@@ -355,7 +355,8 @@ pub fn load_obj_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene,
     }
     let (canonical, base, name) = read::obj_alone_path(path)?;
     let res = read::read_obj_alone(&base, &name, options.limits.memory);
-    build::build_obj_scene(check::Ctx::new(path, ""), &name, &canonical, &res, options)
+    let lines = error::Lines::new("");
+    build::build_obj_scene(check::Ctx::new(path, &lines), &name, &canonical, &res, options)
 }
 
 /// Parses a scene from `text` as if read from `file_name` (used in
@@ -389,8 +390,9 @@ pub fn parse_scene_str_with(
     let file = format::SceneFile::parse(text, file_name)?;
     let res = read::read_resources(&file, base_dir, options.limits.memory);
     let notes = std::cell::RefCell::new(Vec::new());
+    let lines = error::Lines::new(text);
     let mut loaded =
-        build::build_scene(check::Ctx::new(file_name, text).noting(&notes), &file, &res, options)?;
+        build::build_scene(check::Ctx::new(file_name, &lines).noting(&notes), &file, &res, options)?;
     loaded.warnings.extend(notes.into_inner());
     Ok(loaded)
 }

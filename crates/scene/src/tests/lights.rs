@@ -246,7 +246,7 @@ fn background_images_are_built_with_their_rotation_and_refused_when_unreadable()
         Ok(TextureFile { path: "/in-memory/sky.exr".into(), image }),
     );
     let loaded = crate::build::build_scene(
-        crate::check::Ctx::new(file_name, &text),
+        crate::check::Ctx::new(file_name, &crate::error::Lines::new(&text)),
         &file,
         &res,
         &LoadOptions::default(),

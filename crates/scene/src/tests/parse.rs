@@ -122,7 +122,8 @@ fn large_angles_turn_as_their_remainder_in_a_turn() {
     }
     let text = format!("{cam}[render]\nbackground = {{ image = \"sky.png\", rotation = 1e9 }}\n");
     let file = SceneFile::parse(&text, Path::new("t.toml")).unwrap();
-    let ctx = crate::check::Ctx::new(Path::new("t.toml"), &text);
+    let lines = crate::error::Lines::new(&text);
+    let ctx = crate::check::Ctx::new(Path::new("t.toml"), &lines);
     let bg = file.render.as_ref().unwrap().get_ref().background.as_ref().unwrap();
     let image = Arc::new(ImageTexture::from_linear(1, 1, vec![Vec3::ONE], Wrap::Repeat).unwrap());
     let env = crate::view::environment(&ctx, bg.get_ref(), &mut |_| Ok(image.clone())).unwrap().unwrap();
