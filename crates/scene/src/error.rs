@@ -60,7 +60,7 @@ impl fmt::Display for Location {
 /// Offsets past the end, or inside a character, are clamped.
 ///
 /// Each call counts the lines from the start of `text`: for many places
-/// in one text, [`Lines`] finds them once.
+/// in one text, the loader counts them once (`Lines`, internal).
 #[must_use]
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     scanned();
