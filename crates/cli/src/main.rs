@@ -527,16 +527,7 @@ fn render_to(
         );
     }
 
-    let pixels =
-        region.map_or(u64::from(w) * u64::from(h), |r| u64::from(r.0.width()) * u64::from(r.0.height()));
-    // Twice the files' uncompressed bytes: the writers copy the image once
-    // into their own layout (planar floats for EXR, tone-mapped bytes for
-    // PNG) and once more for their encoders.
-    let encoded = 2 * plan.uncompressed_bytes(1, 1, aovs);
-    let channels = aovs.iter().map(|a| a.channels() as u64).sum();
-    if let Some(warning) =
-        memory::check(memory::image_bytes(pixels, plan.alpha, channels, encoded), "this render")?
-    {
+    if let Some(warning) = memory::check(&render_memory(settings, region, plan, aovs), "this render")? {
         errln!("warning: {warning}");
     }
 
@@ -665,6 +656,44 @@ fn render_to(
         }
     }
     Ok(())
+}
+
+/// The image buffers of the render `render_to` runs: of the image, or of
+/// `region` (written as a tile file if an EXR).
+fn render_memory(
+    settings: &RenderSettings,
+    region: Option<tile::Part>,
+    plan: &outputs::Plan,
+    aovs: &[Aov],
+) -> memory::RenderMemory {
+    let (w, h) = settings.camera.size();
+    let bounds = region.map_or_else(|| prism_shade::PixelBounds::full(w, h), |(b, _)| Some(b));
+    let (rw, rh) = bounds.map_or((w, h), |b| (b.width(), b.height()));
+    let tile = region.is_some() && plan.format() == OutputFormat::Exr;
+    // As `render_pixels`: off with passes or alpha; its base pass takes a
+    // border of one pixel (within the image) around a part.
+    let adaptive = settings.antialias.adaptive.is_some()
+        && aovs.is_empty()
+        && !plan.alpha
+        && settings.spp > prism_shade::ADAPTIVE_BASE_SAMPLES;
+    let adaptive_base = adaptive.then(|| {
+        let grown =
+            |lo: u32, hi: u32, max: u32| u64::from(hi.saturating_add(1).min(max) - lo.saturating_sub(1));
+        bounds.map_or(u64::from(w) * u64::from(h), |b| grown(b.x0(), b.x1(), w) * grown(b.y0(), b.y1(), h))
+    });
+    // A `--threads` pool for the render, another for the writers (a tile
+    // is written on this thread); at most one thread a row.
+    let pool = settings.threads.map_or(0, |n| n.min(rh.max(1) as usize) as u64);
+    memory::RenderMemory {
+        width: u64::from(rw),
+        rows: u64::from(rh),
+        alpha: plan.alpha,
+        passes: aovs.len() as u64,
+        pass_channels: aovs.iter().map(|a| a.channels() as u64).sum(),
+        adaptive_base,
+        writers: plan.writer_bytes(rw, rh, aovs, tile),
+        threads: pool * if tile { 1 } else { 2 },
+    }
 }
 
 /// `out/<scene stem>.png`, relative to the working directory

@@ -97,6 +97,74 @@ impl Plan {
         let previews = if self.previews { 3 * aovs.len() as u64 } else { 0 };
         pixels * (image + passes + beside + previews)
     }
+
+    /// The bytes the writers of a `width × height` render with `aovs`
+    /// allocate besides the render's own buffers, the most of those that
+    /// run one after another (the image, then the passes' files, then the
+    /// previews; each frees its buffers before the next starts), for
+    /// `crate::memory::RenderMemory::writers`. `tile`: the part of an image
+    /// written as a tile file. A render holds no NaN (a non-finite sample
+    /// counts as black; a pass has none), so the EXR writers' NaN-free
+    /// copies are not made.
+    pub fn writer_bytes(&self, width: u32, height: u32, aovs: &[prism_shade::Aov], tile: bool) -> u64 {
+        // In u128: no product of these overflows it.
+        let (w, h) = (u128::from(width), u128::from(height));
+        let n = w * h;
+        let alpha = u128::from(self.alpha);
+        let channels: u128 = aovs.iter().map(|a| a.channels() as u128).sum();
+        // A zlib stream of `raw` bytes: no longer than them and deflate's
+        // block headers (5 bytes in 64 KiB; 1 in 1024 is ample), in a
+        // growing Vec that may reserve up to twice that.
+        let zlib = |raw: u128| 2 * (raw + raw / 1024 + 64);
+        // A PNG of `k` bytes a pixel (`write_png`): the encoded pixels,
+        // their big-endian copy at 16 bits (the image crate's), the zlib
+        // stream of the rows with a filter byte each, and png's previous
+        // and current row.
+        let png = |k: u128, sixteen: bool| n * k * (1 + u128::from(sixteen)) + zlib(n * k + h) + 2 * w * k;
+        // A layered EXR of `floats` a pixel (`render_layers`, then
+        // `write_layered_exr`): the layers' planar copy and the writer's
+        // copy of it (render_layers' interleaved colour, freed before that
+        // copy is made, is no larger), and five blocks of 16 rows (ZIP16: the
+        // block, the buffer its bytes are split into, the compressed
+        // block reserving up to twice, the chunk written).
+        let layered = |floats: u128| 2 * n * floats * 4 + 5 * 16 * w * floats * 4;
+        let image = if tile {
+            layered(3 + channels)
+        } else {
+            match self.format {
+                OutputFormat::Png => {
+                    let sixteen = self.png.bit_depth == BitDepth::Sixteen;
+                    png((3 + alpha) * if sixteen { 2 } else { 1 }, sixteen)
+                }
+                // The colour, alpha and passes in one file; or
+                // (`write_image_exr`) the colour alone, interleaved (the
+                // image crate's encoder reads it a 64 × 64 tile at a time).
+                OutputFormat::Exr if self.alpha || (self.has_aovs && !self.aov_files) => {
+                    layered(3 + alpha + if self.aov_files { 0 } else { channels })
+                }
+                OutputFormat::Exr => n * 12,
+            }
+        };
+        let bytes = if tile || aovs.is_empty() {
+            image
+        } else {
+            // The passes each in a file of their own (`write_aov_exr`: its
+            // RGB floats), or beside a PNG in one layered file.
+            let files = if self.aov_files {
+                n * 12
+            } else if self.format == OutputFormat::Png {
+                layered(3 + alpha + channels)
+            } else {
+                0
+            };
+            // A pass's preview: its 8-bit RGB, and the finite depths (a Vec
+            // that may reserve up to twice their 4 bytes) or the PNG's
+            // stream and rows.
+            let previews = if self.previews { n * 3 + (8 * n).max(zlib(n * 3 + h) + 6 * w) } else { 0 };
+            image.max(files).max(previews)
+        };
+        u64::try_from(bytes).unwrap_or(u64::MAX)
+    }
 }
 
 impl ImageArgs {
@@ -247,5 +315,54 @@ impl Plan {
             }
         }
         Ok(written)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prism_shade::Aov;
+
+    fn plan(
+        output: &str,
+        bit_depth: &str,
+        alpha: bool,
+        aov_files: bool,
+        aovs: &[Aov],
+        previews: bool,
+    ) -> Plan {
+        let args =
+            ImageArgs { bit_depth: bit_depth.to_owned(), exposure: 0.0, tonemap: Tonemap::Clamp, aov_files };
+        let format = OutputFormat::from_path(std::path::Path::new(output)).unwrap();
+        args.plan(output.into(), format, alpha, !aovs.is_empty(), previews).unwrap().0
+    }
+
+    #[test]
+    fn the_writers_bytes_hold_their_copies() {
+        let (w, h) = (300, 200);
+        let n = 300 * 200;
+        // A 16-bit RGBA PNG: the encoded pixels, their big-endian copy, a
+        // zlib stream at least as long (noise does not compress).
+        let p = plan("a.png", "16", true, false, &[], false);
+        assert!(p.writer_bytes(w, h, &[], false) >= 3 * n * 8);
+        // A layered EXR: the layers and the writer's copy of them, twice
+        // the file's floats.
+        for (out, alpha) in [("a.exr", true), ("a.exr", false), ("a.png", true), ("a.png", false)] {
+            let p = plan(out, "8", alpha, false, &Aov::ALL, false);
+            let floats = 3 + u64::from(alpha) + 11;
+            assert!(p.writer_bytes(w, h, &Aov::ALL, false) >= 2 * n * floats * 4, "{out} {alpha}");
+            // As a tile (no alpha there).
+            assert!(p.writer_bytes(w, h, &Aov::ALL, true) >= 2 * n * 14 * 4, "{out} {alpha}");
+        }
+        // The colour alone as EXR: its interleaved copy; each pass in its
+        // own file: its RGB floats; previews: 3 bytes and up to 8 for the
+        // finite depths.
+        let p = plan("a.exr", "8", false, true, &[Aov::Depth], true);
+        assert!(p.writer_bytes(w, h, &[Aov::Depth], false) >= n * 12);
+        let p = plan("a.png", "8", false, false, &[Aov::Depth], true);
+        assert!(p.writer_bytes(w, h, &[Aov::Depth], false) >= n * (3 + 8));
+        // The largest image there can be does not overflow.
+        let p = plan("a.exr", "8", true, false, &Aov::ALL, true);
+        assert_eq!(p.writer_bytes(u32::MAX, u32::MAX, &Aov::ALL, false), u64::MAX);
     }
 }

@@ -477,7 +477,8 @@ fn a_render_too_large_for_memory_is_refused_up_front() {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("s.toml"), GOOD).unwrap();
     // Under `ulimit -v` (1 GB): 10000 × 10000 pixels with every pass need
-    // about 10 GiB.
+    // about 20 GiB (their EXR's layers and the writer's copy of them, 11.2
+    // GB, beside the colour and passes and the rows they came from).
     let out = std::process::Command::new("bash")
         .current_dir(dir.path())
         .arg("-c")
@@ -490,7 +491,7 @@ fn a_render_too_large_for_memory_is_refused_up_front() {
         .unwrap();
     assert_clean_failure("ulimit -v", &out);
     let err = text(&out.stderr);
-    assert!(err.contains("needs about 15.6 GiB") && err.contains("ulimit -v"), "{err}");
+    assert!(err.contains("needs about 19.8 GiB for its image buffers") && err.contains("ulimit -v"), "{err}");
     assert_eq!(out.status.code(), Some(1), "{err}");
     // More than any machine here holds in memory and swap (12 TB of
     // colour alone), limits raised to let it through.
@@ -517,6 +518,82 @@ fn a_render_too_large_for_memory_is_refused_up_front() {
     let err = text(&out.stderr);
     assert!(err.contains("more than this machine's"), "{err}");
     assert_eq!(listing(dir.path()), ["s.toml"]);
+}
+
+/// `prism render s.toml ARGS --threads 1` under `ulimit -v LIMIT_KIB` in `dir`.
+#[cfg(target_os = "linux")]
+fn render_under_ulimit(dir: &Path, limit_kib: u64, args: &str) -> std::process::Output {
+    std::process::Command::new("bash")
+        .current_dir(dir)
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec {} render s.toml {args} --threads 1 --quiet",
+            env!("CARGO_BIN_EXE_prism")
+        ))
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .unwrap()
+}
+
+/// `--alpha` and AOV renders count every buffer they hold at once: the
+/// per-row sinks their passes and coverage are gathered from, the beauty
+/// beside them, the rows' memory while the files are written. Left out,
+/// these two passed the check and, after rendering, aborted on a failed
+/// allocation (exit 134, nothing written).
+#[cfg(target_os = "linux")]
+#[test]
+fn alpha_and_aov_renders_are_refused_with_what_they_hold() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    for (limit_kib, args) in [
+        // Needs about 1.4 GiB, and its threads' address space (the
+        // estimate was 0.7 GiB).
+        (1_030_000, "-o a16.png --width 6000 --height 4000 --alpha --bit-depth 16"),
+        // Needs about 2.3 GiB, and its threads' address space (the
+        // estimate was 1.9 GiB).
+        (2_250_000, "-o dn.exr --width 6000 --height 4000 --aov depth,normal"),
+    ] {
+        let out = render_under_ulimit(dir.path(), limit_kib, args);
+        assert_clean_failure(args, &out);
+        let err = text(&out.stderr);
+        assert!(err.contains("needs about") && err.contains("ulimit -v"), "{args}: {err}");
+        assert_eq!(out.status.code(), Some(1), "{args}: {err}");
+    }
+    assert_eq!(listing(dir.path()), ["s.toml"]);
+}
+
+/// Under any address-space limit a render with every buffer (alpha, every
+/// pass, a layered EXR) is either refused up front or finishes: no limit
+/// lets it start and then abort (exit 134). The limits rise by 50 MB from
+/// the least under which a 1 × 1 render of the scene finishes (what the
+/// process and its threads take before any image, which depends on the
+/// machine's cores) until the render has finished three times.
+#[cfg(target_os = "linux")]
+#[test]
+fn under_any_limit_a_render_is_refused_or_finishes() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), GOOD).unwrap();
+    let tiny = "-o one.exr --width 1 --height 1";
+    let start = (2..=160)
+        .map(|k| k * 100_000)
+        .find(|&kib| render_under_ulimit(dir.path(), kib, tiny).status.success())
+        .expect("a 1 × 1 render finishes under some limit up to 16 GB");
+    let args = "-o all.exr --width 1200 --height 800 --alpha --aov all";
+    let (mut refused, mut finished, mut kib) = (0, 0, start);
+    while finished < 3 {
+        let out = render_under_ulimit(dir.path(), kib, args);
+        let err = text(&out.stderr);
+        match out.status.code() {
+            Some(0) => finished += 1,
+            Some(1) if err.contains("needs about") => refused += 1,
+            code => panic!("under ulimit -v {kib} KiB: exit {code:?}\n{err}"),
+        }
+        let _ = fs::remove_file(dir.path().join("all.exr"));
+        kib += 50_000;
+        assert!(kib < start + 4_000_000, "still refused 4 GB above the 1 × 1 render's limit: {err}");
+    }
+    // The render's buffers need more than the 1 × 1 render's.
+    assert!(refused > 0, "{refused} refused, {finished} finished");
 }
 
 /// Image textures that cannot fit in the memory left are refused from
