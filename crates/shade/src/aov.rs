@@ -5,7 +5,7 @@
 use crate::render::{render_pixels, scale_to_mean};
 use crate::{Camera, Image, RenderHooks, RenderSettings, RenderStats, Scene};
 use prism_geometry::Ray;
-use prism_geometry::glam::Vec3;
+use prism_geometry::glam::{DVec3, Vec3};
 use std::fmt;
 use std::str::FromStr;
 
@@ -374,7 +374,9 @@ pub(crate) fn render_passes(
 /// hit a surface and the sum of their radiance.
 struct AlphaRow {
     hits: u32,
-    covered: Vec3,
+    /// In f64, as the beauty sums a pixel's samples: a fully covered
+    /// pixel is the plain render's bit for bit.
+    covered: DVec3,
     /// Premultiplied colour per pixel of the row.
     rgb: Vec<Vec3>,
     /// Alpha per pixel of the row.
@@ -435,7 +437,7 @@ impl<'a> AovRow<'a> {
             centre_id: None,
             alpha: alpha.then(|| AlphaRow {
                 hits: 0,
-                covered: Vec3::ZERO,
+                covered: DVec3::ZERO,
                 rgb: vec![Vec3::ZERO; n],
                 alpha: vec![0.0; n],
             }),
@@ -463,7 +465,7 @@ impl<'a> AovRow<'a> {
             let seen = hit.is_some() || scene.lights.iter().any(|l| l.intersect(ray, ray.t_max).is_some());
             if seen {
                 a.hits += 1;
-                a.covered += radiance;
+                a.covered += radiance.as_dvec3();
             }
         }
         let sums = &mut self.sums;
@@ -508,10 +510,10 @@ impl<'a> AovRow<'a> {
             }
         }
         if let Some(a) = &mut self.alpha {
-            a.rgb[i] = a.covered * inv;
+            a.rgb[i] = a.covered.as_vec3() * inv;
             a.alpha[i] = a.hits as f32 * inv;
             a.hits = 0;
-            a.covered = Vec3::ZERO;
+            a.covered = DVec3::ZERO;
         }
         self.sums = Sums::ZERO;
         self.centre_id = None;
