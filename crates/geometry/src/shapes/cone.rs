@@ -352,10 +352,12 @@ mod tests {
 
     #[test]
     fn hits_from_afar_lie_on_the_side() {
-        // A telephoto camera 10³–10⁵ sizes away: `o + t·d` is off by a few
-        // ε·D (6e-4 at D = 1000), far more than the offset a shadow ray
-        // leaves with, which then met the side again (black speckles). The
-        // point is moved back onto the surface, to ε of the cone's size.
+        // A telephoto camera 10³–10⁵ sizes away: `o + t·d` lies up to a few
+        // ε·D from the true hit (along the ray), and was off the surface by
+        // more than the offset a shadow ray leaves with (3.6e-6 at D = 1000
+        // here, against a bound of 9.5e-7), which then met the side again
+        // (black speckles). The point is moved back onto the surface, to a
+        // few ε of the cone's size.
         let c = Cone::new(Vec3::new(0.3, -0.2, 0.1), 0.6, 1.4).unwrap();
         let (r, h) = (0.6f32, 1.4f32);
         let off_surface = |p: Vec3| {
